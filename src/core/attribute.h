@@ -1,0 +1,60 @@
+// Named, typed per-surfel attribute columns (paint state, patch id, unknown PointCloud2/PLY fields, ...).
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace rc {
+
+/// Scalar types of an attribute; the same set as sensor_msgs/PointField and PLY properties.
+enum class ScalarType : uint8_t { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt32, kFloat32, kFloat64 };
+
+size_t scalarSize(ScalarType type);
+const char* scalarName(ScalarType type);
+
+/// One attribute column: `count` scalars of `type` per surfel, stored as raw bytes (so any field survives a
+/// round trip bit-exactly, whether or not this library understands it).
+struct Attribute {
+  std::string name;
+  ScalarType type = ScalarType::kFloat32;
+  uint32_t count = 1;
+  std::vector<uint8_t> bytes;  ///< size() == elementCount * count * scalarSize(type)
+
+  size_t stride() const { return count * scalarSize(type); }
+  size_t size() const { return stride() == 0 ? 0 : bytes.size() / stride(); }
+  void resize(size_t n) { bytes.resize(n * stride()); }
+
+  /// Value `component` of element `i`, converted to double.
+  double get(size_t i, uint32_t component = 0) const;
+  /// Sets value `component` of element `i` (converted from double to the stored type).
+  void set(size_t i, double value, uint32_t component = 0);
+};
+
+/// An ordered set of attribute columns with unique names.
+class AttributeSet {
+ public:
+  /// Adds a column (zero-filled to `n` elements); throws std::invalid_argument if the name exists.
+  Attribute& add(const std::string& name, ScalarType type, uint32_t count, size_t n);
+  Attribute* find(const std::string& name);
+  const Attribute* find(const std::string& name) const;
+  bool has(const std::string& name) const { return find(name) != nullptr; }
+  void remove(const std::string& name);
+  /// Resizes every column to n elements.
+  void resize(size_t n);
+  /// Appends element `i` of `other` (same column layout required) to every column.
+  void appendFrom(const AttributeSet& other, size_t i);
+  /// Keeps only the elements whose indices are listed, in that order.
+  void select(const std::vector<size_t>& indices);
+
+  const std::vector<Attribute>& columns() const { return columns_; }
+  std::vector<Attribute>& columns() { return columns_; }
+  bool empty() const { return columns_.empty(); }
+
+ private:
+  std::vector<Attribute> columns_;
+};
+
+}  // namespace rc

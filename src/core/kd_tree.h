@@ -1,0 +1,45 @@
+// kd-tree (thesis 3.4.1) over a point array, backed by nanoflann, for k-nearest and range queries.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "core/neighbor.h"
+#include "core/surfel_cloud.h"
+
+namespace rc {
+
+/// Static kd-tree over `points`. The tree references the caller's array: it must outlive the tree and not change
+/// (call rebuild() after it changes). All queries are const and thread-safe; the single-query functions write into
+/// caller-provided storage and do not allocate once that storage has grown to its working size.
+class KdTree {
+ public:
+  explicit KdTree(const std::vector<Vec3>& points, int max_leaf_size = 10);
+  ~KdTree();
+  KdTree(const KdTree&) = delete;
+  KdTree& operator=(const KdTree&) = delete;
+
+  void rebuild();
+  size_t size() const;
+  const std::vector<Vec3>& points() const { return *points_; }
+
+  /// The k nearest points, sorted by increasing distance. Writes min(k, size()) entries to `out` (which must hold
+  /// k entries); `Neighbor::sq_dist` is the squared distance. Returns the number written.
+  size_t knn(const Vec3& query, size_t k, Neighbor* out) const;
+
+  /// All points with distance <= radius (the radius is NOT squared). `out` is cleared first and keeps its
+  /// capacity. Sorted by distance only if `sorted`. Returns out.size().
+  size_t radius(const Vec3& query, double radius, std::vector<Neighbor>& out, bool sorted = false) const;
+
+  /// Batched k-nearest: row i of the result (k entries starting at i*k) belongs to query i; rows of queries
+  /// with fewer than k candidates are padded with {UINT32_MAX, inf}. Multi-threaded.
+  void knnBatch(const std::vector<Vec3>& queries, size_t k, std::vector<Neighbor>& out) const;
+
+ private:
+  struct Impl;
+  const std::vector<Vec3>* points_;
+  int max_leaf_size_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rc
