@@ -7,27 +7,39 @@ namespace rc {
 size_t scalarSize(ScalarType type) {
   switch (type) {
     case ScalarType::kInt8:
-    case ScalarType::kUInt8: return 1;
+    case ScalarType::kUInt8:
+      return 1;
     case ScalarType::kInt16:
-    case ScalarType::kUInt16: return 2;
+    case ScalarType::kUInt16:
+      return 2;
     case ScalarType::kInt32:
     case ScalarType::kUInt32:
-    case ScalarType::kFloat32: return 4;
-    case ScalarType::kFloat64: return 8;
+    case ScalarType::kFloat32:
+      return 4;
+    case ScalarType::kFloat64:
+      return 8;
   }
   return 0;
 }
 
 const char* scalarName(ScalarType type) {
   switch (type) {
-    case ScalarType::kInt8: return "int8";
-    case ScalarType::kUInt8: return "uint8";
-    case ScalarType::kInt16: return "int16";
-    case ScalarType::kUInt16: return "uint16";
-    case ScalarType::kInt32: return "int32";
-    case ScalarType::kUInt32: return "uint32";
-    case ScalarType::kFloat32: return "float32";
-    case ScalarType::kFloat64: return "float64";
+    case ScalarType::kInt8:
+      return "int8";
+    case ScalarType::kUInt8:
+      return "uint8";
+    case ScalarType::kInt16:
+      return "int16";
+    case ScalarType::kUInt16:
+      return "uint16";
+    case ScalarType::kInt32:
+      return "int32";
+    case ScalarType::kUInt32:
+      return "uint32";
+    case ScalarType::kFloat32:
+      return "float32";
+    case ScalarType::kFloat64:
+      return "float64";
   }
   return "?";
 }
@@ -49,14 +61,22 @@ void store(uint8_t* p, double v) {
 double Attribute::get(size_t i, uint32_t component) const {
   const uint8_t* p = bytes.data() + i * stride() + component * scalarSize(type);
   switch (type) {
-    case ScalarType::kInt8: return load<int8_t>(p);
-    case ScalarType::kUInt8: return load<uint8_t>(p);
-    case ScalarType::kInt16: return load<int16_t>(p);
-    case ScalarType::kUInt16: return load<uint16_t>(p);
-    case ScalarType::kInt32: return load<int32_t>(p);
-    case ScalarType::kUInt32: return load<uint32_t>(p);
-    case ScalarType::kFloat32: return load<float>(p);
-    case ScalarType::kFloat64: return load<double>(p);
+    case ScalarType::kInt8:
+      return load<int8_t>(p);
+    case ScalarType::kUInt8:
+      return load<uint8_t>(p);
+    case ScalarType::kInt16:
+      return load<int16_t>(p);
+    case ScalarType::kUInt16:
+      return load<uint16_t>(p);
+    case ScalarType::kInt32:
+      return load<int32_t>(p);
+    case ScalarType::kUInt32:
+      return load<uint32_t>(p);
+    case ScalarType::kFloat32:
+      return load<float>(p);
+    case ScalarType::kFloat64:
+      return load<double>(p);
   }
   return 0.0;
 }
@@ -64,14 +84,30 @@ double Attribute::get(size_t i, uint32_t component) const {
 void Attribute::set(size_t i, double value, uint32_t component) {
   uint8_t* p = bytes.data() + i * stride() + component * scalarSize(type);
   switch (type) {
-    case ScalarType::kInt8: store<int8_t>(p, value); break;
-    case ScalarType::kUInt8: store<uint8_t>(p, value); break;
-    case ScalarType::kInt16: store<int16_t>(p, value); break;
-    case ScalarType::kUInt16: store<uint16_t>(p, value); break;
-    case ScalarType::kInt32: store<int32_t>(p, value); break;
-    case ScalarType::kUInt32: store<uint32_t>(p, value); break;
-    case ScalarType::kFloat32: store<float>(p, value); break;
-    case ScalarType::kFloat64: store<double>(p, value); break;
+    case ScalarType::kInt8:
+      store<int8_t>(p, value);
+      break;
+    case ScalarType::kUInt8:
+      store<uint8_t>(p, value);
+      break;
+    case ScalarType::kInt16:
+      store<int16_t>(p, value);
+      break;
+    case ScalarType::kUInt16:
+      store<uint16_t>(p, value);
+      break;
+    case ScalarType::kInt32:
+      store<int32_t>(p, value);
+      break;
+    case ScalarType::kUInt32:
+      store<uint32_t>(p, value);
+      break;
+    case ScalarType::kFloat32:
+      store<float>(p, value);
+      break;
+    case ScalarType::kFloat64:
+      store<double>(p, value);
+      break;
   }
 }
 
@@ -100,9 +136,9 @@ const Attribute* AttributeSet::find(const std::string& name) const {
 }
 
 void AttributeSet::remove(const std::string& name) {
-  columns_.erase(std::remove_if(columns_.begin(), columns_.end(),
-                                [&](const Attribute& a) { return a.name == name; }),
-                 columns_.end());
+  columns_.erase(
+      std::remove_if(columns_.begin(), columns_.end(), [&](const Attribute& a) { return a.name == name; }),
+      columns_.end());
 }
 
 void AttributeSet::resize(size_t n) {

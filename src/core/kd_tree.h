@@ -9,12 +9,16 @@
 
 namespace rc {
 
-/// Static kd-tree over `points`. The tree references the caller's array: it must outlive the tree and not change
-/// (call rebuild() after it changes). All queries are const and thread-safe; the single-query functions write into
-/// caller-provided storage and do not allocate once that storage has grown to its working size.
+/// Static kd-tree over `points`. The tree references the caller's array: it must outlive the tree and not
+/// change (call rebuild() after it changes). Internally the points are copied in leaf order so that a leaf is
+/// one contiguous block of memory (results still carry the caller's indices). Distances returned are SQUARED;
+/// a point at exactly the query radius is included. Leaves hold up to `max_leaf_size` points: with contiguous
+/// leaves, 24 is faster than nanoflann's default of 10 for both kNN and radius queries. All queries are const
+/// and thread-safe; the single-query functions write into caller-provided storage and do not allocate once
+/// that storage has grown to its working size.
 class KdTree {
  public:
-  explicit KdTree(const std::vector<Vec3>& points, int max_leaf_size = 10);
+  explicit KdTree(const std::vector<Vec3>& points, int max_leaf_size = 24);
   ~KdTree();
   KdTree(const KdTree&) = delete;
   KdTree& operator=(const KdTree&) = delete;
@@ -23,8 +27,8 @@ class KdTree {
   size_t size() const;
   const std::vector<Vec3>& points() const { return *points_; }
 
-  /// The k nearest points, sorted by increasing distance. Writes min(k, size()) entries to `out` (which must hold
-  /// k entries); `Neighbor::sq_dist` is the squared distance. Returns the number written.
+  /// The k nearest points, sorted by increasing distance. Writes min(k, size()) entries to `out` (which must
+  /// hold k entries); `Neighbor::sq_dist` is the squared distance. Returns the number written.
   size_t knn(const Vec3& query, size_t k, Neighbor* out) const;
 
   /// All points with distance <= radius (the radius is NOT squared). `out` is cleared first and keeps its
@@ -34,6 +38,11 @@ class KdTree {
   /// Batched k-nearest: row i of the result (k entries starting at i*k) belongs to query i; rows of queries
   /// with fewer than k candidates are padded with {UINT32_MAX, inf}. Multi-threaded.
   void knnBatch(const std::vector<Vec3>& queries, size_t k, std::vector<Neighbor>& out) const;
+
+  /// Batched radius queries in CSR form: the neighbours of query i are out[offsets[i] .. offsets[i+1]),
+  /// unsorted, with squared distances. Multi-threaded (OpenMP); `offsets` and `out` keep their capacity.
+  void radiusBatch(const std::vector<Vec3>& queries, double radius, std::vector<size_t>& offsets,
+                   std::vector<Neighbor>& out) const;
 
  private:
   struct Impl;

@@ -75,7 +75,8 @@ void SurfelCloud::select(const std::vector<size_t>& idx) {
 
 void SurfelCloud::append(const SurfelCloud& other) {
   const bool first = empty();
-  if (first && attributes.empty()) attributes = other.attributes;
+  if (first && attributes.empty())
+    attributes = other.attributes;
   else
     for (size_t i = 0; i < other.size(); ++i) attributes.appendFrom(other.attributes, i);
   appendChannel(normals, other.normals, first);

@@ -19,14 +19,14 @@ using Rgba = std::array<uint8_t, 4>;
 /// (absent) or has exactly size() elements. Geometry is double precision (floats only at message boundaries).
 struct SurfelCloud {
   std::vector<Vec3> positions;
-  std::vector<Vec3> normals;     ///< unit normals (optional)
-  std::vector<double> radii;     ///< circular surfel radius (optional)
-  std::vector<Vec3> axes1;       ///< elliptical surfel tangent axis t1, |t1| = semi-axis length (optional)
-  std::vector<Vec3> axes2;       ///< elliptical surfel tangent axis t2 (optional, present iff axes1 is)
-  std::vector<Rgba> colors;      ///< 8-bit RGBA (optional)
-  std::vector<float> confidence; ///< pcl::PointSurfel::confidence (optional)
-  std::vector<float> curvature;  ///< surface variation (optional)
-  AttributeSet attributes;       ///< named extra columns; unknown input fields are kept here
+  std::vector<Vec3> normals;      ///< unit normals (optional)
+  std::vector<double> radii;      ///< circular surfel radius (optional)
+  std::vector<Vec3> axes1;        ///< elliptical surfel tangent axis t1, |t1| = semi-axis length (optional)
+  std::vector<Vec3> axes2;        ///< elliptical surfel tangent axis t2 (optional, present iff axes1 is)
+  std::vector<Rgba> colors;       ///< 8-bit RGBA (optional)
+  std::vector<float> confidence;  ///< pcl::PointSurfel::confidence (optional)
+  std::vector<float> curvature;   ///< surface variation (optional)
+  AttributeSet attributes;        ///< named extra columns; unknown input fields are kept here
 
   /// Frame and time the positions are expressed in (ROS conventions; empty/0 when unknown).
   std::string frame_id;
@@ -53,8 +53,8 @@ struct SurfelCloud {
   /// Appends all surfels of `other`. Channels present in only one cloud are dropped (throws only if the
   /// attribute columns disagree in layout).
   void append(const SurfelCloud& other);
-  /// Removes surfels whose position (or normal/radius if present) is not finite (the cloud becomes unorganised).
-  /// Returns how many were removed.
+  /// Removes surfels whose position (or normal/radius if present) is not finite (the cloud becomes
+  /// unorganised). Returns how many were removed.
   size_t removeNonFinite();
   /// Throws std::invalid_argument naming the channel if a present channel has the wrong size.
   void validate() const;

@@ -12,9 +12,12 @@ WeightKind parseWeightKind(const std::string& name) {
 
 const char* weightKindName(WeightKind kind) {
   switch (kind) {
-    case WeightKind::kGaussian: return "gaussian";
-    case WeightKind::kClippedGaussian: return "clipped_gaussian";
-    case WeightKind::kWendlandC2: return "wendland";
+    case WeightKind::kGaussian:
+      return "gaussian";
+    case WeightKind::kClippedGaussian:
+      return "clipped_gaussian";
+    case WeightKind::kWendlandC2:
+      return "wendland";
   }
   return "?";
 }

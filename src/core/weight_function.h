@@ -34,9 +34,12 @@ struct WeightFunction {
   /// Distance beyond which w is zero (infinity for the plain Gaussian).
   double support() const {
     switch (kind) {
-      case WeightKind::kGaussian: return std::numeric_limits<double>::infinity();
-      case WeightKind::kClippedGaussian: return clip * scale;
-      case WeightKind::kWendlandC2: return scale;
+      case WeightKind::kGaussian:
+        return std::numeric_limits<double>::infinity();
+      case WeightKind::kClippedGaussian:
+        return clip * scale;
+      case WeightKind::kWendlandC2:
+        return scale;
     }
     return scale;
   }
@@ -44,8 +47,9 @@ struct WeightFunction {
   /// w(d) from the squared distance (avoids a sqrt for the Gaussians).
   double fromSquared(double d2) const {
     switch (kind) {
-      case WeightKind::kGaussian: return std::exp(-d2 / (scale * scale));  // (3.10)
-      case WeightKind::kClippedGaussian:                                     // (3.11)
+      case WeightKind::kGaussian:
+        return std::exp(-d2 / (scale * scale));  // (3.10)
+      case WeightKind::kClippedGaussian:         // (3.11)
         return d2 < clip * clip * scale * scale ? std::exp(-d2 / (scale * scale)) : 0.0;
       case WeightKind::kWendlandC2: {  // (3.12) with Wendland's (1 + 4q): the printed (1 + q) is not C2 at 0
         if (d2 >= scale * scale) return 0.0;

@@ -1,0 +1,30 @@
+# Sourced by the scripts: system tools first (a pyenv python3 on PATH breaks catkin and rostest).
+export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
+export PYTHON_EXECUTABLE=/usr/bin/python3
+RC_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+RC_JOBS=${RC_JOBS:-$(nproc)}
+export RC_ROOT RC_JOBS
+
+# Configures and builds the core alone with plain CMake (no ROS): build/core.
+rc_build_core() {
+  cmake -S "$RC_ROOT" -B "$RC_ROOT/build/core" -DRC_WITH_ROS=OFF -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+  cmake --build "$RC_ROOT/build/core" -j "$RC_JOBS"
+}
+
+# Configures and builds the catkin package (core + ROS layer): build/ros, devel space in build/ros/devel.
+rc_build_ros() {
+  cmake -S "$RC_ROOT" -B "$RC_ROOT/build/ros" -DRC_WITH_ROS=ON -DCMAKE_BUILD_TYPE=Release \
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 "$@" >/dev/null
+  cmake --build "$RC_ROOT/build/ros" -j "$RC_JOBS"
+}
+
+# Makes the package's nodes, messages and launch files visible to rosrun/roslaunch/rostest.
+rc_source_ros() {
+  set +u
+  # shellcheck disable=SC1091
+  source "$RC_ROOT/build/ros/devel/setup.bash"
+  set -u
+  export ROS_PACKAGE_PATH="$RC_ROOT:${ROS_PACKAGE_PATH:-}"
+  export ROS_HOME="$RC_ROOT/build/ros_home"
+  export ROS_LOG_DIR="$RC_ROOT/build/ros_home/log"
+}

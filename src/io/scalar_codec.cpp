@@ -1,0 +1,187 @@
+#include "io/scalar_codec.h"
+
+#include <charconv>
+#include <cmath>
+
+#include "io/text_lines.h"
+
+namespace rc {
+
+namespace {
+template <typename T>
+T load(const uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return v;
+}
+template <typename T>
+void store(T v, uint8_t* p) {
+  std::memcpy(p, &v, sizeof(T));
+}
+template <typename T>
+bool parseInteger(std::string_view token, uint8_t* out) {
+  if (token.size() > 1 && token[0] == '+') token.remove_prefix(1);
+  T v;
+  const char* end = token.data() + token.size();
+  const auto r = std::from_chars(token.data(), end, v);
+  if (r.ec == std::errc() && r.ptr == end) {
+    store(v, out);
+    return true;
+  }
+  double d;  // "3.0" or "1e3" written for an integer property
+  if (!parseDouble(token, &d) || d != std::floor(d)) return false;
+  store(static_cast<T>(d), out);
+  return true;
+}
+template <typename T>
+void appendNumber(T v, std::string* out) {
+  char buffer[64];
+  const auto r = std::to_chars(buffer, buffer + sizeof(buffer), v);
+  out->append(buffer, r.ptr);
+}
+}  // namespace
+
+double scalarToDouble(const uint8_t* p, ScalarType type) {
+  switch (type) {
+    case ScalarType::kInt8:
+      return load<int8_t>(p);
+    case ScalarType::kUInt8:
+      return load<uint8_t>(p);
+    case ScalarType::kInt16:
+      return load<int16_t>(p);
+    case ScalarType::kUInt16:
+      return load<uint16_t>(p);
+    case ScalarType::kInt32:
+      return load<int32_t>(p);
+    case ScalarType::kUInt32:
+      return load<uint32_t>(p);
+    case ScalarType::kFloat32:
+      return load<float>(p);
+    case ScalarType::kFloat64:
+      return load<double>(p);
+  }
+  return 0.0;
+}
+
+int64_t scalarToInt64(const uint8_t* p, ScalarType type) {
+  switch (type) {
+    case ScalarType::kInt8:
+      return load<int8_t>(p);
+    case ScalarType::kUInt8:
+      return load<uint8_t>(p);
+    case ScalarType::kInt16:
+      return load<int16_t>(p);
+    case ScalarType::kUInt16:
+      return load<uint16_t>(p);
+    case ScalarType::kInt32:
+      return load<int32_t>(p);
+    case ScalarType::kUInt32:
+      return load<uint32_t>(p);
+    case ScalarType::kFloat32: {
+      const float f = load<float>(p);
+      return std::isfinite(f) ? static_cast<int64_t>(f) : -1;
+    }
+    case ScalarType::kFloat64: {
+      const double d = load<double>(p);
+      return std::isfinite(d) ? static_cast<int64_t>(d) : -1;
+    }
+  }
+  return 0;
+}
+
+void doubleToScalar(double value, ScalarType type, uint8_t* out) {
+  switch (type) {
+    case ScalarType::kInt8:
+      store(static_cast<int8_t>(value), out);
+      break;
+    case ScalarType::kUInt8:
+      store(static_cast<uint8_t>(value), out);
+      break;
+    case ScalarType::kInt16:
+      store(static_cast<int16_t>(value), out);
+      break;
+    case ScalarType::kUInt16:
+      store(static_cast<uint16_t>(value), out);
+      break;
+    case ScalarType::kInt32:
+      store(static_cast<int32_t>(value), out);
+      break;
+    case ScalarType::kUInt32:
+      store(static_cast<uint32_t>(value), out);
+      break;
+    case ScalarType::kFloat32:
+      store(static_cast<float>(value), out);
+      break;
+    case ScalarType::kFloat64:
+      store(value, out);
+      break;
+  }
+}
+
+bool parseScalar(std::string_view token, ScalarType type, uint8_t* out) {
+  switch (type) {
+    case ScalarType::kInt8:
+      return parseInteger<int8_t>(token, out);
+    case ScalarType::kUInt8:
+      return parseInteger<uint8_t>(token, out);
+    case ScalarType::kInt16:
+      return parseInteger<int16_t>(token, out);
+    case ScalarType::kUInt16:
+      return parseInteger<uint16_t>(token, out);
+    case ScalarType::kInt32:
+      return parseInteger<int32_t>(token, out);
+    case ScalarType::kUInt32:
+      return parseInteger<uint32_t>(token, out);
+    case ScalarType::kFloat32: {
+      if (token.size() > 1 && token[0] == '+') token.remove_prefix(1);
+      float v;
+      const char* end = token.data() + token.size();
+      const auto r = std::from_chars(token.data(), end, v);
+      if (r.ec != std::errc() || r.ptr != end) return false;
+      store(v, out);
+      return true;
+    }
+    case ScalarType::kFloat64: {
+      double v;
+      if (!parseDouble(token, &v)) return false;
+      store(v, out);
+      return true;
+    }
+  }
+  return false;
+}
+
+void appendScalarText(const uint8_t* p, ScalarType type, std::string* out) {
+  switch (type) {
+    case ScalarType::kInt8:
+      appendNumber(static_cast<int>(load<int8_t>(p)), out);
+      break;
+    case ScalarType::kUInt8:
+      appendNumber(static_cast<int>(load<uint8_t>(p)), out);
+      break;
+    case ScalarType::kInt16:
+      appendNumber(load<int16_t>(p), out);
+      break;
+    case ScalarType::kUInt16:
+      appendNumber(load<uint16_t>(p), out);
+      break;
+    case ScalarType::kInt32:
+      appendNumber(load<int32_t>(p), out);
+      break;
+    case ScalarType::kUInt32:
+      appendNumber(load<uint32_t>(p), out);
+      break;
+    case ScalarType::kFloat32:
+      appendNumber(load<float>(p), out);
+      break;
+    case ScalarType::kFloat64:
+      appendNumber(load<double>(p), out);
+      break;
+  }
+}
+
+void appendDoubleText(double value, std::string* out) {
+  appendNumber(value, out);
+}
+
+}  // namespace rc
