@@ -1,0 +1,17 @@
+// scanner node: simulated or file-based point cloud source (see src/ros/scanner_node.h).
+#include <ros/ros.h>
+
+#include "ros/scanner_node.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "scanner");
+  ros::NodeHandle nh, private_nh("~");
+  try {
+    rc::ScannerNode scanner(nh, private_nh);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL_STREAM("scanner: " << e.what());
+    return 1;
+  }
+  return 0;
+}
