@@ -87,6 +87,7 @@ struct MlsOptions {
   int degree = 2;
   int iterations = 20;
   bool hermite = false;
+  bool strict = false;
 
   void add(CLI::App* app) {
     app->add_option("--fit", fit, "MLS fit: plane | polynomial | sphere")->capture_default_str();
@@ -96,6 +97,7 @@ struct MlsOptions {
     app->add_option("--degree", degree, "polynomial degree for --fit polynomial")->capture_default_str();
     app->add_option("--iterations", iterations, "projection iterations")->capture_default_str();
     app->add_flag("--hermite", hermite, "normals from input normals (3.8)");
+    app->add_flag("--strict", strict, "drop points whose projection did not converge within --iterations");
   }
   rc::MlsConfig config(const SurfelCloud& cloud) const {
     rc::MlsConfig c;
@@ -105,6 +107,7 @@ struct MlsOptions {
     c.weight.scale = r;
     c.polynomial_degree = degree;
     c.max_iterations = iterations;
+    c.require_convergence = strict;
     c.normal_source = hermite ? rc::MlsNormalSource::kHermite : rc::MlsNormalSource::kCovariance;
     std::fprintf(stderr, "MLS: fit %s, weight %s, support %.6g, up to %d iterations\n", fit.c_str(),
                  weight.c_str(), r, iterations);
@@ -143,18 +146,26 @@ void printInfo(const SurfelCloud& c) {
     std::printf("spacing    %g (mean distance to the 6th neighbour)\n", estimateSpacing(finite));
 }
 
-/// Runs smooth / project / sample: the MLS projection of a set of points.
-SurfelCloud runProjection(const SurfelCloud& c, const MlsOptions& opts, std::vector<Vec3> xs,
-                          bool keep_channels) {
+/// Runs smooth / project / sample: the MLS projection of a set of points. Without `xs`, the cloud's own
+/// points are projected (smooth), through the batched neighbour-list path.
+SurfelCloud runProjection(const SurfelCloud& c, const MlsOptions& opts, const std::vector<Vec3>* xs_or_null) {
   const rc::MlsSurface surface(c, opts.config(c));
+  const bool own_points = xs_or_null == nullptr;
+  const std::vector<Vec3>& xs = own_points ? c.positions : *xs_or_null;
   std::vector<rc::MlsProjection> proj;
   const auto t0 = Clock::now();
-  const size_t invalid = projectWithProgress(surface, xs, proj);
+  size_t invalid = 0;
+  if (own_points) {
+    surface.projectInputs(proj);
+    for (const auto& p : proj) invalid += !p.valid;
+  } else {
+    invalid = projectWithProgress(surface, xs, proj);
+  }
   const double s = secondsSince(t0);
   std::fprintf(stderr, "projected %zu points in %.2f s (%.0f points/s), %zu without a valid projection\n",
                xs.size(), s, xs.size() / std::max(s, 1e-9), invalid);
   SurfelCloud result;
-  if (keep_channels) result = c;
+  if (own_points) result = c;
   result.positions.resize(xs.size());
   result.normals.resize(xs.size());
   std::vector<size_t> keep;
@@ -227,10 +238,11 @@ int main(int argc, char** argv) {
       save(out, c);
     } else if (*smooth) {
       const SurfelCloud c = load(in);
-      save(out, runProjection(c, mls_opts, c.positions, true));
+      save(out, runProjection(c, mls_opts, nullptr));
     } else if (*project) {
       const SurfelCloud c = load(in);
-      save(out, runProjection(c, mls_opts, load(queries).positions, false));
+      const std::vector<Vec3> xs = load(queries).positions;
+      save(out, runProjection(c, mls_opts, &xs));
     } else if (*sample) {
       // Jitter randomly chosen input points by about the spacing, then project them onto the surface.
       const SurfelCloud c = load(in);
@@ -240,7 +252,7 @@ int main(int argc, char** argv) {
       std::normal_distribution<double> jitter(0.0, 0.5 * h);
       std::vector<Vec3> xs(count ? count : c.size());
       for (auto& x : xs) x = c.positions[pick(rng)] + Vec3(jitter(rng), jitter(rng), jitter(rng));
-      save(out, runProjection(c, mls_opts, xs, false));
+      save(out, runProjection(c, mls_opts, &xs));
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "rc_surface: error: %s\n", e.what());
