@@ -11,6 +11,7 @@
 #include "core/surfel_cloud.h"
 #include "render/camera.h"
 #include "render/fragment_clipper.h"
+#include "render/splat_workspace.h"
 
 namespace rc {
 
@@ -20,6 +21,9 @@ struct SplatConfig {
   double cutoff_radius = 1.0;          ///< reconstruction kernel cut-off, in units of the surfel radius
   double depth_tolerance_scale = 1.0;  ///< per-fragment fuzzy-depth tolerance multiplier (3.2.1)
   int threads = 0;                     ///< 0: all cores
+  /// Surfels facing away from the camera are drawn too (two-sided, shaded with the flipped normal) unless
+  /// this is set; culling them halves the work for closed models.
+  bool backface_culling = false;
   // Deferred Phong shading (per pixel, from the blended normals)
   bool shading = true;
   Vec3 light_direction_camera = Vec3(-0.3, -0.5, -1.0);  ///< towards the scene, camera frame
@@ -41,6 +45,11 @@ struct RenderImages {
 struct RenderStats {
   size_t surfels = 0, splats = 0, fragments = 0, clipped_fragments = 0;
   size_t edge_on_surfels = 0;  ///< surfels seen (almost) edge-on, drawn through the degenerate-ellipse path
+  size_t invalid_surfels = 0;  ///< skipped: non-finite position/normal/axes or zero radius
+  size_t culled_surfels = 0;   ///< outside the view volume or image, back-facing (if culled) or invisible
+  /// Wall time of set-up and tile binning; the per-tile passes (visibility, accumulation, normalisation
+  /// with shading) run tile by tile, so their times are summed over threads and divided by the thread count.
+  double setup_ms = 0, bin_ms = 0;
   double visibility_ms = 0, accumulate_ms = 0, shade_ms = 0, total_ms = 0;
 };
 
@@ -49,13 +58,20 @@ class SurfelRenderer {
   explicit SurfelRenderer(const SplatConfig& config = {});
   const SplatConfig& config() const { return config_; }
 
-  /// Renders `cloud` (needs normals and radii or axes; patch ids from the attribute "patch_id" if present).
-  /// Throws std::invalid_argument naming what is missing.
+  /// Renders `cloud` (needs normals and radii or axes; patch ids from the attribute "patch_id" if present,
+  /// else 0). Throws std::invalid_argument naming what is missing. The caller calls clipper->prepare() for
+  /// this camera before render(); render() uses only the const, thread-safe clipper methods. Fragments that
+  /// the clipper rejects are dropped in both passes (they do not occlude), except for colour-only clipping.
+  /// stats.splats counts rasterized surfels, stats.fragments the fragments accumulated in the second pass,
+  /// stats.clipped_fragments the fragments (inside the cut-off and the image) that the clipper rejected.
+  /// Images may be at most 65535 pixels wide and high. Scratch memory is kept in the renderer between
+  /// frames; concurrent calls on one renderer are safe (all but one use temporary scratch memory).
   void render(const SurfelCloud& cloud, const Camera& camera, RenderImages* out,
               const FragmentClipper* clipper = nullptr, RenderStats* stats = nullptr) const;
 
  private:
   SplatConfig config_;
+  mutable SplatWorkspaceSlot workspace_;
 };
 
 }  // namespace rc

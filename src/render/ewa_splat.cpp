@@ -1,0 +1,315 @@
+#include "render/ewa_splat.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rc {
+
+CameraFrame::CameraFrame(const Camera& camera)
+    : perspective(camera.projection == Camera::Projection::kPerspective),
+      fx(camera.fx),
+      fy(camera.fy),
+      cx(camera.cx),
+      cy(camera.cy),
+      ortho_scale(camera.ortho_scale),
+      near_clip(camera.near_clip),
+      far_clip(camera.far_clip),
+      width(camera.width),
+      height(camera.height) {
+  world_R_camera = camera.world_T_camera.linear();
+  eye = camera.world_T_camera.translation();
+  camera_R_world = world_R_camera.transpose();
+  camera_t_world = -(camera_R_world * eye);
+}
+
+void tangentAxes(const Vec3& normal, double radius, Vec3* axis1, Vec3* axis2) {
+  const Vec3 helper = std::abs(normal.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  const Vec3 t1 = normal.cross(helper).normalized();
+  const Vec3 t2 = normal.cross(t1);
+  *axis1 = radius * t1;
+  *axis2 = radius * t2;
+}
+
+namespace {
+
+/// Jacobian of the projection (camera frame -> pixels) at camera point c.
+Eigen::Matrix<double, 2, 3> projectionJacobian(const CameraFrame& camera, const Vec3& c) {
+  Eigen::Matrix<double, 2, 3> jacobian = Eigen::Matrix<double, 2, 3>::Zero();
+  if (camera.perspective) {
+    const double inv_z = 1.0 / c.z();
+    jacobian << camera.fx * inv_z, 0, -camera.fx * c.x() * inv_z * inv_z,  //
+        0, camera.fy * inv_z, -camera.fy * c.y() * inv_z * inv_z;
+  } else {
+    jacobian << camera.ortho_scale, 0, 0, 0, camera.ortho_scale, 0;
+  }
+  return jacobian;
+}
+
+/// ceil / floor of `value` clamped to [-1, size] (integer conversion instead of a rounding call).
+int32_t ceilToPixel(double value, uint32_t size) {
+  const double clamped = std::clamp(value, -1.0, double(size));
+  const int32_t truncated = int32_t(clamped);
+  return truncated + (double(truncated) < clamped);
+}
+int32_t floorToPixel(double value, uint32_t size) {
+  const double clamped = std::clamp(value, -1.0, double(size));
+  const int32_t truncated = int32_t(clamped);
+  return truncated - (double(truncated) > clamped);
+}
+
+}  // namespace
+
+namespace {
+
+/// A surfel in the camera frame: centre c, unit normal n, and either scaled tangent axes or a radius.
+struct CameraSurfel {
+  Vec3 c, n;
+  bool has_axes;
+  Vec3 a1, a2;    ///< scaled tangent axes (has_axes)
+  double radius;  ///< circular surfel (!has_axes)
+};
+
+/// Affine map local (s, t) in axis units -> pixel offsets, for the given camera-frame axes.
+Eigen::Matrix2d localToScreen(const Eigen::Matrix<double, 2, 3>& jacobian, const Vec3& a1, const Vec3& a2) {
+  Eigen::Matrix2d local_to_screen;
+  local_to_screen.col(0) = jacobian * a1;
+  local_to_screen.col(1) = jacobian * a2;
+  return local_to_screen;
+}
+
+/// Regularised inverse of the affine map (pixel offset -> local axis units): exact inverse for regular
+/// surfels, the minimum-norm solution along the visible line for edge-on ones.
+Eigen::Matrix2d screenToLocal(const Eigen::Matrix2d& local_to_screen, bool edge_on) {
+  const Eigen::Matrix2d normal_matrix = local_to_screen.transpose() * local_to_screen;
+  const double regularisation = (edge_on ? 1e-3 : 1e-12) * normal_matrix.trace() + 1e-300;
+  return (normal_matrix + regularisation * Eigen::Matrix2d::Identity()).inverse() *
+         local_to_screen.transpose();
+}
+
+SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& camera, const EwaParams& params,
+                             SplatRaster* raster, Eigen::Matrix2d* screen_to_local_out, double* center_u_out,
+                             double* center_v_out, bool* edge_on_out) {
+  const Vec3& c = surfel.c;
+  const Vec3& n = surfel.n;
+  if (!(c.z() >= camera.near_clip && c.z() <= camera.far_clip)) return SplatSetup::kCulled;
+  // cos(normal, view ray) = n.c / |c|, compared squared (no square root)
+  const double n_dot_view = camera.perspective ? n.dot(c) : n.z();
+  const double view_length2 = camera.perspective ? c.squaredNorm() : 1.0;
+  if (params.backface_culling && n_dot_view > 0) return SplatSetup::kCulled;
+
+  // Affine approximation of the projection at the centre: local (s, t) in axis units -> pixel offsets.
+  // Its Gram matrix L L^T is the screen footprint; for a circular surfel L L^T = r^2 J (I - n n^T) J^T.
+  const Eigen::Matrix<double, 2, 3> jacobian = projectionJacobian(camera, c);
+  Eigen::Matrix2d footprint;
+  double scale2, det2, z_half_extent, radius;  // det2 = det(L)^2
+  if (surfel.has_axes) {
+    const Eigen::Matrix2d local_to_screen = localToScreen(jacobian, surfel.a1, surfel.a2);
+    footprint = local_to_screen * local_to_screen.transpose();
+    scale2 = local_to_screen.squaredNorm();
+    det2 = local_to_screen.determinant() * local_to_screen.determinant();
+    z_half_extent = params.cutoff_radius * std::hypot(surfel.a1.z(), surfel.a2.z());
+    radius = params.cutoff_radius * std::max(surfel.a1.norm(), surfel.a2.norm());
+  } else {
+    const Eigen::Vector2d jn = jacobian * n;
+    const double r2 = surfel.radius * surfel.radius;
+    footprint = r2 * (jacobian * jacobian.transpose() - jn * jn.transpose());
+    scale2 = footprint.trace();
+    det2 = footprint.determinant();
+    z_half_extent = params.cutoff_radius * surfel.radius * std::sqrt(std::max(0.0, 1.0 - n.z() * n.z()));
+    radius = params.cutoff_radius * surfel.radius;
+  }
+  const bool edge_on = n_dot_view * n_dot_view < kEdgeOnCosine * kEdgeOnCosine * view_length2 ||
+                       !(det2 > 1e-18 * scale2 * scale2);
+
+  double center_u, center_v;
+  if (camera.perspective) {
+    const double inv_z = 1.0 / c.z();
+    center_u = camera.cx + camera.fx * c.x() * inv_z;
+    center_v = camera.cy + camera.fy * c.y() * inv_z;
+  } else {
+    center_u = camera.cx + camera.ortho_scale * c.x();
+    center_v = camera.cy + camera.ortho_scale * c.y();
+  }
+
+  // Screen-space covariance of the object-space Gaussian, plus the EWA low-pass filter. Edge-on surfels
+  // always get the filter: their conic is (nearly) singular, the filter widens it to a line of pixel width.
+  const double sigma2 = kKernelSigmaPerRadius * kKernelSigmaPerRadius;
+  Eigen::Matrix2d covariance = sigma2 * footprint;
+  if (params.ewa_filter || edge_on) covariance.diagonal().array() += params.lowpass_variance;
+  covariance.diagonal().array() += 1e-6;  // keeps tiny unfiltered splats invertible
+  const double cutoff_sigmas = params.cutoff_radius / kKernelSigmaPerRadius;
+  const double cutoff2 = cutoff_sigmas * cutoff_sigmas;
+  const double det = covariance.determinant();
+  if (!(det > 0) || !std::isfinite(det)) return SplatSetup::kInvalid;
+  // Conic scaled so that r2 = 1 is the cut-off ellipse.
+  const double conic_scale = 1.0 / (det * cutoff2);
+  const Eigen::Array2d half = cutoff_sigmas * covariance.diagonal().array().sqrt();
+  const double half_u = half(0), half_v = half(1);
+  const int32_t x0 = std::max(0, ceilToPixel(center_u - half_u, camera.width));
+  const int32_t x1 = std::min(int32_t(camera.width) - 1, floorToPixel(center_u + half_u, camera.width));
+  const int32_t y0 = std::max(0, ceilToPixel(center_v - half_v, camera.height));
+  const int32_t y1 = std::min(int32_t(camera.height) - 1, floorToPixel(center_v + half_v, camera.height));
+  if (x0 > x1 || y0 > y1) return SplatSetup::kCulled;
+  raster->x0 = uint16_t(x0);
+  raster->x1 = uint16_t(x1);
+  raster->y0 = uint16_t(y0);
+  raster->y1 = uint16_t(y1);
+
+  raster->center_u = float(center_u);
+  raster->center_v = float(center_v);
+  raster->conic_a = float(covariance(1, 1) * conic_scale);
+  raster->conic_b = float(-covariance(0, 1) * conic_scale);
+  raster->conic_c = float(covariance(0, 0) * conic_scale);
+
+  // Depth range of the cut-off ellipse, and the per-surfel fuzzy depth tolerance (3.2.1). At one pixel,
+  // overlapping surfels of the same sheet differ in depth by about their radius times their normal difference
+  // (curvature, noise), stretched along the ray by 1 / cos(view angle): eps = s * k r / max(cos, c_min). The
+  // depth span of the whole disc (r sin) is NOT a measure of that: for a large oblique surfel it would reach
+  // sheets far behind it (a cube face of one surfel would blend with the faces behind). A relative term
+  // absorbs float rounding.
+  double z_lo = c.z() - z_half_extent, z_hi = c.z() + z_half_extent;
+  const double cos_view = std::abs(n_dot_view) / std::sqrt(view_length2);
+  raster->depth_tolerance = float(params.depth_tolerance_scale * kFacingDepthTolerance * radius /
+                                      std::max(cos_view, kMinToleranceCosine) +
+                                  1e-5 * std::abs(c.z()));
+
+  // Depth of the surfel plane along the pixel ray: perspective z = (n.c) / (n.d(u, v)) with d = ((u - cx) /
+  // fx, (v - cy) / fy, 1), i.e. 1/z affine in the pixel offset; orthographic z affine.
+  bool affine_depth = edge_on;
+  if (!edge_on && camera.perspective) {
+    const double d1 = n.x() / camera.fx, d2 = n.y() / camera.fy;
+    const double d0 = d1 * (center_u - camera.cx) + d2 * (center_v - camera.cy) + n.z();
+    // The denominator must keep its sign over the bounding box, otherwise the plane is seen edge-on there.
+    const double du_lo = x0 - center_u, du_hi = x1 - center_u;
+    const double dv_lo = y0 - center_v, dv_hi = y1 - center_v;
+    const double d_min = d0 + std::min(d1 * du_lo, d1 * du_hi) + std::min(d2 * dv_lo, d2 * dv_hi);
+    const double d_max = d0 + std::max(d1 * du_lo, d1 * du_hi) + std::max(d2 * dv_lo, d2 * dv_hi);
+    if (d_min * d_max > 0) {
+      // The EWA-widened footprint extends beyond the disc: the plane depth range over the box is at its
+      // corners.
+      const double numerator = n.dot(c);
+      const double z_a = numerator / d_min, z_b = numerator / d_max;
+      z_lo = std::min({double(float(z_lo)), z_a, z_b});
+      z_hi = std::max({double(float(z_hi)), z_a, z_b});
+      const double inv_d0 = 1.0 / d0;
+      raster->depth_num[0] = float(numerator * inv_d0);
+      raster->depth_num[1] = raster->depth_num[2] = 0;
+      raster->depth_den[0] = float(d1 * inv_d0);
+      raster->depth_den[1] = float(d2 * inv_d0);
+    } else {
+      affine_depth = true;
+    }
+  } else if (!edge_on) {
+    const double inv = -1.0 / (camera.ortho_scale * n.z());
+    const double du_extent = std::max(x1 - center_u, center_u - x0);
+    const double dv_extent = std::max(y1 - center_v, center_v - y0);
+    const double z_extent = std::abs(n.x() * inv) * du_extent + std::abs(n.y() * inv) * dv_extent;
+    z_lo = std::min<double>(float(z_lo), c.z() - z_extent);
+    z_hi = std::max<double>(float(z_hi), c.z() + z_extent);
+    raster->depth_num[0] = float(c.z());
+    raster->depth_num[1] = float(n.x() * inv);
+    raster->depth_num[2] = float(n.y() * inv);
+    raster->depth_den[0] = raster->depth_den[1] = 0;
+  }
+  raster->z_lo = float(z_lo);
+  raster->z_hi = float(z_hi);
+
+  if (affine_depth || screen_to_local_out) {
+    Vec3 a1 = surfel.a1, a2 = surfel.a2;
+    if (!surfel.has_axes) tangentAxes(n, surfel.radius, &a1, &a2);  // any orthonormal pair gives the same
+    const Eigen::Matrix2d screen_to_local = screenToLocal(localToScreen(jacobian, a1, a2), edge_on);
+    if (screen_to_local_out) *screen_to_local_out = screen_to_local;
+    if (affine_depth) {  // z = c.z + (a1.z, a2.z) * screen_to_local * (du, dv)
+      const Eigen::RowVector2d gradient = Eigen::RowVector2d(a1.z(), a2.z()) * screen_to_local;
+      raster->depth_num[0] = float(c.z());
+      raster->depth_num[1] = float(gradient(0));
+      raster->depth_num[2] = float(gradient(1));
+      raster->depth_den[0] = raster->depth_den[1] = 0;
+    }
+  }
+  raster->flags = edge_on ? SplatRaster::kEdgeOn : 0;
+  if (center_u_out) *center_u_out = center_u;
+  if (center_v_out) *center_v_out = center_v;
+  if (edge_on_out) *edge_on_out = edge_on;
+  return edge_on ? SplatSetup::kDrawnEdgeOn : SplatSetup::kDrawn;
+}
+
+}  // namespace
+
+SplatSetup setupEwaSplat(const Vec3& center, const Vec3& normal, const Vec3& axis1, const Vec3& axis2,
+                         const CameraFrame& camera, const EwaParams& params, SplatRaster* raster,
+                         SplatGeometry* geometry) {
+  if (!center.allFinite() || !normal.allFinite() || !axis1.allFinite() || !axis2.allFinite())
+    return SplatSetup::kInvalid;
+  const double normal_length = normal.norm();
+  if (!(normal_length > 0) || !(axis1.norm() > 0) || !(axis2.norm() > 0)) return SplatSetup::kInvalid;
+
+  CameraSurfel surfel;
+  surfel.c = camera.camera_R_world * center + camera.camera_t_world;
+  surfel.n = camera.camera_R_world * normal / normal_length;
+  surfel.has_axes = true;
+  surfel.a1 = camera.camera_R_world * axis1;
+  surfel.a2 = camera.camera_R_world * axis2;
+  surfel.radius = 0;
+  Eigen::Matrix2d screen_to_local;
+  double center_u = 0, center_v = 0;
+  bool edge_on = false;
+  const SplatSetup result = setupCameraSurfel(
+      surfel, camera, params, raster, geometry ? &screen_to_local : nullptr, &center_u, &center_v, &edge_on);
+  if (geometry && (result == SplatSetup::kDrawn || result == SplatSetup::kDrawnEdgeOn)) {
+    geometry->center_world = center;
+    geometry->normal_world = normal / normal_length;
+    geometry->axis1_world = axis1;
+    geometry->axis2_world = axis2;
+    geometry->center_u = center_u;
+    geometry->center_v = center_v;
+    geometry->screen_to_local = screen_to_local;
+    geometry->cutoff = params.cutoff_radius;
+    geometry->edge_on = edge_on;
+  }
+  return result;
+}
+
+SplatSetup setupCircularEwaSplat(const Vec3& center, const Vec3& normal, double radius,
+                                 const CameraFrame& camera, const EwaParams& params, SplatRaster* raster,
+                                 float* unit_normal_out) {
+  if (!center.allFinite() || !normal.allFinite() || !std::isfinite(radius)) return SplatSetup::kInvalid;
+  const double normal_length = normal.norm();
+  if (!(normal_length > 0) || !(std::abs(radius) > 0)) return SplatSetup::kInvalid;
+  const Vec3 unit_normal = normal * (1.0 / normal_length);
+  if (unit_normal_out)
+    for (int k = 0; k < 3; ++k) unit_normal_out[k] = float(unit_normal[k]);
+  CameraSurfel surfel;
+  surfel.c = camera.camera_R_world * center + camera.camera_t_world;
+  surfel.n = camera.camera_R_world * unit_normal;
+  surfel.has_axes = false;
+  surfel.radius = std::abs(radius);
+  return setupCameraSurfel(surfel, camera, params, raster, nullptr, nullptr, nullptr, nullptr);
+}
+
+Vec3 fragmentWorldPoint(const SplatGeometry& geometry, const CameraFrame& camera, double u, double v) {
+  if (!geometry.edge_on) {
+    Vec3 origin, direction;
+    if (camera.perspective) {
+      origin = camera.eye;
+      direction = camera.world_R_camera * Vec3((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+    } else {
+      origin = camera.eye + camera.world_R_camera * Vec3((u - camera.cx) / camera.ortho_scale,
+                                                         (v - camera.cy) / camera.ortho_scale, 0.0);
+      direction = camera.world_R_camera.col(2);
+    }
+    const double denominator = geometry.normal_world.dot(direction);
+    if (std::abs(denominator) > 1e-12 * direction.norm()) {
+      const double t = geometry.normal_world.dot(geometry.center_world - origin) / denominator;
+      if (std::isfinite(t)) return origin + t * direction;
+    }
+  }
+  Eigen::Vector2d local =
+      geometry.screen_to_local * Eigen::Vector2d(u - geometry.center_u, v - geometry.center_v);
+  const double length = local.norm();
+  if (length > geometry.cutoff) local *= geometry.cutoff / length;
+  return geometry.center_world + local.x() * geometry.axis1_world + local.y() * geometry.axis2_world;
+}
+
+}  // namespace rc

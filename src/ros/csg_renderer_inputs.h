@@ -1,0 +1,45 @@
+// The inputs of csg_renderer: surfel patch clouds checked for rendering, moved into the fixed frame and
+// merged into one cloud with the int32 attributes "patch_id" and "surfel_role" that rc::CsgClipper reads.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "core/surfel_cloud.h"
+
+namespace rc {
+
+/// Attribute names shared with the CSG clipper (src/render/csg_clipper.h).
+constexpr const char* kPatchIdAttribute = "patch_id";
+constexpr const char* kSurfelRoleAttribute = "surfel_role";
+
+/// Checks that `cloud` can be splatted: not empty, normals and radii (or tangent axes) present, every
+/// position/normal/radius finite, normals non-zero, radii positive; with `require_patch_id` also a "patch_id"
+/// attribute of non-negative integers; a "surfel_role" attribute must hold 0, 1 or 2. Throws
+/// std::invalid_argument naming the channel and the problem (e.g. "no normals (fields normal_x, normal_y,
+/// normal_z)", "3 of 100 surfels have non-finite positions").
+void checkRenderableCloud(const SurfelCloud& cloud, bool require_patch_id);
+
+/// Moves positions, normals and tangent axes by `fixed_T_cloud` (a rigid transform).
+void transformCloud(SurfelCloud& cloud, const Eigen::Isometry3d& fixed_T_cloud);
+
+/// One checked input cloud. patch_id >= 0 overrides the cloud's own "patch_id" attribute (patch topics);
+/// -1 keeps the attribute (the `surfels` topic).
+struct PatchCloudInput {
+  const SurfelCloud* cloud = nullptr;
+  int patch_id = -1;
+};
+
+/// Concatenates the inputs into one cloud: positions, unit normals, radii (for elliptical surfels the radius
+/// of the enclosing disc, max(|t1|, |t2|), unless every input has axes, which are then kept as well), colours
+/// when any input has them (`default_color` for the others), and int32 columns "patch_id" and "surfel_role"
+/// (0 where an input has no role). Other attributes are dropped. Throws std::invalid_argument for an input
+/// that fails checkRenderableCloud.
+SurfelCloud mergePatchClouds(const std::vector<PatchCloudInput>& inputs, const std::string& frame_id,
+                             const Rgba& default_color = {200, 200, 200, 255});
+
+/// Sorted distinct values of the "patch_id" attribute (empty if absent).
+std::vector<int> patchIds(const SurfelCloud& cloud);
+
+}  // namespace rc
