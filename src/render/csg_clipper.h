@@ -45,6 +45,8 @@ class CsgClipper : public FragmentClipper {
   bool keepFragment(uint32_t surfel, const Vec3& x) const override;
   bool isVisible(uint32_t surfel) const override { return visible_[surfel] != 0; }
   bool clipsColorOnly(uint32_t surfel) const override { return color_only_[surfel] != 0; }
+  /// Surfels of complemented patches (isInverted()) are shaded with the reversed normal.
+  bool flipsNormal(uint32_t surfel) const override { return inverted_[surfel] != 0; }
 
   /// Algorithm 4.4: x against `patch` from the partners of `surfel` in that patch (not inverted).
   Tri insidePatch(uint32_t surfel, int patch, const Vec3& x) const;

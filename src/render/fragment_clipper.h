@@ -23,6 +23,9 @@ class FragmentClipper {
   /// True if a rejected fragment of `surfel` loses only its colour contribution (surfels clipped by texture
   /// discontinuity surfels, 4.3): its weight, depth and normal still blend, so shading stays smooth.
   virtual bool clipsColorOnly(uint32_t surfel) const { return false; }
+  /// True if the renderer shades `surfel` with its normal reversed (walls of complemented patches, 4.2:
+  /// their normals point into the solid they bound). Shading only; clipping uses the original normals.
+  virtual bool flipsNormal(uint32_t surfel) const { return false; }
 };
 
 }  // namespace rc

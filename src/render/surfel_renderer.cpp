@@ -46,7 +46,10 @@ constexpr int kBlocksPerTile = kTileSize / kBlockSize;
 /// Tile-local buffers of the two passes (structure of arrays), pixel (x, y) of the tile at (x0, y0) at
 /// (y - y0) * kTileStride + x - x0.
 struct TileBuffers {
-  alignas(16) float bound[kTileBufferSize];  ///< pass 1: smallest z + eps_z
+  alignas(16) float bound[kTileBufferSize];            ///< pass 1: smallest z + eps_z
+  alignas(16) float front[kTileBufferSize];            ///< pass 1: smallest z
+  alignas(16) int32_t front_patch[kTileBufferSize];    ///< pass 1: patch of the fragment at the smallest z
+  alignas(16) float front_normal[3][kTileBufferSize];  ///< pass 1: its unit normal (shading normal)
   alignas(16) float weight[kTileBufferSize];
   alignas(16) float color_weight[kTileBufferSize];
   alignas(16) float depth[kTileBufferSize];
@@ -57,10 +60,13 @@ struct TileBuffers {
 
   void clear() {
     std::fill_n(bound, kTileBufferSize, std::numeric_limits<float>::infinity());
+    std::fill_n(front, kTileBufferSize, std::numeric_limits<float>::infinity());
     for (float* buffer : {weight, color_weight, depth, color[0], color[1], color[2], normal[0], normal[1],
                           normal[2], max_weight})
       std::fill_n(buffer, kTileBufferSize, 0.0f);
     std::fill_n(patch_id, kTileBufferSize, -1);
+    std::fill_n(front_patch, kTileBufferSize, -1);
+    for (float* buffer : front_normal) std::fill_n(buffer, kTileBufferSize, 0.0f);
   }
 };
 
@@ -158,6 +164,26 @@ inline void rasterizeSplat4(const SplatRaster& s, const TileRect& tile, Visit&& 
       visit(base + x, r2, z, mask);
     }
   }
+}
+#endif
+
+/// With CSG clipping, a fragment of another patch than the pixel's front fragment blends only if its normal
+/// is within acos(kCrossPatchBlendCosine) (about 25 deg) of the front normal: patches meet at sharp edges or
+/// lie behind each other (a face behind a silhouette), but texture patches of one sheet (4.3) still blend.
+constexpr float kCrossPatchBlendCosine = 0.9f;
+
+#if defined(__SSE2__)
+/// Lanes where `all` is set, `patch` equals the front patch, or the normals agree (kCrossPatchBlendCosine).
+inline __m128 blendsWithFront(__m128 all, __m128 patch, const float normal[3], const TileBuffers& tb, int i) {
+  const __m128i front = _mm_loadu_si128(reinterpret_cast<const __m128i*>(tb.front_patch + i));
+  const float* const front_normal[3] = {tb.front_normal[0] + i, tb.front_normal[1] + i,
+                                        tb.front_normal[2] + i};
+  const __m128 same = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_castps_si128(patch), front));
+  const __m128 cosine =
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(normal[0]), _mm_loadu_ps(front_normal[0])),
+                            _mm_mul_ps(_mm_set1_ps(normal[1]), _mm_loadu_ps(front_normal[1]))),
+                 _mm_mul_ps(_mm_set1_ps(normal[2]), _mm_loadu_ps(front_normal[2])));
+  return _mm_or_ps(_mm_or_ps(all, same), _mm_cmpge_ps(cosine, _mm_set1_ps(kCrossPatchBlendCosine)));
 }
 #endif
 
@@ -295,6 +321,8 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
         const Vec3 unit_normal = normal.normalized();
         for (int k = 0; k < 3; ++k) shading.normal[k] = float(unit_normal[k]);
       }
+      if (clipper && clipper->flipsNormal(uint32_t(i)))  // cavity wall of a complemented patch (4.2)
+        for (float& component : shading.normal) component = -component;
       if (result == SplatSetup::kInvalid) {
         ++counts.invalid;
         continue;
@@ -404,9 +432,13 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   const uint8_t alpha = config_.default_color[3];
   const float infinity = std::numeric_limits<float>::infinity();
 
-  // --- Per tile: pass 1 (visibility, 3.2.2) finds per pixel the smallest z + eps_z over all (unclipped)
-  // fragments; pass 2 (accumulation) blends the fragments with z <= that bound; then the tile is normalised
-  // and shaded (deferred Phong, two-sided: the normal is turned towards the viewer). ---
+  // --- Per tile: pass 1 (visibility, 3.2.2) finds per pixel the smallest z and the smallest z + eps_z over
+  // all (unclipped) fragments; pass 2 (accumulation) blends the fragments with z <= that bound and
+  // z - eps_z <= the smallest z (a large front surfel does not pull in small ones behind it); then the tile
+  // is normalised and shaded (deferred Phong, two-sided: the normal is turned towards the viewer). --- With
+  // CSG clipping, fragments of different patches meet only at (sharp) edges: a fragment blends only with the
+  // patch of the pixel's front fragment, so a face behind a silhouette does not bleed in.
+  const bool separate_patches = clipper != nullptr;
   size_t fragments = 0, clipped_fragments = 0;
   double visibility_ms = 0, accumulate_ms = 0, shade_ms = 0;
 #pragma omp parallel num_threads(threads) reduction(+ : fragments, clipped_fragments, visibility_ms, \
@@ -433,20 +465,37 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
         if (k + kPrefetchDistance < splat_count) __builtin_prefetch(staged + items[k + kPrefetchDistance]);
         const SplatRaster& s = staged[items[k]];
         const float tolerance = s.depth_tolerance;
+        const SplatShading& front_shading = staged_shading[items[k]];
+        const int32_t patch = front_shading.patch_id;
         const bool clip = (s.flags & SplatRaster::kClip) != 0;
         if (clip || !kSimd) {
           rasterizeSplat(s, rect, [&](int x, int y, float, float z) {
             if (clip && !keeps(s, x, y)) return;
-            float& b = tb.bound[index(x, y)];
-            b = std::min(b, z + tolerance);
+            const int i = index(x, y);
+            tb.bound[i] = std::min(tb.bound[i], z + tolerance);
+            if (z < tb.front[i]) {
+              tb.front[i] = z;
+              tb.front_patch[i] = patch;
+              for (int c = 0; c < 3; ++c) tb.front_normal[c][i] = front_shading.normal[c];
+            }
           });
           continue;
         }
 #if defined(__SSE2__)
         const __m128 tolerance4 = _mm_set1_ps(tolerance);
+        const __m128 patch4 = _mm_castsi128_ps(_mm_set1_epi32(patch));
         rasterizeSplat4(s, rect, [&](int i, __m128, __m128 z, __m128 mask) {
-          const __m128 b = _mm_loadu_ps(tb.bound + i);
+          const __m128 b = _mm_loadu_ps(tb.bound + i), f = _mm_loadu_ps(tb.front + i);
           _mm_storeu_ps(tb.bound + i, select(mask, _mm_min_ps(b, _mm_add_ps(z, tolerance4)), b));
+          const __m128 nearer = _mm_and_ps(mask, _mm_cmplt_ps(z, f));
+          _mm_storeu_ps(tb.front + i, select(nearer, z, f));
+          float* front_patches = reinterpret_cast<float*>(tb.front_patch + i);
+          _mm_storeu_ps(front_patches, select(nearer, patch4, _mm_loadu_ps(front_patches)));
+          for (int c = 0; c < 3; ++c) {
+            float* front_normal = tb.front_normal[c] + i;
+            _mm_storeu_ps(front_normal,
+                          select(nearer, _mm_set1_ps(front_shading.normal[c]), _mm_loadu_ps(front_normal)));
+          }
         });
 #endif
       }
@@ -491,6 +540,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
                      {float(attributes.color[0]), float(attributes.color[1]), float(attributes.color[2])},
                      attributes.patch_id};
         const bool clip = (s.flags & (SplatRaster::kClip | SplatRaster::kClipColorOnly)) != 0;
+        const float tolerance = s.depth_tolerance;
         if (clip || !kSimd) {
           const bool color_only = (s.flags & SplatRaster::kClipColorOnly) != 0;
           rasterizeSplat(s, rect, [&](int x, int y, float r2, float z) {
@@ -501,7 +551,14 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
               add_color = false;
             }
             const int i = index(x, y);
-            if (z > tb.bound[i]) return;
+            // Blend iff within the tolerance of the front surfel AND within this surfel's own tolerance of
+            // the front depth: eps_z from both the pixel's and the incoming surfel (3.2.1).
+            if (z > tb.bound[i] || z - tolerance > tb.front[i]) return;
+            if (separate_patches && shading.patch_id != tb.front_patch[i] &&
+                shading.normal[0] * tb.front_normal[0][i] + shading.normal[1] * tb.front_normal[1][i] +
+                        shading.normal[2] * tb.front_normal[2][i] <
+                    kCrossPatchBlendCosine)
+              return;
             const int step = std::min(kWeightTableSteps, int(std::max(r2, 0.0f) * kWeightTableSteps + 0.5f));
             const float w = weight_table[step];
             tb.weight[i] += w;
@@ -527,8 +584,13 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
         const __m128 patch = _mm_castsi128_ps(_mm_set1_epi32(shading.patch_id));
         const __m128 steps = _mm_set1_ps(float(kWeightTableSteps)), half = _mm_set1_ps(0.5f);
         const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+        const __m128 tolerance4 = _mm_set1_ps(tolerance);
+        const __m128 all_patches = separate_patches ? _mm_setzero_ps() : _mm_castsi128_ps(_mm_set1_epi32(-1));
         rasterizeSplat4(s, rect, [&](int i, __m128 r2, __m128 z, __m128 mask) {
-          const __m128 pass = _mm_and_ps(mask, _mm_cmple_ps(z, _mm_loadu_ps(tb.bound + i)));
+          const __m128 pass =
+              _mm_and_ps(_mm_and_ps(mask, _mm_cmple_ps(z, _mm_loadu_ps(tb.bound + i))),
+                         _mm_and_ps(_mm_cmple_ps(_mm_sub_ps(z, tolerance4), _mm_loadu_ps(tb.front + i)),
+                                    blendsWithFront(all_patches, patch, shading.normal, tb, i)));
           const int bits = _mm_movemask_ps(pass);
           if (!bits) return;
           fragments += kBitCount[bits];

@@ -295,6 +295,31 @@ TEST(CsgClipper, UpdatePerFrameKeepsPartnersAndBothMethodsAgree) {
   EXPECT_EQ(wrong, 0);
 }
 
+TEST(CsgClipper, SurfelsOfComplementedPatchesFlipTheirShadingNormal) {
+  SceneBuilder b;
+  b.grid(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), 1, 1, 0.2, 0);  // A
+  b.grid(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), 1, 1, 0.2, 1);  // B
+  b.grid(Vec3(0, 0, 0), Vec3(0, 1, 0), Vec3(1, 0, 0), 1, 1, 0.2, 2);  // C
+  const SurfelCloud cloud = b.build();
+  // A - (B | !C) = A & !B & C: B is complemented, C twice complemented (not), A not.
+  const CsgClipper clipper(cloud, CsgTree::parse("A - (B | !C)", kNames));
+  int flipped[3] = {0, 0, 0}, counts[3] = {0, 0, 0};
+  for (uint32_t s = 0; s < cloud.size(); ++s) {
+    ++counts[b.patch[s]];
+    flipped[b.patch[s]] += clipper.flipsNormal(s);
+    EXPECT_EQ(clipper.flipsNormal(s), clipper.isInverted(s));
+  }
+  EXPECT_EQ(flipped[0], 0);
+  EXPECT_EQ(flipped[1], counts[1]);
+  EXPECT_EQ(flipped[2], 0);
+  EXPECT_GT(counts[1], 0);
+  // Flipping is for shading only: the clipper's geometry keeps the stored normals.
+  for (uint32_t s = 0; s < cloud.size(); ++s)
+    if (b.patch[s] == 1) {
+      EXPECT_EQ(clipper.discs().normals[s], Vec3(1, 0, 0));
+    }
+}
+
 TEST(CsgClipper, BadInputIsRejected) {
   SceneBuilder b;
   b.add(Vec3(0, 0, 0), Vec3(0, 0, 1), 1, 5);

@@ -404,5 +404,69 @@ TEST(SurfelRenderer, BackfaceCullingAndPatchIds) {
   EXPECT_EQ(images.patch_id[right], -1);
 }
 
+/// Clips nothing; reverses the shading normal of the surfels at or after `first_flipped`.
+class FlippingClipper : public FragmentClipper {
+ public:
+  explicit FlippingClipper(uint32_t first_flipped) : first_flipped_(first_flipped) {}
+  bool needsClipping(uint32_t) const override { return false; }
+  bool keepFragment(uint32_t, const Vec3&) const override { return true; }
+  bool flipsNormal(uint32_t surfel) const override { return surfel >= first_flipped_; }
+
+ private:
+  uint32_t first_flipped_;
+};
+
+TEST(SurfelRenderer, FlippedNormalsOfComplementedPatchesShadeOnly) {
+  // Left half: a plane with normals towards the camera; right half: its continuation whose stored normals
+  // point away (a cavity wall of a complemented patch). Flipping makes the blended normal continuous.
+  const Camera camera = frontCamera();
+  SurfelCloud cloud = samplePlane(3.0, 0, 0.6, 0.02, 1.0, {200, 200, 200, 255});
+  std::vector<size_t> left, right;
+  for (size_t i = 0; i < cloud.size(); ++i) (cloud.positions[i].x() < 0 ? left : right).push_back(i);
+  SurfelCloud right_cloud = cloud, left_cloud = cloud;
+  left_cloud.select(left);
+  right_cloud.select(right);
+  for (Vec3& n : right_cloud.normals) n = -n;
+  const uint32_t first_flipped = uint32_t(left_cloud.size());
+  left_cloud.append(right_cloud);
+  const FlippingClipper flipping(first_flipped), none(uint32_t(left_cloud.size()));
+  RenderImages flipped, plain;
+  SurfelRenderer renderer(unshaded());
+  renderer.render(left_cloud, camera, &flipped, &flipping);
+  renderer.render(left_cloud, camera, &plain, &none);
+  size_t towards_camera = 0, cancelled = 0, checked = 0;
+  for (uint32_t v = 70; v <= 130; ++v)
+    for (uint32_t u = 60; u <= 140; ++u) {
+      const size_t p = v * camera.width + u;
+      ++checked;
+      towards_camera += flipped.normal[p].z() < -0.999f;
+      // Without flipping, the two halves' normals cancel at the seam (or point away on the right).
+      cancelled += !(plain.normal[p].z() < -0.999f);
+      EXPECT_FLOAT_EQ(flipped.depth[p], plain.depth[p]);  // geometry is unchanged
+    }
+  EXPECT_EQ(towards_camera, checked);
+  EXPECT_GT(cancelled, checked / 3);
+}
+
+TEST(SurfelRenderer, LargeFrontSurfelDoesNotPullInSmallSurfelsBehind) {
+  // One large surfel (tolerance 0.1 r = 0.1) in front of a dense plane 0.03 behind (tolerance 0.001) of
+  // another patch at the same orientation: the plane lies within the big surfel's tolerance but not within
+  // its own, so it must not blend (eps_z from both surfels, 3.2.1).
+  const Camera camera = frontCamera();
+  SurfelCloud cloud;
+  addSurfel(cloud, Vec3(0, 0, 3.0), Vec3(0, 0, -1), 1.0, {255, 0, 0, 255});
+  cloud.append(samplePlane(3.03, 0, 0.3, 0.01, 1.0, {0, 0, 255, 255}));
+  RenderImages images;
+  SurfelRenderer(unshaded()).render(cloud, camera, &images);
+  size_t pure_front = 0, checked = 0;
+  for (uint32_t v = 80; v <= 120; ++v)
+    for (uint32_t u = 80; u <= 120; ++u) {
+      const size_t p = v * camera.width + u;
+      ++checked;
+      pure_front += images.color[p] == Rgba{255, 0, 0, 255} && std::abs(images.depth[p] - 3.0f) < 1e-4f;
+    }
+  EXPECT_EQ(pure_front, checked);
+}
+
 }  // namespace
 }  // namespace rc
