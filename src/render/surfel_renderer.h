@@ -26,7 +26,9 @@ struct SplatConfig {
   bool backface_culling = false;
   // Deferred Phong shading (per pixel, from the blended normals)
   bool shading = true;
-  Vec3 light_direction_camera = Vec3(-0.3, -0.5, -1.0);  ///< towards the scene, camera frame
+  Vec3 light_direction_camera =
+      Vec3(0.3, 0.5, 1.0);  ///< direction the light travels (camera optical frame: +z into the scene);
+                            ///< default from behind the camera, upper left
   double ambient = 0.25, diffuse = 0.7, specular = 0.25, shininess = 30;
   Rgba background = {255, 255, 255, 255};
   Rgba default_color = {200, 200, 200, 255};  ///< for clouds without colours

@@ -395,8 +395,10 @@ TEST(SurfelRenderer, BackfaceCullingAndPatchIds) {
   const size_t left = 100 * camera.width + 88, right = 100 * camera.width + 112;
   EXPECT_EQ(images.patch_id[left], 7);
   EXPECT_EQ(images.patch_id[right], 9);
-  // Two-sided shading: the back face is lit like the front face.
-  EXPECT_EQ(int(images.color[right][1]), int(images.color[left][0]));
+  // Two-sided shading: the back face is lit like the front face (up to the specular term, whose view
+  // direction differs between the two mirrored pixels), and the diffuse light reaches both.
+  EXPECT_NEAR(int(images.color[right][1]), int(images.color[left][0]), 3);
+  EXPECT_GT(int(images.color[left][0]), int(0.5 * 255));
   SplatConfig config;
   config.backface_culling = true;
   SurfelRenderer(config).render(cloud, camera, &images, nullptr, &stats);
