@@ -53,13 +53,12 @@ T load(const uint8_t* p) {
 }
 template <typename T>
 void store(uint8_t* p, double v) {
-  T t = static_cast<T>(v);
+  const T t = static_cast<T>(v);
   std::memcpy(p, &t, sizeof(T));
 }
 }  // namespace
 
-double Attribute::get(size_t i, uint32_t component) const {
-  const uint8_t* p = bytes.data() + i * stride() + component * scalarSize(type);
+double scalarToDouble(const uint8_t* p, ScalarType type) {
   switch (type) {
     case ScalarType::kInt8:
       return load<int8_t>(p);
@@ -81,34 +80,41 @@ double Attribute::get(size_t i, uint32_t component) const {
   return 0.0;
 }
 
-void Attribute::set(size_t i, double value, uint32_t component) {
-  uint8_t* p = bytes.data() + i * stride() + component * scalarSize(type);
+void doubleToScalar(double value, ScalarType type, uint8_t* out) {
   switch (type) {
     case ScalarType::kInt8:
-      store<int8_t>(p, value);
+      store<int8_t>(out, value);
       break;
     case ScalarType::kUInt8:
-      store<uint8_t>(p, value);
+      store<uint8_t>(out, value);
       break;
     case ScalarType::kInt16:
-      store<int16_t>(p, value);
+      store<int16_t>(out, value);
       break;
     case ScalarType::kUInt16:
-      store<uint16_t>(p, value);
+      store<uint16_t>(out, value);
       break;
     case ScalarType::kInt32:
-      store<int32_t>(p, value);
+      store<int32_t>(out, value);
       break;
     case ScalarType::kUInt32:
-      store<uint32_t>(p, value);
+      store<uint32_t>(out, value);
       break;
     case ScalarType::kFloat32:
-      store<float>(p, value);
+      store<float>(out, value);
       break;
     case ScalarType::kFloat64:
-      store<double>(p, value);
+      store<double>(out, value);
       break;
   }
+}
+
+double Attribute::get(size_t i, uint32_t component) const {
+  return scalarToDouble(bytes.data() + i * stride() + component * scalarSize(type), type);
+}
+
+void Attribute::set(size_t i, double value, uint32_t component) {
+  doubleToScalar(value, type, bytes.data() + i * stride() + component * scalarSize(type));
 }
 
 Attribute& AttributeSet::add(const std::string& name, ScalarType type, uint32_t count, size_t n) {

@@ -14,6 +14,10 @@ enum class ScalarType : uint8_t { kInt8, kUInt8, kInt16, kUInt16, kInt32, kUInt3
 
 size_t scalarSize(ScalarType type);
 const char* scalarName(ScalarType type);
+/// The scalar of `type` at `p` (host byte order, any alignment) as a double.
+double scalarToDouble(const uint8_t* p, ScalarType type);
+/// Writes `value` converted to `type` at `out` (host byte order, any alignment).
+void doubleToScalar(double value, ScalarType type, uint8_t* out);
 
 /// One attribute column: `count` scalars of `type` per surfel, stored as raw bytes (so any field survives a
 /// round trip bit-exactly, whether or not this library understands it).

@@ -41,28 +41,6 @@ void appendNumber(T v, std::string* out) {
 }
 }  // namespace
 
-double scalarToDouble(const uint8_t* p, ScalarType type) {
-  switch (type) {
-    case ScalarType::kInt8:
-      return load<int8_t>(p);
-    case ScalarType::kUInt8:
-      return load<uint8_t>(p);
-    case ScalarType::kInt16:
-      return load<int16_t>(p);
-    case ScalarType::kUInt16:
-      return load<uint16_t>(p);
-    case ScalarType::kInt32:
-      return load<int32_t>(p);
-    case ScalarType::kUInt32:
-      return load<uint32_t>(p);
-    case ScalarType::kFloat32:
-      return load<float>(p);
-    case ScalarType::kFloat64:
-      return load<double>(p);
-  }
-  return 0.0;
-}
-
 int64_t scalarToInt64(const uint8_t* p, ScalarType type) {
   switch (type) {
     case ScalarType::kInt8:
@@ -87,35 +65,6 @@ int64_t scalarToInt64(const uint8_t* p, ScalarType type) {
     }
   }
   return 0;
-}
-
-void doubleToScalar(double value, ScalarType type, uint8_t* out) {
-  switch (type) {
-    case ScalarType::kInt8:
-      store(static_cast<int8_t>(value), out);
-      break;
-    case ScalarType::kUInt8:
-      store(static_cast<uint8_t>(value), out);
-      break;
-    case ScalarType::kInt16:
-      store(static_cast<int16_t>(value), out);
-      break;
-    case ScalarType::kUInt16:
-      store(static_cast<uint16_t>(value), out);
-      break;
-    case ScalarType::kInt32:
-      store(static_cast<int32_t>(value), out);
-      break;
-    case ScalarType::kUInt32:
-      store(static_cast<uint32_t>(value), out);
-      break;
-    case ScalarType::kFloat32:
-      store(static_cast<float>(value), out);
-      break;
-    case ScalarType::kFloat64:
-      store(value, out);
-      break;
-  }
 }
 
 bool parseScalar(std::string_view token, ScalarType type, uint8_t* out) {

@@ -1,4 +1,5 @@
-// Conversions between raw scalar bytes (rc::ScalarType, host byte order), doubles and text.
+// Conversions between raw scalar bytes (rc::ScalarType, host byte order), integers and text; to and from
+// doubles: scalarToDouble / doubleToScalar in core/attribute.h.
 #pragma once
 
 #include <algorithm>
@@ -22,12 +23,8 @@ inline void reverseBytes(uint8_t* p, size_t n) {
   std::reverse(p, p + n);
 }
 
-/// The scalar at `p` (host byte order) as a double.
-double scalarToDouble(const uint8_t* p, ScalarType type);
 /// The scalar at `p` as an integer (floating-point values are truncated).
 int64_t scalarToInt64(const uint8_t* p, ScalarType type);
-/// Writes `value` converted to `type` at `out`.
-void doubleToScalar(double value, ScalarType type, uint8_t* out);
 /// Parses a text token as `type` into `out`; integers written as "3.0" are accepted. False if not a number.
 bool parseScalar(std::string_view token, ScalarType type, uint8_t* out);
 /// Appends the scalar at `p` as text that reads back to the same value (shortest round-trip form).

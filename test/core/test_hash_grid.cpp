@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "spatial_test_points.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -12,34 +14,8 @@
 namespace rc {
 namespace {
 
-enum class Layout { kUniform, kClustered, kSphere };
-
-std::vector<Vec3> makePoints(Layout layout, size_t n, uint32_t seed, double scale = 1.0,
-                             const Vec3& offset = Vec3::Zero()) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> uni(-1.0, 1.0);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  std::vector<Vec3> centers;
-  for (int c = 0; c < 8; ++c) centers.emplace_back(uni(rng), uni(rng), uni(rng));
-  std::vector<Vec3> pts(n);
-  for (size_t i = 0; i < n; ++i) {
-    Vec3 p = Vec3::Zero();
-    switch (layout) {
-      case Layout::kUniform:
-        p = Vec3(uni(rng), uni(rng), uni(rng));
-        break;
-      case Layout::kClustered:
-        p = centers[i % centers.size()] + 0.03 * Vec3(gauss(rng), gauss(rng), gauss(rng));
-        break;
-      case Layout::kSphere:
-        p = Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized();
-        break;
-    }
-    pts[i] = offset + scale * p;
-  }
-  return pts;
-}
-
+using test::Layout;
+using test::makePoints;
 /// Reference: the live points of a dynamic set (NaN marks a removed id).
 std::vector<double> bruteDists(const std::vector<Vec3>& pts, const Vec3& q, double r, size_t k) {
   std::vector<double> d;
