@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <thread>
+
 #include <cmath>
 #include <cstring>
 
@@ -290,6 +292,37 @@ TEST(SurfelRenderer, DeterministicForAnyThreadCount) {
   EXPECT_EQ(0, std::memcmp(images[0].weight.data(), images[1].weight.data(), n * sizeof(float)));
   EXPECT_EQ(0, std::memcmp(images[0].normal.data(), images[1].normal.data(), n * sizeof(Eigen::Vector3f)));
   EXPECT_EQ(images[0].patch_id, images[1].patch_id);
+}
+
+// The renderer keeps scratch memory between frames: a second frame of another scene, a copied renderer and
+// two threads rendering with one renderer at the same time all give the images of a fresh renderer.
+TEST(SurfelRenderer, ReusedCopiedAndConcurrentRenderersGiveFreshResults) {
+  const Camera camera = frontCamera(129, 150);
+  const SurfelCloud sphere = sampleSphere(Vec3(0, 0, 4), 1.0, 8000, {200, 50, 50, 255});
+  const SurfelCloud plane = samplePlane(4.5, 0.2, 1.5, 0.05, 1.0, {50, 50, 200, 255});
+  RenderImages fresh_sphere, fresh_plane;
+  SurfelRenderer().render(sphere, camera, &fresh_sphere);
+  SurfelRenderer().render(plane, camera, &fresh_plane);
+  auto same = [](const RenderImages& a, const RenderImages& b) {
+    return a.depth.size() == b.depth.size() &&
+           std::memcmp(a.depth.data(), b.depth.data(), a.depth.size() * sizeof(float)) == 0 &&
+           std::memcmp(a.color.data(), b.color.data(), a.color.size() * sizeof(Rgba)) == 0 &&
+           a.patch_id == b.patch_id;
+  };
+  SurfelRenderer reused;
+  RenderImages images;
+  reused.render(sphere, camera, &images);
+  reused.render(plane, camera, &images);
+  EXPECT_TRUE(same(images, fresh_plane));
+  const SurfelRenderer copy = reused;
+  copy.render(sphere, camera, &images);
+  EXPECT_TRUE(same(images, fresh_sphere));
+  RenderImages concurrent[2];
+  std::thread other([&] { reused.render(plane, camera, &concurrent[1]); });
+  reused.render(sphere, camera, &concurrent[0]);
+  other.join();
+  EXPECT_TRUE(same(concurrent[0], fresh_sphere));
+  EXPECT_TRUE(same(concurrent[1], fresh_plane));
 }
 
 /// Keeps fragments with world x < 0 of surfel 0.
