@@ -42,29 +42,9 @@ void appendNumber(T v, std::string* out) {
 }  // namespace
 
 int64_t scalarToInt64(const uint8_t* p, ScalarType type) {
-  switch (type) {
-    case ScalarType::kInt8:
-      return load<int8_t>(p);
-    case ScalarType::kUInt8:
-      return load<uint8_t>(p);
-    case ScalarType::kInt16:
-      return load<int16_t>(p);
-    case ScalarType::kUInt16:
-      return load<uint16_t>(p);
-    case ScalarType::kInt32:
-      return load<int32_t>(p);
-    case ScalarType::kUInt32:
-      return load<uint32_t>(p);
-    case ScalarType::kFloat32: {
-      const float f = load<float>(p);
-      return std::isfinite(f) ? static_cast<int64_t>(f) : -1;
-    }
-    case ScalarType::kFloat64: {
-      const double d = load<double>(p);
-      return std::isfinite(d) ? static_cast<int64_t>(d) : -1;
-    }
-  }
-  return 0;
+  // Every integer type up to 32 bits is exact in a double; non-finite floats map to -1.
+  const double d = scalarToDouble(p, type);
+  return std::isfinite(d) ? static_cast<int64_t>(d) : -1;
 }
 
 bool parseScalar(std::string_view token, ScalarType type, uint8_t* out) {

@@ -130,7 +130,7 @@ struct Scene {
   SurfelCloud atTime(double t) const;
   /// Same as atTime(), writing into `out` (reuses its storage; `out` must be a copy of `surfels`).
   void moveTo(double t, SurfelCloud* out) const;
-  /// Analytic solids at time t, index = patch id (texture-discontinuity patches get an empty placeholder).
+  /// Analytic solids at time t, index = patch id (texture-discontinuity patches get an empty solid).
   std::vector<AnalyticSolid> solidsAt(double t) const;
   /// Analytic reference of the scene at time t. Throws std::invalid_argument if the CSG uses a patch without
   /// analytic solid (texture squares: use analyticGeometryCaster()).
