@@ -54,7 +54,7 @@ int main(int argc, char** argv) {
   for (const ThesisRow& row : kThesis) {
     const rc::Scene scene = rc::loadScene(dir + "/" + row.scene + ".yaml");
     rc::SceneRenderOptions options;
-    options.partner_method = spatial ? rc::PartnerMethod::kSpatialIndex : rc::PartnerMethod::kClipBuffer;
+    options.clipper.method = spatial ? rc::PartnerMethod::kSpatialIndex : rc::PartnerMethod::kClipBuffer;
     rc::SceneRenderer renderer(scene, options);
     for (const rc::SceneCamera& sc : scene.cameras) {
       rc::Camera camera = sc.camera;

@@ -1,6 +1,7 @@
 #include "render/csg_clipper.h"
 
 #include <algorithm>
+#include <cstring>
 #include <stdexcept>
 
 #include "render/clip_inside_patch.h"
@@ -29,6 +30,7 @@ void CsgClipper::classify() {
   discs_.updateGeometry(cloud_);
   finder_.findSpatial(discs_, &partners_, nullptr, &stats_);
   classes_ = classifySurfels(discs_, partners_, tree_);
+  partners_current_ = false;  // these are the partners of all surfels; prepare() restricts to edge surfels
   edge_surfels_.clear();
   for (uint32_t i = 0; i < discs_.size(); ++i)
     if (classes_[i] == SurfelClass::kEdge) edge_surfels_.push_back(i);
@@ -38,9 +40,14 @@ void CsgClipper::classify() {
 void CsgClipper::update(const Camera& camera) {
   last_camera_ = camera;
   has_camera_ = true;
+  if (options_.method == PartnerMethod::kSpatialIndex) {
+    prepare();
+    return;
+  }
   discs_.updateGeometry(cloud_);
   finder_.find(options_.method, discs_, &camera, &partners_, &edge_surfels_, &stats_);
   refreshFlags();
+  partners_current_ = false;
 }
 
 void CsgClipper::prepare() {
@@ -48,9 +55,36 @@ void CsgClipper::prepare() {
     update(last_camera_);
     return;
   }
+  // Spatial partners depend on the geometry only: unchanged surfels keep the last frame's partners.
+  if (partners_current_ && !geometryChanged()) return;
   discs_.updateGeometry(cloud_);
   finder_.findSpatial(discs_, &partners_, &edge_surfels_, &stats_);
   refreshFlags();
+  snapshotGeometry();
+  partners_current_ = true;
+}
+
+namespace {
+
+template <class T>
+bool sameBytes(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+}  // namespace
+
+bool CsgClipper::geometryChanged() const {
+  return !sameBytes(cloud_.positions, snapshot_.positions) || !sameBytes(cloud_.normals, snapshot_.normals) ||
+         !sameBytes(cloud_.radii, snapshot_.radii) || !sameBytes(cloud_.axes1, snapshot_.axes1) ||
+         !sameBytes(cloud_.axes2, snapshot_.axes2);
+}
+
+void CsgClipper::snapshotGeometry() {
+  snapshot_.positions = cloud_.positions;
+  snapshot_.normals = cloud_.normals;
+  snapshot_.radii = cloud_.radii;
+  snapshot_.axes1 = cloud_.axes1;
+  snapshot_.axes2 = cloud_.axes2;
 }
 
 void CsgClipper::refreshFlags() {
@@ -94,6 +128,69 @@ Tri CsgClipper::insideTree(uint32_t surfel, int node, const Vec3& x) const {
 bool CsgClipper::keepFragment(uint32_t surfel, const Vec3& x) const {
   return tree_.fragmentOnSurface(discs_.patches[surfel],
                                  [&](int patch) { return insidePatch(surfel, patch, x); });
+}
+
+namespace {
+
+/// Emits the postfix code of `node`'s inside test (Algorithm 4.3) with the patches without a group dropped
+/// (they are `unknown` over the whole surfel: b AND/OR unknown = b, (4.9)/(4.10)). False if the whole
+/// subtree is unknown (nothing emitted).
+bool emitInsideTree(const CsgTree& tree, int node, const std::vector<std::pair<int, int>>& group_of_patch,
+                    ClipProgram* program) {
+  const CsgTree::Node& n = tree.node(node);
+  if (n.op == CsgTree::Op::kLeaf) {
+    for (const auto& [patch, group] : group_of_patch)
+      if (patch == n.patch) {
+        program->pushGroup(group, n.inverted);
+        return true;
+      }
+    return false;
+  }
+  const bool left = emitInsideTree(tree, n.left, group_of_patch, program);
+  const bool right = emitInsideTree(tree, n.right, group_of_patch, program);
+  if (left && right) {
+    if (n.op == CsgTree::Op::kIntersection) {
+      program->pushAnd();
+    } else {
+      program->pushOr();
+    }
+  }
+  return left || right;
+}
+
+}  // namespace
+
+bool CsgClipper::compileClip(uint32_t surfel, const ClipFrame& frame, ClipProgram* program) const {
+  if (!options_.compiled_clipping) return false;
+  program->reset(frame);
+  // One group per partner patch, in the order of by_patch_ (as insidePatch() sees them).
+  std::vector<std::pair<int, int>> group_of_patch;  // (patch, group)
+  const uint32_t begin = partners_.offsets[surfel], end = partners_.offsets[surfel + 1];
+  for (uint32_t first = begin; first < end;) {
+    uint32_t last = first;
+    while (last < end && by_patch_patch_[last] == by_patch_patch_[first]) ++last;
+    const int group = program->addGroup(by_patch_.data() + first, last - first, discs_.centers.data(),
+                                        discs_.normals.data());
+    if (group < 0) return false;
+    group_of_patch.emplace_back(by_patch_patch_[first], group);
+    first = last;
+  }
+  // Algorithm 4.2: walk up from the surfel's leaf; each level's sibling decides by (4.5) or (4.6).
+  int a = tree_.leafOf(discs_.patches[surfel]);
+  if (a < 0) return false;
+  while (tree_.node(a).parent >= 0) {
+    const CsgTree::Node& father = tree_.node(tree_.node(a).parent);
+    const int sibling = father.left == a ? father.right : father.left;
+    if (emitInsideTree(tree_, sibling, group_of_patch, program)) {
+      if (father.op == CsgTree::Op::kIntersection) {
+        program->levelIntersection();
+      } else {
+        program->levelUnion();
+      }
+    }
+    a = tree_.node(a).parent;
+  }
+  return program->valid();
 }
 
 }  // namespace rc

@@ -22,6 +22,9 @@ struct CsgClipperOptions {
   /// is the default; both give identical partner sets.
   PartnerMethod method = PartnerMethod::kSpatialIndex;
   ClipBufferOptions clip_buffer;
+  /// Compile each clipped surfel's test per frame into screen-space affine tests (compileClip, float, four
+  /// pixels at a time) instead of evaluating Algorithms 4.2-4.4 in double per fragment (keepFragment).
+  bool compiled_clipping = true;
 };
 
 class CsgClipper : public FragmentClipper {
@@ -38,11 +41,14 @@ class CsgClipper : public FragmentClipper {
   /// method (clip buffer for `camera`, or spatial index). Call once before SurfelRenderer::render().
   void update(const Camera& camera);
   /// Same as update() with the camera of the last update() (the spatial method needs none; the clip buffer
-  /// method without a previous update() falls back to the spatial index).
+  /// method without a previous update() falls back to the spatial index). Spatial partners depend on the
+  /// geometry only: when the cloud's positions, normals, radii and axes are byte-identical to those of the
+  /// last search, the partners are kept (a static scene searches once).
   void prepare() override;
 
   bool needsClipping(uint32_t surfel) const override { return needs_clipping_[surfel] != 0; }
   bool keepFragment(uint32_t surfel, const Vec3& x) const override;
+  bool compileClip(uint32_t surfel, const ClipFrame& frame, ClipProgram* program) const override;
   bool isVisible(uint32_t surfel) const override { return visible_[surfel] != 0; }
   bool clipsColorOnly(uint32_t surfel) const override { return color_only_[surfel] != 0; }
   /// Surfels of complemented patches (isInverted()) are shaded with the reversed normal.
@@ -68,6 +74,8 @@ class CsgClipper : public FragmentClipper {
 
  private:
   void refreshFlags();
+  bool geometryChanged() const;
+  void snapshotGeometry();
 
   const SurfelCloud& cloud_;
   CsgTree tree_;
@@ -82,6 +90,8 @@ class CsgClipper : public FragmentClipper {
   std::vector<uint8_t> needs_clipping_, visible_, color_only_, inverted_;
   Camera last_camera_;
   bool has_camera_ = false;
+  bool partners_current_ = false;  ///< partners_ are the spatial partners of the edge surfels of snapshot_
+  SurfelCloud snapshot_;           ///< geometry channels at the last spatial search
   ClipPartnerStats stats_;
 };
 

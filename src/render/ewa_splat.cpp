@@ -289,7 +289,7 @@ SplatSetup setupCircularEwaSplat(const Vec3& center, const Vec3& normal, double 
 }
 
 Vec3 fragmentWorldPoint(const SplatGeometry& geometry, const CameraFrame& camera, double u, double v) {
-  if (!geometry.edge_on) {
+  {
     Vec3 origin, direction;
     if (camera.perspective) {
       origin = camera.eye;
@@ -302,7 +302,17 @@ Vec3 fragmentWorldPoint(const SplatGeometry& geometry, const CameraFrame& camera
     const double denominator = geometry.normal_world.dot(direction);
     if (std::abs(denominator) > 1e-12 * direction.norm()) {
       const double t = geometry.normal_world.dot(geometry.center_world - origin) / denominator;
-      if (std::isfinite(t)) return origin + t * direction;
+      if (std::isfinite(t)) {
+        if (!geometry.edge_on) return origin + t * direction;
+        // Edge-on: the ray/plane point too (the affine inverse is a point off the ray, which clipped a
+        // 1 px band outside silhouettes), clamped radially to the cut-off ellipse of the disc.
+        const Vec3 offset = origin + t * direction - geometry.center_world;
+        Eigen::Vector2d local(offset.dot(geometry.axis1_world) / geometry.axis1_world.squaredNorm(),
+                              offset.dot(geometry.axis2_world) / geometry.axis2_world.squaredNorm());
+        const double length = local.norm();
+        if (length > geometry.cutoff) local *= geometry.cutoff / length;
+        return geometry.center_world + local.x() * geometry.axis1_world + local.y() * geometry.axis2_world;
+      }
     }
   }
   Eigen::Vector2d local =

@@ -36,7 +36,7 @@ struct CameraFrame {
 
 struct EwaParams {
   bool ewa_filter = true;
-  double lowpass_variance = 1.0;
+  double lowpass_variance = 0.25;
   double cutoff_radius = 1.0;
   double depth_tolerance_scale = 1.0;
   bool backface_culling = false;
@@ -97,8 +97,8 @@ SplatSetup setupCircularEwaSplat(const Vec3& center, const Vec3& normal, double 
                                  const CameraFrame& camera, const EwaParams& params, SplatRaster* raster,
                                  float* unit_normal = nullptr);
 
-/// World point on the surfel plane seen through pixel (u, v): the exact ray/plane intersection, or for
-/// edge-on surfels the regularised affine inverse, clamped to the cut-off ellipse.
+/// World point on the surfel plane seen through pixel (u, v): the exact ray/plane intersection (for edge-on
+/// surfels clamped to the cut-off ellipse; the regularised affine inverse where the ray misses the plane).
 Vec3 fragmentWorldPoint(const SplatGeometry& geometry, const CameraFrame& camera, double u, double v);
 
 }  // namespace rc

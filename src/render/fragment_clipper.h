@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "core/surfel_cloud.h"
+#include "render/clip_program.h"
 
 namespace rc {
 
@@ -18,6 +19,13 @@ class FragmentClipper {
   /// True if the fragment at world point x (on the plane of surfel `surfel`) is rendered (Algorithm 4.2).
   /// Must be thread-safe (called concurrently from rasterizer threads).
   virtual bool keepFragment(uint32_t surfel, const Vec3& x) const = 0;
+  /// Optional fast path (clip_program.h): compiles the fragment test of `surfel` for this frame into
+  /// `program` (screen-space affine tests over the pixel map `frame`). False: the renderer calls
+  /// keepFragment() per fragment instead. Must be thread-safe and agree with keepFragment() up to float
+  /// rounding at the decision boundaries.
+  virtual bool compileClip(uint32_t surfel, const ClipFrame& frame, ClipProgram* program) const {
+    return false;
+  }
   /// False for surfels that only clip (discontinuity surfels, 4.3): they are never drawn.
   virtual bool isVisible(uint32_t surfel) const { return true; }
   /// True if a rejected fragment of `surfel` loses only its colour contribution (surfels clipped by texture

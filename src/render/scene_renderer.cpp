@@ -18,9 +18,7 @@ double msSince(Clock::time_point t0) {
 SceneRenderer::SceneRenderer(const Scene& scene, const SceneRenderOptions& options)
     : scene_(scene), options_(options), moved_(scene.surfels), renderer_(options.splat) {
   if (options_.csg) {
-    CsgClipperOptions clip;
-    clip.method = options_.partner_method;
-    clipper_ = std::make_unique<CsgClipper>(moved_, scene_.csgTree(), clip);
+    clipper_ = std::make_unique<CsgClipper>(moved_, scene_.csgTree(), options_.clipper);
   } else {
     std::vector<size_t> keep;
     const Attribute* role = scene.surfels.attributes.find("surfel_role");
@@ -68,7 +66,7 @@ void SceneRenderer::render(const Camera& camera, double t, RenderImages* out, Sc
   s.visibility_ms = s.render.visibility_ms;
   s.accumulate_ms = s.render.accumulate_ms;
   s.shade_ms = s.render.shade_ms;
-  if (clipper_) s.edge_pixels = countEdgePixels(moved_, *clipper_, camera, *out);
+  if (clipper_ && stats) s.edge_pixels = countEdgePixels(moved_, *clipper_, camera, *out);
   if (stats) *stats = s;
 }
 

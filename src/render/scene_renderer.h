@@ -14,7 +14,7 @@ namespace rc {
 struct SceneRenderOptions {
   bool csg =
       true;  ///< false: plain splatting of the visible surfels (no clipping, discontinuity surfels dropped)
-  PartnerMethod partner_method = PartnerMethod::kClipBuffer;  ///< per-frame partner search (4.2.1)
+  CsgClipperOptions clipper;  ///< partner search (4.2.1; spatial index by default) and compiled clipping
   SplatConfig splat;
 };
 

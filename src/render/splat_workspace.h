@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "render/clip_program.h"
 #include "render/ewa_splat.h"
 
 namespace rc {
@@ -54,6 +55,8 @@ struct SplatWorkspace {
   std::vector<uint32_t> tile_offsets;       ///< tile t holds bin_items[tile_offsets[t], tile_offsets[t + 1])
   std::vector<uint32_t> clip_surfels;       ///< surfel of each clip slot
   std::vector<SplatGeometry> clip_geometry;
+  std::vector<ClipProgram> clip_programs;  ///< per clip slot (grows only: keeps each program's memory)
+  std::vector<uint8_t> clip_compiled;      ///< 1: clip_programs[slot] holds this frame's compiled test
 };
 
 /// A workspace owned by a renderer: copies of the renderer get their own, concurrent render() calls on one

@@ -9,24 +9,24 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "render/ewa_splat.h"
+#include "render/splat_rasterizer.h"
 
 namespace rc {
 
 namespace {
 
-constexpr int kTileSize = 32;
+using namespace splat_tile;
 constexpr int kTilePixels = kTileSize * kTileSize;
 constexpr int kWeightTableSteps = 1024;    ///< Gaussian weight table over r2 in [0, 1]
+constexpr int kSpecularTableSteps = 1024;  ///< Phong highlight table over cos in [0, 1]
 constexpr size_t kSurfelsPerChunk = 4096;  ///< set-up/binning work unit (at most 8 per thread)
-/// Splats whose box is at least this wide inside a tile solve each row's span; narrower ones test the
-/// conic at every pixel of their box (no square root or division per row).
-constexpr int kSpanMinWidth = 8;
 #if defined(__SSE2__)
 constexpr bool kSimd = true;  ///< unclipped splats are rasterized four pixels at a time
 #else
@@ -38,7 +38,6 @@ double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-constexpr int kTileStride = kTileSize + 8;  ///< row stride of the tile buffers: room for a 4-wide overrun
 constexpr int kTileBufferSize = kTileSize * kTileStride;
 constexpr int kBlockSize = 8;  ///< occlusion culling granularity inside a tile
 constexpr int kBlocksPerTile = kTileSize / kBlockSize;
@@ -58,20 +57,23 @@ struct TileBuffers {
   alignas(16) float max_weight[kTileBufferSize];
   alignas(16) int32_t patch_id[kTileBufferSize];
 
-  void clear() {
-    std::fill_n(bound, kTileBufferSize, std::numeric_limits<float>::infinity());
-    std::fill_n(front, kTileBufferSize, std::numeric_limits<float>::infinity());
+  /// Pass 1 state. front_patch / front_normal are read only where front was written.
+  void clearVisibility() {
+    fillInfinity(bound);
+    fillInfinity(front);
+  }
+  /// Pass 2 sums. patch_id is read only where a fragment with positive weight wrote it.
+  void clearAccumulation() {
     for (float* buffer : {weight, color_weight, depth, color[0], color[1], color[2], normal[0], normal[1],
                           normal[2], max_weight})
-      std::fill_n(buffer, kTileBufferSize, 0.0f);
-    std::fill_n(patch_id, kTileBufferSize, -1);
-    std::fill_n(front_patch, kTileBufferSize, -1);
-    for (float* buffer : front_normal) std::fill_n(buffer, kTileBufferSize, 0.0f);
+      std::memset(buffer, 0, sizeof(float) * kTileBufferSize);
   }
-};
 
-struct TileRect {
-  int x0, y0, x1, y1;  ///< inclusive pixel range
+ private:
+  static void fillInfinity(float* buffer) {
+    constexpr float kInfinity = std::numeric_limits<float>::infinity();
+    for (int i = 0; i < kTileBufferSize; ++i) buffer[i] = kInfinity;
+  }
 };
 
 struct ChunkCounts {
@@ -80,99 +82,18 @@ struct ChunkCounts {
   uint32_t clip_offset = 0;  ///< first clip slot of this chunk
 };
 
-/// Calls visit(x, y, r2, z) for every pixel of the tile inside the cut-off ellipse of `s` (r2 <= 1), with
-/// the clamped plane depth z. Coverage depends only on the splat and the tile, so both passes agree.
-template <class Visit>
-inline void rasterizeSplat(const SplatRaster& s, const TileRect& tile, Visit&& visit) {
-  const int xb = std::max(int(s.x0), tile.x0), xe = std::min(int(s.x1), tile.x1);
-  const int yb = std::max(int(s.y0), tile.y0), ye = std::min(int(s.y1), tile.y1);
-  const float a = s.conic_a, b = s.conic_b, c = s.conic_c;
-  const float n1 = s.depth_num[1], d1 = s.depth_den[0];
-  const float z_lo = s.z_lo, z_hi = s.z_hi;
-  const bool solve_span = xe - xb + 1 >= kSpanMinWidth;
-  for (int y = yb; y <= ye; ++y) {
-    const float dv = float(y) - s.center_v;
-    const float r2_row = c * dv * dv, r2_cross = 2.0f * b * dv;
-    int x_begin = xb, x_end = xe;
-    if (solve_span) {  // roots of a du^2 + 2 b dv du + c dv^2 = 1, widened by a pixel (the r2 test decides)
-      const float b_dv = b * dv;
-      const float discriminant = b_dv * b_dv - a * (r2_row - 1.0f);
-      if (!(discriminant >= 0)) continue;
-      const float root = std::sqrt(discriminant), inv_a = 1.0f / a;
-      const float u_lo = s.center_u + (-b_dv - root) * inv_a, u_hi = s.center_u + (-b_dv + root) * inv_a;
-      x_begin = std::max(xb, int(std::max(u_lo, float(xb))) - 1);
-      x_end = std::min(xe, int(std::min(u_hi, float(xe))) + 1);
-    }
-    const float num_row = s.depth_num[0] + s.depth_num[2] * dv;
-    const float den_row = 1.0f + s.depth_den[1] * dv;
-    for (int x = x_begin; x <= x_end; ++x) {
-      const float du = float(x) - s.center_u;
-      const float r2 = (a * du + r2_cross) * du + r2_row;
-      if (r2 > 1.0f) continue;
-      float z = (num_row + n1 * du) / (den_row + d1 * du);
-      z = z > z_lo ? z : z_lo;  // also maps +-inf and NaN into the range
-      z = z < z_hi ? z : z_hi;
-      visit(x, y, r2, z);
-    }
-  }
-}
-
-#if defined(__SSE2__)
-inline __m128 select(__m128 mask, __m128 if_true, __m128 if_false) {
-  return _mm_or_ps(_mm_and_ps(mask, if_true), _mm_andnot_ps(mask, if_false));
-}
-
-/// rasterizeSplat four pixels at a time: visit(index, r2, z, mask) for each group of four pixels of a row
-/// with at least one inside the cut-off (mask), index = tile buffer index of the first. Same arithmetic as
-/// rasterizeSplat, so both give the same coverage, r2 and z.
-template <class Visit>
-inline void rasterizeSplat4(const SplatRaster& s, const TileRect& tile, Visit&& visit) {
-  const int xb = std::max(int(s.x0), tile.x0), xe = std::min(int(s.x1), tile.x1);
-  const int yb = std::max(int(s.y0), tile.y0), ye = std::min(int(s.y1), tile.y1);
-  const float b = s.conic_b, c = s.conic_c;
-  const __m128 lane = _mm_setr_ps(0, 1, 2, 3), one = _mm_set1_ps(1.0f);
-  const __m128 a = _mm_set1_ps(s.conic_a), center_u = _mm_set1_ps(s.center_u);
-  const __m128 n1 = _mm_set1_ps(s.depth_num[1]), d1 = _mm_set1_ps(s.depth_den[0]);
-  const __m128 z_lo = _mm_set1_ps(s.z_lo), z_hi = _mm_set1_ps(s.z_hi);
-  const bool solve_span = xe - xb + 1 >= kSpanMinWidth;
-  for (int y = yb; y <= ye; ++y) {
-    const float dv = float(y) - s.center_v;
-    const float r2_row = c * dv * dv, r2_cross = 2.0f * b * dv;
-    int x_begin = xb, x_end = xe;
-    if (solve_span) {
-      const float b_dv = b * dv;
-      const float discriminant = b_dv * b_dv - s.conic_a * (r2_row - 1.0f);
-      if (!(discriminant >= 0)) continue;
-      const float root = std::sqrt(discriminant), inv_a = 1.0f / s.conic_a;
-      const float u_lo = s.center_u + (-b_dv - root) * inv_a, u_hi = s.center_u + (-b_dv + root) * inv_a;
-      x_begin = std::max(xb, int(std::max(u_lo, float(xb))) - 1);
-      x_end = std::min(xe, int(std::min(u_hi, float(xe))) + 1);
-    }
-    const __m128 row = _mm_set1_ps(r2_row), cross = _mm_set1_ps(r2_cross);
-    const __m128 num_row = _mm_set1_ps(s.depth_num[0] + s.depth_num[2] * dv);
-    const __m128 den_row = _mm_set1_ps(1.0f + s.depth_den[1] * dv);
-    const __m128 last = _mm_set1_ps(float(x_end));
-    const int base = (y - tile.y0) * kTileStride - tile.x0;
-    for (int x = x_begin; x <= x_end; x += 4) {
-      const __m128 xs = _mm_add_ps(_mm_set1_ps(float(x)), lane);
-      const __m128 du = _mm_sub_ps(xs, center_u);
-      const __m128 r2 = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(a, du), cross), du), row);
-      const __m128 mask = _mm_and_ps(_mm_cmple_ps(r2, one), _mm_cmple_ps(xs, last));
-      if (!_mm_movemask_ps(mask)) continue;
-      __m128 z = _mm_div_ps(_mm_add_ps(num_row, _mm_mul_ps(n1, du)), _mm_add_ps(den_row, _mm_mul_ps(d1, du)));
-      z = _mm_min_ps(_mm_max_ps(z, z_lo), z_hi);  // max(NaN, lo) = lo
-      visit(base + x, r2, z, mask);
-    }
-  }
-}
-#endif
-
 /// With CSG clipping, a fragment of another patch than the pixel's front fragment blends only if its normal
 /// is within acos(kCrossPatchBlendCosine) (about 25 deg) of the front normal: patches meet at sharp edges or
 /// lie behind each other (a face behind a silhouette), but texture patches of one sheet (4.3) still blend.
 constexpr float kCrossPatchBlendCosine = 0.9f;
 
 #if defined(__SSE2__)
+/// All-ones lanes for the set bits of a 4-bit mask.
+inline __m128 laneMask(int bits) {
+  const __m128i lane_bits = _mm_setr_epi32(1, 2, 4, 8);
+  return _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(bits), lane_bits), lane_bits));
+}
+
 /// Lanes where `all` is set, `patch` equals the front patch, or the normals agree (kCrossPatchBlendCosine).
 inline __m128 blendsWithFront(__m128 all, __m128 patch, const float normal[3], const TileBuffers& tb, int i) {
   const __m128i front = _mm_loadu_si128(reinterpret_cast<const __m128i*>(tb.front_patch + i));
@@ -201,7 +122,7 @@ inline void forEachTileOfSplat(const SplatRaster& s, int tiles_x, Visit&& visit)
 }
 
 Rgba toRgba(float r, float g, float b, uint8_t alpha) {
-  auto channel = [](float value) { return uint8_t(std::clamp(std::lround(value), 0L, 255L)); };
+  auto channel = [](float value) { return uint8_t(std::min(255.0f, std::max(0.0f, value)) + 0.5f); };
   return {channel(r), channel(g), channel(b), alpha};
 }
 
@@ -363,15 +284,23 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   for (const ChunkCounts& counts : chunk_counts)
     std::copy_n(ws.clip_staged.data() + counts.begin, counts.clipped,
                 ws.clip_surfels.data() + counts.clip_offset);
+  // and, where the clipper can, a per-frame compiled fragment test (clip_program.h).
   ws.clip_geometry.resize(clip_count);
-#pragma omp parallel for num_threads(threads) schedule(static)
+  if (ws.clip_programs.size() < clip_count) ws.clip_programs.resize(clip_count);
+  ws.clip_compiled.assign(clip_count, 0);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 64)
   for (size_t k = 0; k < clip_count; ++k) {
     const size_t i = ws.clip_surfels[k];
     Vec3 normal, axis1, axis2;
     surfelFrame(cloud, i, &normal, &axis1, &axis2);
-    SplatRaster scratch;
-    setupEwaSplat(cloud.positions[i], normal, axis1, axis2, frame, params, &scratch, &ws.clip_geometry[k]);
+    SplatRaster box;
+    setupEwaSplat(cloud.positions[i], normal, axis1, axis2, frame, params, &box, &ws.clip_geometry[k]);
+    ClipFrame clip_frame;  // over the box widened by a pixel (the drawn record may round differently)
+    if (makeClipFrame(ws.clip_geometry[k], frame, int(box.x0) - 1, int(box.y0) - 1, int(box.x1) + 1,
+                      int(box.y1) + 1, &clip_frame))
+      ws.clip_compiled[k] = clipper->compileClip(uint32_t(i), clip_frame, &ws.clip_programs[k]);
   }
+  for (uint8_t compiled : ws.clip_compiled) local_stats.compiled_clip_surfels += compiled;
   local_stats.setup_ms = millisecondsSince(start_setup);
 
   // --- Binning: record indices sorted by tile; chunk c of tile t follows chunks 0..c-1 of tile t, so every
@@ -405,7 +334,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   }
   local_stats.bin_ms = millisecondsSince(start_bin);
 
-  // True if the clipper keeps fragment (x, y) of a splat flagged kClip*.
+  // True if the clipper keeps fragment (x, y) of a splat flagged kClip* (per-fragment path, 4.2.2).
   auto keeps = [&](const SplatRaster& s, int x, int y) {
     const uint32_t slot = s.clipSlot();
     return clipper->keepFragment(ws.clip_surfels[slot],
@@ -416,6 +345,10 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   const double cutoff_sigmas = config_.cutoff_radius / kKernelSigmaPerRadius;
   for (int k = 0; k <= kWeightTableSteps; ++k)
     weight_table[k] = float(std::exp(-0.5 * cutoff_sigmas * cutoff_sigmas * k / kWeightTableSteps));
+  // cos^shininess of the Phong highlight, interpolated from a table (std::pow per pixel was most of shading)
+  std::array<float, kSpecularTableSteps + 2> specular_table;
+  for (int k = 0; k <= kSpecularTableSteps + 1; ++k)
+    specular_table[k] = float(std::pow(std::min(1.0, double(k) / kSpecularTableSteps), config_.shininess));
 
   out->width = camera.width;
   out->height = camera.height;
@@ -428,7 +361,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   const Eigen::Matrix3f camera_R_world = frame.camera_R_world.cast<float>();
   const Eigen::Vector3f to_light = (-config_.light_direction_camera.normalized()).cast<float>();
   const float ambient = float(config_.ambient), diffuse = float(config_.diffuse);
-  const float specular = float(config_.specular), shininess = float(config_.shininess);
+  const float specular = float(config_.specular);
   const uint8_t alpha = config_.default_color[3];
   const float infinity = std::numeric_limits<float>::infinity();
 
@@ -437,15 +370,24 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   // z - eps_z <= the smallest z (a large front surfel does not pull in small ones behind it); then the tile
   // is normalised and shaded (deferred Phong, two-sided: the normal is turned towards the viewer). --- With
   // CSG clipping, fragments of different patches meet only at (sharp) edges: a fragment blends only with the
-  // patch of the pixel's front fragment, so a face behind a silhouette does not bleed in.
+  // patch of the pixel's front fragment, so a face behind a silhouette does not bleed in. Clipped splats are
+  // tested once, in pass 1; their keep bits (per row, bit x - x0) are reused by pass 2.
   const bool separate_patches = clipper != nullptr;
   size_t fragments = 0, clipped_fragments = 0;
   double visibility_ms = 0, accumulate_ms = 0, shade_ms = 0;
 #pragma omp parallel num_threads(threads) reduction(+ : fragments, clipped_fragments, visibility_ms, \
                                                         accumulate_ms, shade_ms)
   {
-    std::unique_ptr<TileBuffers> buffers(new TileBuffers);
+    std::unique_ptr<TileBuffers> buffers(new TileBuffers());
     TileBuffers& tb = *buffers;
+    std::vector<uint64_t> keep_rows;  // keep bits of the tile's clipped splats, row by row (bit x - x0)
+    struct ClipItem {
+      float z_lo;
+      uint32_t item, rows;  ///< index in the tile's list, offset of its rows in keep_rows
+    };
+    std::vector<ClipItem> clip_items, sorted_clip_items;
+    std::vector<uint64_t> candidate_rows(kTileSize);
+    alignas(16) float clip_depth[kTileSize * kTileStride];  // depth of the candidate fragments
 #pragma omp for schedule(dynamic, 1)
     for (int tile = 0; tile < tiles; ++tile) {
       const Clock::time_point start_tile = Clock::now();
@@ -459,19 +401,41 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       const uint32_t* items = ws.bin_items.data() + ws.tile_offsets[tile];
       const uint32_t splat_count = ws.tile_offsets[tile + 1] - ws.tile_offsets[tile];
       auto index = [&](int x, int y) { return (y - rect.y0) * kTileStride + x - rect.x0; };
-      tb.clear();
+      if (splat_count == 0) {
+        for (int y = rect.y0; y <= rect.y1; ++y) {
+          const size_t p = size_t(y) * width + rect.x0, count = size_t(rect.x1 - rect.x0 + 1);
+          std::fill_n(out->weight.begin() + p, count, 0.0f);
+          std::fill_n(out->depth.begin() + p, count, infinity);
+          std::fill_n(out->normal.begin() + p, count, Eigen::Vector3f::Zero());
+          std::fill_n(out->patch_id.begin() + p, count, -1);
+          std::fill_n(out->color.begin() + p, count, config_.background);
+        }
+        shade_ms += millisecondsSince(start_tile);
+        continue;
+      }
+      tb.clearVisibility();
+      keep_rows.clear();
+      clip_items.clear();
 
-      for (uint32_t k = 0; k < splat_count; ++k) {
-        if (k + kPrefetchDistance < splat_count) __builtin_prefetch(staged + items[k + kPrefetchDistance]);
+      // Pass 1 of splat k. Clipped splats: the clip test runs only on fragments not behind the current bound
+      // (the others cannot pass the final depth test either), and records its keep bits in `rows`.
+      auto visibilitySplat = [&](uint32_t k, uint64_t* rows) {
         const SplatRaster& s = staged[items[k]];
         const float tolerance = s.depth_tolerance;
         const SplatShading& front_shading = staged_shading[items[k]];
         const int32_t patch = front_shading.patch_id;
-        const bool clip = (s.flags & SplatRaster::kClip) != 0;
-        if (clip || !kSimd) {
+        const bool clip_any = rows != nullptr;
+        const bool clip_geometry = (s.flags & SplatRaster::kClip) != 0;
+        const int row0 = std::max(int(s.y0), rect.y0);
+        if (!kSimd) {
           rasterizeSplat(s, rect, [&](int x, int y, float, float z) {
-            if (clip && !keeps(s, x, y)) return;
             const int i = index(x, y);
+            if (clip_any && z <= tb.bound[i]) {
+              const bool kept = keeps(s, x, y);
+              clipped_fragments += !kept;
+              rows[y - row0] |= uint64_t(kept) << (x - rect.x0);
+              if (clip_geometry && !kept) return;
+            }
             tb.bound[i] = std::min(tb.bound[i], z + tolerance);
             if (z < tb.front[i]) {
               tb.front[i] = z;
@@ -479,16 +443,17 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
               for (int c = 0; c < 3; ++c) tb.front_normal[c][i] = front_shading.normal[c];
             }
           });
-          continue;
+          return;
         }
 #if defined(__SSE2__)
         const __m128 tolerance4 = _mm_set1_ps(tolerance);
         const __m128 patch4 = _mm_castsi128_ps(_mm_set1_epi32(patch));
-        rasterizeSplat4(s, rect, [&](int i, __m128, __m128 z, __m128 mask) {
+        auto update = [&](int i, __m128 z, __m128 mask) {
           const __m128 b = _mm_loadu_ps(tb.bound + i), f = _mm_loadu_ps(tb.front + i);
           _mm_storeu_ps(tb.bound + i, select(mask, _mm_min_ps(b, _mm_add_ps(z, tolerance4)), b));
           const __m128 nearer = _mm_and_ps(mask, _mm_cmplt_ps(z, f));
           _mm_storeu_ps(tb.front + i, select(nearer, z, f));
+          if (!separate_patches) return;
           float* front_patches = reinterpret_cast<float*>(tb.front_patch + i);
           _mm_storeu_ps(front_patches, select(nearer, patch4, _mm_loadu_ps(front_patches)));
           for (int c = 0; c < 3; ++c) {
@@ -496,23 +461,68 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
             _mm_storeu_ps(front_normal,
                           select(nearer, _mm_set1_ps(front_shading.normal[c]), _mm_loadu_ps(front_normal)));
           }
-        });
-#endif
-      }
-      // Largest bound per block: an unclipped splat whose nearest depth lies behind it everywhere in its box
-      // has no visible fragment there (occlusion culling; exact, z >= z_lo).
-      float block_max[kBlocksPerTile * kBlocksPerTile];
-      for (int by = 0; by < kBlocksPerTile; ++by) {
-        for (int bx = 0; bx < kBlocksPerTile; ++bx) {
-          float largest = -infinity;
-          for (int y = rect.y0 + by * kBlockSize;
-               y <= std::min(rect.y1, rect.y0 + by * kBlockSize + kBlockSize - 1); ++y)
-            for (int x = rect.x0 + bx * kBlockSize;
-                 x <= std::min(rect.x1, rect.x0 + bx * kBlockSize + kBlockSize - 1); ++x)
-              largest = std::max(largest, tb.bound[index(x, y)]);
-          block_max[by * kBlocksPerTile + bx] = largest;
+        };
+        if (!clip_any) {
+          rasterizeSplat4(s, rect,
+                          [&](int i, int, int, __m128, __m128 z, __m128 mask) { update(i, z, mask); });
+          return;
         }
-      }
+        // Clipped: collect per row the fragments not behind the current bound (bit x - x0) and their depth,
+        // test them a row at a time, then update with the kept ones.
+        const int rows_count = std::min(int(s.y1), rect.y1) - row0 + 1;
+        uint64_t* candidates = candidate_rows.data();
+        std::fill_n(candidates, rows_count, 0);
+        rasterizeSplat4(s, rect, [&](int i, int x, int y, __m128, __m128 z, __m128 mask) {
+          const int lanes = _mm_movemask_ps(_mm_and_ps(mask, _mm_cmple_ps(z, _mm_loadu_ps(tb.bound + i))));
+          if (!lanes) return;
+          candidates[y - row0] |= uint64_t(lanes) << (x - rect.x0);
+          _mm_storeu_ps(clip_depth + i, z);
+        });
+        const uint32_t slot = s.clipSlot();
+        const ClipProgram* program = ws.clip_compiled[slot] ? &ws.clip_programs[slot] : nullptr;
+        for (int r = 0; r < rows_count; ++r) {
+          const uint64_t candidate = candidates[r];
+          if (!candidate) continue;
+          const int y = row0 + r;
+          uint64_t keep = 0;
+          if (program) {
+            keep = program->keepRow(y - program->v0(), rect.x0 - program->u0(), candidate);
+          } else {
+            for (uint64_t bits = candidate; bits; bits &= bits - 1) {
+              const int b = __builtin_ctzll(bits);
+              if (keeps(s, rect.x0 + b, y)) keep |= uint64_t(1) << b;
+            }
+          }
+          clipped_fragments += size_t(__builtin_popcountll(candidate & ~keep));
+          rows[r] = keep;
+          const uint64_t drawn = clip_geometry ? keep : candidate;
+          const int base = (y - rect.y0) * kTileStride;
+          for (uint64_t bits = drawn; bits;) {
+            const int b = __builtin_ctzll(bits);
+            const int lanes = int((bits >> b) & 0xF);
+            update(base + b, _mm_loadu_ps(clip_depth + base + b), laneMask(lanes));
+            bits &= ~(uint64_t(0xF) << b);
+          }
+        }
+#endif
+      };
+
+      // Largest bound per block: a splat whose nearest depth lies behind it everywhere in its box has no
+      // visible fragment there (occlusion culling; exact, z >= z_lo; clipping only removes fragments).
+      float block_max[kBlocksPerTile * kBlocksPerTile];
+      auto updateBlockMax = [&]() {
+        for (int by = 0; by < kBlocksPerTile; ++by) {
+          for (int bx = 0; bx < kBlocksPerTile; ++bx) {
+            float largest = -infinity;
+            for (int y = rect.y0 + by * kBlockSize;
+                 y <= std::min(rect.y1, rect.y0 + by * kBlockSize + kBlockSize - 1); ++y)
+              for (int x = rect.x0 + bx * kBlockSize;
+                   x <= std::min(rect.x1, rect.x0 + bx * kBlockSize + kBlockSize - 1); ++x)
+                largest = std::max(largest, tb.bound[index(x, y)]);
+            block_max[by * kBlocksPerTile + bx] = largest;
+          }
+        }
+      };
       auto occluded = [&](const SplatRaster& s) {
         const int bx0 = (std::max(int(s.x0), rect.x0) - rect.x0) / kBlockSize;
         const int bx1 = (std::min(int(s.x1), rect.x1) - rect.x0) / kBlockSize;
@@ -524,14 +534,64 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
         return true;
       };
 
+      // The result of pass 1 (per-pixel minima) does not depend on the order of the splats: unclipped
+      // splats go first, then the clipped ones front to back, so that most of their hidden fragments are
+      // rejected by depth before the (costlier) clip test.
+      for (uint32_t k = 0; k < splat_count; ++k) {
+        if (k + kPrefetchDistance < splat_count) __builtin_prefetch(staged + items[k + kPrefetchDistance]);
+        const SplatRaster& s = staged[items[k]];
+        if (s.flags & SplatRaster::kClip) {
+          const uint32_t rows = uint32_t(std::min(int(s.y1), rect.y1) - std::max(int(s.y0), rect.y0) + 1);
+          clip_items.push_back({s.z_lo, k, uint32_t(keep_rows.size())});
+          keep_rows.resize(keep_rows.size() + rows, 0);
+          continue;
+        }
+        visibilitySplat(k, nullptr);
+      }
+      if (!clip_items.empty()) {
+        sorted_clip_items = clip_items;
+        std::sort(sorted_clip_items.begin(), sorted_clip_items.end(),
+                  [](const ClipItem& a, const ClipItem& b) {
+                    return a.z_lo != b.z_lo ? a.z_lo < b.z_lo : a.item < b.item;
+                  });
+        updateBlockMax();
+        for (const ClipItem& clip_item : sorted_clip_items)
+          if (!occluded(staged[items[clip_item.item]]))
+            visibilitySplat(clip_item.item, keep_rows.data() + clip_item.rows);
+      }
+      updateBlockMax();
+
       const Clock::time_point start_accumulate = Clock::now();
       visibility_ms += std::chrono::duration<double, std::milli>(start_accumulate - start_tile).count();
+      tb.clearAccumulation();
 
+      size_t next_clip_item = 0;
       for (uint32_t k = 0; k < splat_count; ++k) {
         if (k + kPrefetchDistance < splat_count)
           __builtin_prefetch(staged_shading + items[k + kPrefetchDistance]);
         const SplatRaster& s = staged[items[k]];
-        if (!(s.flags & (SplatRaster::kClip | SplatRaster::kClipColorOnly)) && occluded(s)) continue;
+        const bool clip_geometry = (s.flags & SplatRaster::kClip) != 0;
+        const bool clip_color = (s.flags & SplatRaster::kClipColorOnly) != 0;
+        const uint64_t* rows = nullptr;
+        int row0 = 0;
+        if (clip_geometry) {  // this splat's keep bits from pass 1
+          row0 = std::max(int(s.y0), rect.y0);
+          rows = keep_rows.data() + clip_items[next_clip_item++].rows;
+        }
+        // Colour-only clipping (texture discontinuities, 4.3) does not change visibility: it is tested here,
+        // on the fragments that blend, only.
+        const ClipProgram* color_program =
+            clip_color && ws.clip_compiled[s.clipSlot()] ? &ws.clip_programs[s.clipSlot()] : nullptr;
+        auto colorKeep4 = [&](int x, int y, int lanes) {
+          if (color_program)
+            return int(
+                color_program->keepRow(y - color_program->v0(), x - color_program->u0(), uint64_t(lanes)));
+          int keep = 0;
+          for (int lane = 0; lane < 4; ++lane)
+            if ((lanes >> lane & 1) && keeps(s, x + lane, y)) keep |= 1 << lane;
+          return keep;
+        };
+        if (occluded(s)) continue;
         const SplatShading& attributes = staged_shading[items[k]];
         const struct {
           float normal[3], color[3];
@@ -539,17 +599,10 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
         } shading = {{attributes.normal[0], attributes.normal[1], attributes.normal[2]},
                      {float(attributes.color[0]), float(attributes.color[1]), float(attributes.color[2])},
                      attributes.patch_id};
-        const bool clip = (s.flags & (SplatRaster::kClip | SplatRaster::kClipColorOnly)) != 0;
         const float tolerance = s.depth_tolerance;
-        if (clip || !kSimd) {
-          const bool color_only = (s.flags & SplatRaster::kClipColorOnly) != 0;
+        if (!kSimd) {
           rasterizeSplat(s, rect, [&](int x, int y, float r2, float z) {
-            bool add_color = true;
-            if (clip && !keeps(s, x, y)) {
-              ++clipped_fragments;
-              if (!color_only) return;
-              add_color = false;
-            }
+            if (clip_geometry && !((rows[y - row0] >> (x - rect.x0)) & 1)) return;
             const int i = index(x, y);
             // Blend iff within the tolerance of the front surfel AND within this surfel's own tolerance of
             // the front depth: eps_z from both the pixel's and the incoming surfel (3.2.1).
@@ -559,6 +612,8 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
                         shading.normal[2] * tb.front_normal[2][i] <
                     kCrossPatchBlendCosine)
               return;
+            const bool add_color = !clip_color || keeps(s, x, y);
+            clipped_fragments += !add_color;
             const int step = std::min(kWeightTableSteps, int(std::max(r2, 0.0f) * kWeightTableSteps + 0.5f));
             const float w = weight_table[step];
             tb.weight[i] += w;
@@ -586,7 +641,9 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
         const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
         const __m128 tolerance4 = _mm_set1_ps(tolerance);
         const __m128 all_patches = separate_patches ? _mm_setzero_ps() : _mm_castsi128_ps(_mm_set1_epi32(-1));
-        rasterizeSplat4(s, rect, [&](int i, __m128 r2, __m128 z, __m128 mask) {
+        const __m128 all_lanes = _mm_castsi128_ps(_mm_set1_epi32(-1));
+        rasterizeSplat4(s, rect, [&](int i, int x, int y, __m128 r2, __m128 z, __m128 mask) {
+          if (clip_geometry) mask = _mm_and_ps(mask, laneMask(int(rows[y - row0] >> (x - rect.x0)) & 0xF));
           const __m128 pass =
               _mm_and_ps(_mm_and_ps(mask, _mm_cmple_ps(z, _mm_loadu_ps(tb.bound + i))),
                          _mm_and_ps(_mm_cmple_ps(_mm_sub_ps(z, tolerance4), _mm_loadu_ps(tb.front + i)),
@@ -594,12 +651,19 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
           const int bits = _mm_movemask_ps(pass);
           if (!bits) return;
           fragments += kBitCount[bits];
+          __m128 color_lanes = all_lanes;
+          if (clip_color) {  // texture discontinuity: only the colour is clipped (4.3)
+            const int keep = colorKeep4(x, y, bits);
+            clipped_fragments += kBitCount[bits & ~keep];
+            color_lanes = laneMask(keep);
+          }
           alignas(16) int32_t step[4];
           const __m128 clamped = _mm_min_ps(_mm_max_ps(r2, zero), one);
           _mm_store_si128(reinterpret_cast<__m128i*>(step),
                           _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(clamped, steps), half)));
           const __m128 w = _mm_and_ps(pass, _mm_setr_ps(weight_table[step[0]], weight_table[step[1]],
                                                         weight_table[step[2]], weight_table[step[3]]));
+          const __m128 color_w = _mm_and_ps(w, color_lanes);
           auto add = [&](float* buffer, __m128 value) {
             _mm_storeu_ps(buffer + i, _mm_add_ps(_mm_loadu_ps(buffer + i), value));
           };
@@ -608,10 +672,10 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
           add(tb.normal[0], _mm_mul_ps(w, normal0));
           add(tb.normal[1], _mm_mul_ps(w, normal1));
           add(tb.normal[2], _mm_mul_ps(w, normal2));
-          add(tb.color_weight, w);
-          add(tb.color[0], _mm_mul_ps(w, color0));
-          add(tb.color[1], _mm_mul_ps(w, color1));
-          add(tb.color[2], _mm_mul_ps(w, color2));
+          add(tb.color_weight, color_w);
+          add(tb.color[0], _mm_mul_ps(color_w, color0));
+          add(tb.color[1], _mm_mul_ps(color_w, color1));
+          add(tb.color[2], _mm_mul_ps(color_w, color2));
           const __m128 max_weight = _mm_loadu_ps(tb.max_weight + i);
           const __m128 larger = _mm_cmpgt_ps(w, max_weight);
           _mm_storeu_ps(tb.max_weight + i, select(larger, w, max_weight));
@@ -643,27 +707,40 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
           out->weight[p] = weight;
           out->depth[p] = tb.depth[i] / weight;
           const Eigen::Vector3f blended(tb.normal[0][i], tb.normal[1][i], tb.normal[2][i]);
-          const float length = blended.norm();
-          out->normal[p] = length > 1e-20f ? Eigen::Vector3f(blended / length) : Eigen::Vector3f::Zero();
+          const float length2 = blended.squaredNorm();
+          const Eigen::Vector3f normal = length2 > 1e-40f
+                                             ? Eigen::Vector3f(blended * (1.0f / std::sqrt(length2)))
+                                             : Eigen::Vector3f::Zero();
+          out->normal[p] = normal;
           out->patch_id[p] = tb.patch_id[i];
           const float color_weight = tb.color_weight[i];
           float base[3];
-          for (int k = 0; k < 3; ++k)
-            base[k] = color_weight > 0 ? tb.color[k][i] / color_weight : float(config_.default_color[k]);
+          if (color_weight > 0) {
+            const float inverse = 1.0f / color_weight;
+            for (int k = 0; k < 3; ++k) base[k] = tb.color[k][i] * inverse;
+          } else {
+            for (int k = 0; k < 3; ++k) base[k] = float(config_.default_color[k]);
+          }
           if (!config_.shading) {
             out->color[p] = toRgba(base[0], base[1], base[2], alpha);
             continue;
           }
-          const Eigen::Vector3f to_eye =
-              frame.perspective ? Eigen::Vector3f(view_x[x - rect.x0], view_y, -1.0f).normalized()
-                                : Eigen::Vector3f(0, 0, -1);
-          Eigen::Vector3f shading_normal = camera_R_world * out->normal[p];
+          Eigen::Vector3f to_eye(0, 0, -1);
+          if (frame.perspective) {
+            const float vx = view_x[x - rect.x0];
+            to_eye =
+                Eigen::Vector3f(vx, view_y, -1.0f) * (1.0f / std::sqrt(vx * vx + view_y * view_y + 1.0f));
+          }
+          Eigen::Vector3f shading_normal = camera_R_world * normal;
           if (shading_normal.dot(to_eye) < 0) shading_normal = -shading_normal;
           const float lambert = std::max(0.0f, shading_normal.dot(to_light));
           float highlight = 0;
           if (lambert > 0) {
             const Eigen::Vector3f reflected = 2.0f * lambert * shading_normal - to_light;
-            highlight = std::pow(std::max(0.0f, reflected.dot(to_eye)), shininess);
+            const float t = std::min(1.0f, std::max(0.0f, reflected.dot(to_eye))) * kSpecularTableSteps;
+            const int step = std::min(int(t), kSpecularTableSteps - 1);
+            highlight =
+                specular_table[step] + (t - float(step)) * (specular_table[step + 1] - specular_table[step]);
           }
           const float intensity = ambient + diffuse * lambert;
           const float added = 255.0f * specular * highlight;

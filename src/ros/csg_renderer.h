@@ -47,14 +47,15 @@ class CsgClipper;
 
 struct CsgRendererParams {
   std::string fixed_frame = "world";
-  std::string camera_frame = "csg_camera";     ///< optical convention (REP 103): z forward, x right, y down
-  std::string csg;                             ///< initial CSG expression; empty: all patches, unclipped
-  std::vector<std::string> patch_topics;       ///< patch i comes from topic i
-  bool use_surfels_topic = true;               ///< subscribe to `surfels` (clouds with a patch_id field)
-  double tf_timeout = 0.1;                     ///< seconds to wait for the transform of a cloud's stamp
-  double max_rate = 10.0;                      ///< frames per second at most
-  double pose_tolerance = 1e-6;                ///< camera motion (metres / radians) that triggers a new frame
-  std::string partner_method = "clip_buffer";  ///< clip_buffer (Algorithm 4.1) | spatial_index
+  std::string camera_frame = "csg_camera";  ///< optical convention (REP 103): z forward, x right, y down
+  std::string csg;                          ///< initial CSG expression; empty: all patches, unclipped
+  std::vector<std::string> patch_topics;    ///< patch i comes from topic i
+  bool use_surfels_topic = true;            ///< subscribe to `surfels` (clouds with a patch_id field)
+  double tf_timeout = 0.1;                  ///< seconds to wait for the transform of a cloud's stamp
+  double max_rate = 10.0;                   ///< frames per second at most
+  double pose_tolerance = 1e-6;             ///< camera motion (metres / radians) that triggers a new frame
+  std::string partner_method =
+      "spatial_index";  ///< spatial_index (faster, bench_clip_partners) | clip_buffer (Algorithm 4.1)
   // Intrinsics
   int width = 640, height = 480;
   double horizontal_fov = 60.0;             ///< degrees

@@ -75,7 +75,7 @@ rc::Camera resized(const rc::Camera& c, uint32_t width, uint32_t height) {
 
 int main(int argc, char** argv) {
   CLI::App app{"rc_render: CSG splatting with sharp edges and corners (thesis ch. 4)"};
-  std::string scene_path, out_dir = ".", clip_method = "clipbuffer", csg;
+  std::string scene_path, out_dir = ".", clip_method = "spatial", csg;
   std::vector<std::string> surfel_files;
   int camera_index = -1, frames = 1;
   uint32_t width = 0, height = 0;
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
   app.add_option("--dt", dt, "seconds per frame");
   app.add_option("--out", out_dir, "output folder");
   app.add_flag("--no-csg", no_csg, "plain splatting without clipping");
-  app.add_option("--clip-method", clip_method, "clipping partner search")
+  app.add_option("--clip-method", clip_method, "clipping partner search (default spatial)")
       ->check(CLI::IsMember({"clipbuffer", "spatial"}));
   CLI11_PARSE(app, argc, argv);
 
@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(out_dir);
     rc::SceneRenderOptions options;
     options.csg = !no_csg;
-    options.partner_method =
+    options.clipper.method =
         clip_method == "spatial" ? rc::PartnerMethod::kSpatialIndex : rc::PartnerMethod::kClipBuffer;
     rc::SceneRenderer renderer(scene, options);
     std::printf("%-24s %8s %8s %8s %8s %8s %8s %8s %8s %8s\n", "frame", "surfels", "edge_sf", "edge_px",
