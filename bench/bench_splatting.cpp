@@ -73,25 +73,28 @@ int main(int argc, char** argv) {
   std::printf("EWA splatting, sphere at 1280x720 (silhouette radius %.0f px), median of 5 frames\n\n",
               silhouette_px);
   std::printf(
-      "| surfels | threads | EWA | total ms | set-up ms | bin ms | visibility ms | accumulate ms | shade ms "
-      "| "
-      "Msplats/s | fragments/splat |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "| surfels | threads | EWA | outputs | total ms | set-up ms | bin ms | visibility ms | accumulate ms | "
+      "shade ms | Msplats/s | fragments/splat |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int count : {100000, 1000000}) {
     const rc::SurfelCloud cloud = sampleSphere(1.0, count);
     for (int threads : {1, 2})
-      for (bool ewa : {true, false}) {
-        rc::SplatConfig config;
-        config.threads = threads;
-        config.ewa_filter = ewa;
-        rc::SurfelRenderer renderer(config);
-        rc::RenderImages images;
-        const Timing t = medianOf5(renderer, cloud, camera, &images);
-        rc::RenderStats stats;
-        renderer.render(cloud, camera, &images, nullptr, &stats);
-        std::printf("| %d | %d | %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n", count,
-                    threads, ewa ? "on" : "off", t.total, t.setup, t.bin, t.visibility, t.accumulate, t.shade,
-                    count / (t.total * 1e3), double(stats.fragments) / stats.splats);
-      }
+      for (bool ewa : {true, false})
+        for (uint32_t outputs : {uint32_t(rc::kOutputAll), uint32_t(rc::kOutputColor | rc::kOutputDepth)}) {
+          if (!ewa && outputs != rc::kOutputAll) continue;
+          rc::SplatConfig config;
+          config.threads = threads;
+          config.ewa_filter = ewa;
+          config.outputs = outputs;
+          rc::SurfelRenderer renderer(config);
+          rc::RenderImages images;
+          const Timing t = medianOf5(renderer, cloud, camera, &images);
+          rc::RenderStats stats;
+          renderer.render(cloud, camera, &images, nullptr, &stats);
+          std::printf("| %d | %d | %s | %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n",
+                      count, threads, ewa ? "on" : "off", outputs == rc::kOutputAll ? "all" : "colour+depth",
+                      t.total, t.setup, t.bin, t.visibility, t.accumulate, t.shade, count / (t.total * 1e3),
+                      double(stats.fragments) / stats.splats);
+        }
   }
 
   std::printf(

@@ -66,7 +66,8 @@ void SceneRenderer::render(const Camera& camera, double t, RenderImages* out, Sc
   s.visibility_ms = s.render.visibility_ms;
   s.accumulate_ms = s.render.accumulate_ms;
   s.shade_ms = s.render.shade_ms;
-  if (clipper_ && stats) s.edge_pixels = countEdgePixels(moved_, *clipper_, camera, *out);
+  if (clipper_ && stats && !out->depth.empty())
+    s.edge_pixels = countEdgePixels(moved_, *clipper_, camera, *out);
   if (stats) *stats = s;
 }
 

@@ -21,7 +21,7 @@ struct SceneRenderOptions {
 struct SceneFrameStats {
   size_t surfels = 0;       ///< surfels in the scene
   size_t edge_surfels = 0;  ///< surfels with clipping partners (4.1.2)
-  size_t edge_pixels = 0;   ///< visible pixels covered by an edge surfel (see countEdgePixels)
+  size_t edge_pixels = 0;   ///< visible pixels covered by an edge surfel (countEdgePixels; needs depth)
   double classify_ms = 0;   ///< dynamic scenes: re-classification after the motion
   double partners_ms = 0;   ///< per-frame clipping partners
   double visibility_ms = 0, accumulate_ms = 0, shade_ms = 0;

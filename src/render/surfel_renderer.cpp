@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "render/deferred_shader.h"
 #include "render/ewa_splat.h"
 #include "render/splat_rasterizer.h"
 
@@ -25,7 +26,6 @@ namespace {
 using namespace splat_tile;
 constexpr int kTilePixels = kTileSize * kTileSize;
 constexpr int kWeightTableSteps = 1024;    ///< Gaussian weight table over r2 in [0, 1]
-constexpr int kSpecularTableSteps = 1024;  ///< Phong highlight table over cos in [0, 1]
 constexpr size_t kSurfelsPerChunk = 4096;  ///< set-up/binning work unit (at most 8 per thread)
 #if defined(__SSE2__)
 constexpr bool kSimd = true;  ///< unclipped splats are rasterized four pixels at a time
@@ -121,11 +121,6 @@ inline void forEachTileOfSplat(const SplatRaster& s, int tiles_x, Visit&& visit)
     for (int tx = tx0; tx <= tx1; ++tx) visit(ty * tiles_x + tx);
 }
 
-Rgba toRgba(float r, float g, float b, uint8_t alpha) {
-  auto channel = [](float value) { return uint8_t(std::min(255.0f, std::max(0.0f, value)) + 0.5f); };
-  return {channel(r), channel(g), channel(b), alpha};
-}
-
 void validateConfig(const SplatConfig& config) {
   auto fail = [](const std::string& what) { throw std::invalid_argument("SplatConfig: " + what); };
   if (!(config.lowpass_variance > 0) || !std::isfinite(config.lowpass_variance))
@@ -135,6 +130,7 @@ void validateConfig(const SplatConfig& config) {
   if (!(config.depth_tolerance_scale >= 0) || !std::isfinite(config.depth_tolerance_scale))
     fail("depth_tolerance_scale must be non-negative");
   if (config.threads < 0) fail("threads must be >= 0");
+  if (config.outputs & ~uint32_t(kOutputAll)) fail("outputs has unknown RenderOutput bits");
   if (!(config.light_direction_camera.norm() > 0)) fail("light_direction_camera must be non-zero");
 }
 
@@ -345,24 +341,22 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   const double cutoff_sigmas = config_.cutoff_radius / kKernelSigmaPerRadius;
   for (int k = 0; k <= kWeightTableSteps; ++k)
     weight_table[k] = float(std::exp(-0.5 * cutoff_sigmas * cutoff_sigmas * k / kWeightTableSteps));
-  // cos^shininess of the Phong highlight, interpolated from a table (std::pow per pixel was most of shading)
-  std::array<float, kSpecularTableSteps + 2> specular_table;
-  for (int k = 0; k <= kSpecularTableSteps + 1; ++k)
-    specular_table[k] = float(std::pow(std::min(1.0, double(k) / kSpecularTableSteps), config_.shininess));
-
   out->width = camera.width;
   out->height = camera.height;
-  out->color.resize(pixels);
-  out->depth.resize(pixels);
-  out->normal.resize(pixels);
-  out->weight.resize(pixels);
-  out->patch_id.resize(pixels);
+  auto prepareImage = [&](auto& image, RenderOutput output) {
+    if (config_.outputs & output) {
+      image.resize(pixels);
+    } else {
+      image.clear();
+    }
+  };
+  prepareImage(out->color, kOutputColor);
+  prepareImage(out->depth, kOutputDepth);
+  prepareImage(out->normal, kOutputNormal);
+  prepareImage(out->weight, kOutputWeight);
+  prepareImage(out->patch_id, kOutputPatchId);
 
-  const Eigen::Matrix3f camera_R_world = frame.camera_R_world.cast<float>();
-  const Eigen::Vector3f to_light = (-config_.light_direction_camera.normalized()).cast<float>();
-  const float ambient = float(config_.ambient), diffuse = float(config_.diffuse);
-  const float specular = float(config_.specular);
-  const uint8_t alpha = config_.default_color[3];
+  const DeferredShader shader(config_, frame);
   const float infinity = std::numeric_limits<float>::infinity();
 
   // --- Per tile: pass 1 (visibility, 3.2.2) finds per pixel the smallest z and the smallest z + eps_z over
@@ -402,14 +396,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       const uint32_t splat_count = ws.tile_offsets[tile + 1] - ws.tile_offsets[tile];
       auto index = [&](int x, int y) { return (y - rect.y0) * kTileStride + x - rect.x0; };
       if (splat_count == 0) {
-        for (int y = rect.y0; y <= rect.y1; ++y) {
-          const size_t p = size_t(y) * width + rect.x0, count = size_t(rect.x1 - rect.x0 + 1);
-          std::fill_n(out->weight.begin() + p, count, 0.0f);
-          std::fill_n(out->depth.begin() + p, count, infinity);
-          std::fill_n(out->normal.begin() + p, count, Eigen::Vector3f::Zero());
-          std::fill_n(out->patch_id.begin() + p, count, -1);
-          std::fill_n(out->color.begin() + p, count, config_.background);
-        }
+        for (int y = rect.y0; y <= rect.y1; ++y) shader.clearSpan(rect.x1 - rect.x0 + 1, rect.x0, y, out);
         shade_ms += millisecondsSince(start_tile);
         continue;
       }
@@ -422,8 +409,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       auto visibilitySplat = [&](uint32_t k, uint64_t* rows) {
         const SplatRaster& s = staged[items[k]];
         const float tolerance = s.depth_tolerance;
-        const SplatShading& front_shading = staged_shading[items[k]];
-        const int32_t patch = front_shading.patch_id;
+        const SplatShading& front_shading = staged_shading[items[k]];  // read only with separate patches
         const bool clip_any = rows != nullptr;
         const bool clip_geometry = (s.flags & SplatRaster::kClip) != 0;
         const int row0 = std::max(int(s.y0), rect.y0);
@@ -439,7 +425,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
             tb.bound[i] = std::min(tb.bound[i], z + tolerance);
             if (z < tb.front[i]) {
               tb.front[i] = z;
-              tb.front_patch[i] = patch;
+              tb.front_patch[i] = front_shading.patch_id;
               for (int c = 0; c < 3; ++c) tb.front_normal[c][i] = front_shading.normal[c];
             }
           });
@@ -447,7 +433,6 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
         }
 #if defined(__SSE2__)
         const __m128 tolerance4 = _mm_set1_ps(tolerance);
-        const __m128 patch4 = _mm_castsi128_ps(_mm_set1_epi32(patch));
         auto update = [&](int i, __m128 z, __m128 mask) {
           const __m128 b = _mm_loadu_ps(tb.bound + i), f = _mm_loadu_ps(tb.front + i);
           _mm_storeu_ps(tb.bound + i, select(mask, _mm_min_ps(b, _mm_add_ps(z, tolerance4)), b));
@@ -455,6 +440,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
           _mm_storeu_ps(tb.front + i, select(nearer, z, f));
           if (!separate_patches) return;
           float* front_patches = reinterpret_cast<float*>(tb.front_patch + i);
+          const __m128 patch4 = _mm_castsi128_ps(_mm_set1_epi32(front_shading.patch_id));
           _mm_storeu_ps(front_patches, select(nearer, patch4, _mm_loadu_ps(front_patches)));
           for (int c = 0; c < 3; ++c) {
             float* front_normal = tb.front_normal[c] + i;
@@ -538,7 +524,10 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       // splats go first, then the clipped ones front to back, so that most of their hidden fragments are
       // rejected by depth before the (costlier) clip test.
       for (uint32_t k = 0; k < splat_count; ++k) {
-        if (k + kPrefetchDistance < splat_count) __builtin_prefetch(staged + items[k + kPrefetchDistance]);
+        if (k + kPrefetchDistance < splat_count) {
+          __builtin_prefetch(staged + items[k + kPrefetchDistance]);
+          if (separate_patches) __builtin_prefetch(staged_shading + items[k + kPrefetchDistance]);
+        }
         const SplatRaster& s = staged[items[k]];
         if (s.flags & SplatRaster::kClip) {
           const uint32_t rows = uint32_t(std::min(int(s.y1), rect.y1) - std::max(int(s.y0), rect.y0) + 1);
@@ -567,8 +556,9 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
 
       size_t next_clip_item = 0;
       for (uint32_t k = 0; k < splat_count; ++k) {
-        if (k + kPrefetchDistance < splat_count)
+        if (k + kPrefetchDistance < splat_count) {  // pass 1 brought the raster records into the caches
           __builtin_prefetch(staged_shading + items[k + kPrefetchDistance]);
+        }
         const SplatRaster& s = staged[items[k]];
         const bool clip_geometry = (s.flags & SplatRaster::kClip) != 0;
         const bool clip_color = (s.flags & SplatRaster::kClipColorOnly) != 0;
@@ -688,65 +678,15 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       accumulate_ms += std::chrono::duration<double, std::milli>(start_shade - start_accumulate).count();
 
       // Normalise by the accumulated weights and shade.
-      float view_x[kTileSize];  // view ray slope per column (perspective)
-      for (int x = rect.x0; x <= rect.x1; ++x) view_x[x - rect.x0] = -float((x - frame.cx) / frame.fx);
       for (int y = rect.y0; y <= rect.y1; ++y) {
-        const float view_y = -float((y - frame.cy) / frame.fy);
-        for (int x = rect.x0; x <= rect.x1; ++x) {
-          const int i = index(x, y);
-          const size_t p = size_t(y) * width + x;
-          const float weight = tb.weight[i];
-          if (!(weight > 0)) {
-            out->weight[p] = 0;
-            out->depth[p] = infinity;
-            out->normal[p].setZero();
-            out->patch_id[p] = -1;
-            out->color[p] = config_.background;
-            continue;
-          }
-          out->weight[p] = weight;
-          out->depth[p] = tb.depth[i] / weight;
-          const Eigen::Vector3f blended(tb.normal[0][i], tb.normal[1][i], tb.normal[2][i]);
-          const float length2 = blended.squaredNorm();
-          const Eigen::Vector3f normal = length2 > 1e-40f
-                                             ? Eigen::Vector3f(blended * (1.0f / std::sqrt(length2)))
-                                             : Eigen::Vector3f::Zero();
-          out->normal[p] = normal;
-          out->patch_id[p] = tb.patch_id[i];
-          const float color_weight = tb.color_weight[i];
-          float base[3];
-          if (color_weight > 0) {
-            const float inverse = 1.0f / color_weight;
-            for (int k = 0; k < 3; ++k) base[k] = tb.color[k][i] * inverse;
-          } else {
-            for (int k = 0; k < 3; ++k) base[k] = float(config_.default_color[k]);
-          }
-          if (!config_.shading) {
-            out->color[p] = toRgba(base[0], base[1], base[2], alpha);
-            continue;
-          }
-          Eigen::Vector3f to_eye(0, 0, -1);
-          if (frame.perspective) {
-            const float vx = view_x[x - rect.x0];
-            to_eye =
-                Eigen::Vector3f(vx, view_y, -1.0f) * (1.0f / std::sqrt(vx * vx + view_y * view_y + 1.0f));
-          }
-          Eigen::Vector3f shading_normal = camera_R_world * normal;
-          if (shading_normal.dot(to_eye) < 0) shading_normal = -shading_normal;
-          const float lambert = std::max(0.0f, shading_normal.dot(to_light));
-          float highlight = 0;
-          if (lambert > 0) {
-            const Eigen::Vector3f reflected = 2.0f * lambert * shading_normal - to_light;
-            const float t = std::min(1.0f, std::max(0.0f, reflected.dot(to_eye))) * kSpecularTableSteps;
-            const int step = std::min(int(t), kSpecularTableSteps - 1);
-            highlight =
-                specular_table[step] + (t - float(step)) * (specular_table[step + 1] - specular_table[step]);
-          }
-          const float intensity = ambient + diffuse * lambert;
-          const float added = 255.0f * specular * highlight;
-          out->color[p] = toRgba(base[0] * intensity + added, base[1] * intensity + added,
-                                 base[2] * intensity + added, alpha);
-        }
+        const int i = index(rect.x0, y);
+        const AccumulatedSpan span = {tb.weight + i,
+                                      tb.color_weight + i,
+                                      tb.depth + i,
+                                      {tb.color[0] + i, tb.color[1] + i, tb.color[2] + i},
+                                      {tb.normal[0] + i, tb.normal[1] + i, tb.normal[2] + i},
+                                      tb.patch_id + i};
+        shader.shadeSpan(span, rect.x1 - rect.x0 + 1, rect.x0, y, out);
       }
       shade_ms += millisecondsSince(start_shade);
     }

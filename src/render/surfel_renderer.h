@@ -15,6 +15,17 @@
 
 namespace rc {
 
+/// Output images of SurfelRenderer::render() (bit flags). Images not asked for are left empty and cost
+/// nothing: the per-pixel output writes are a large part of a frame at 1280x720.
+enum RenderOutput : uint32_t {
+  kOutputColor = 1,
+  kOutputDepth = 2,
+  kOutputNormal = 4,
+  kOutputWeight = 8,
+  kOutputPatchId = 16,
+  kOutputAll = 31,
+};
+
 struct SplatConfig {
   bool ewa_filter = true;  ///< convolve with the screen-space low-pass filter (EWA)
   /// Variance of the screen-space low-pass filter [px^2]. Zwicker et al. use 1; with the 2-sigma cut-off
@@ -33,11 +44,13 @@ struct SplatConfig {
       Vec3(0.3, 0.5, 1.0);  ///< direction the light travels (camera optical frame: +z into the scene);
                             ///< default from behind the camera, upper left
   double ambient = 0.25, diffuse = 0.7, specular = 0.25, shininess = 30;
+  uint32_t outputs = kOutputAll;  ///< RenderOutput flags: the images render() fills
   Rgba background = {255, 255, 255, 255};
   Rgba default_color = {200, 200, 200, 255};  ///< for clouds without colours
 };
 
-/// Output images, row-major, width * height. Background pixels: weight 0, depth +inf, patch id -1.
+/// Output images, row-major, width * height (empty if not in SplatConfig::outputs). Background pixels:
+/// weight 0, depth +inf, normal 0, patch id -1.
 struct RenderImages {
   uint32_t width = 0, height = 0;
   std::vector<Rgba> color;              ///< shaded colour

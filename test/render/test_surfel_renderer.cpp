@@ -325,6 +325,35 @@ TEST(SurfelRenderer, ReusedCopiedAndConcurrentRenderersGiveFreshResults) {
   EXPECT_TRUE(same(concurrent[1], fresh_plane));
 }
 
+TEST(SurfelRenderer, OnlyTheRequestedOutputsAreFilledAndTheyAreUnchanged) {
+  const Camera camera = frontCamera(129, 150);
+  const SurfelCloud sphere = sampleSphere(Vec3(0, 0, 4), 1.0, 8000, {200, 50, 50, 255});
+  RenderImages all, some;
+  SurfelRenderer().render(sphere, camera, &all);
+  for (const uint32_t outputs : {uint32_t(kOutputColor | kOutputDepth), uint32_t(kOutputNormal),
+                                 uint32_t(kOutputWeight | kOutputPatchId)}) {
+    SplatConfig config;
+    config.outputs = outputs;
+    SurfelRenderer(config).render(sphere, camera, &some);
+    const size_t pixels = size_t(camera.width) * camera.height;
+    EXPECT_EQ(some.color.size(), (outputs & kOutputColor) ? pixels : 0u);
+    EXPECT_EQ(some.depth.size(), (outputs & kOutputDepth) ? pixels : 0u);
+    EXPECT_EQ(some.normal.size(), (outputs & kOutputNormal) ? pixels : 0u);
+    EXPECT_EQ(some.weight.size(), (outputs & kOutputWeight) ? pixels : 0u);
+    EXPECT_EQ(some.patch_id.size(), (outputs & kOutputPatchId) ? pixels : 0u);
+    if (outputs & kOutputColor)
+      EXPECT_EQ(std::memcmp(some.color.data(), all.color.data(), pixels * sizeof(Rgba)), 0);
+    if (outputs & kOutputDepth)
+      EXPECT_EQ(std::memcmp(some.depth.data(), all.depth.data(), pixels * sizeof(float)), 0);
+    if (outputs & kOutputNormal) EXPECT_TRUE(some.normal == all.normal);
+    if (outputs & kOutputWeight) EXPECT_TRUE(some.weight == all.weight);
+    if (outputs & kOutputPatchId) EXPECT_TRUE(some.patch_id == all.patch_id);
+  }
+  SplatConfig bad;
+  bad.outputs = 64;
+  EXPECT_THROW(SurfelRenderer{bad}, std::invalid_argument);
+}
+
 /// Keeps fragments with world x < 0 of surfel 0.
 class HalfSpaceClipper : public FragmentClipper {
  public:
