@@ -160,14 +160,13 @@ bool ClipProgram::valid() const {
 }
 
 #if defined(__SSE2__)
-int ClipProgram::insideMask4(const Group& g, int du, int dv) const {
+int ClipProgram::insideMask4(const Group& g, const uint8_t* active, int count, int du, int dv) const {
   const __m128 du4 = _mm_add_ps(_mm_set1_ps(float(du)), _mm_setr_ps(0, 1, 2, 3));
   const float fdv = float(dv);
   auto evaluate = [&](const ClipAffine& a) {
     return _mm_add_ps(_mm_set1_ps(a.c0 + a.cv * fdv), _mm_mul_ps(_mm_set1_ps(a.cu), du4));
   };
   const __m128 zero = _mm_setzero_ps();
-  if (g.count == 1) return ~_mm_movemask_ps(_mm_cmpge_ps(evaluate(planes_[g.first]), zero)) & 0xF;  // (4.3)
   // The two closest partners per pixel (first of equal ranks wins, as in insidePatchFromSurfels), with
   // their indices and plane values.
   __m128 best0 = _mm_set1_ps(std::numeric_limits<float>::infinity()), best1 = best0;
@@ -176,7 +175,8 @@ int ClipProgram::insideMask4(const Group& g, int du, int dv) const {
   auto choose = [](__m128 mask, __m128 a, __m128 b) {
     return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
   };
-  for (int k = 0; k < g.count; ++k) {
+  for (int a = 0; a < count; ++a) {
+    const int k = active[a];
     const __m128 r = evaluate(ranks_[g.first + k]), p = evaluate(planes_[g.first + k]);
     const __m128 kf = _mm_set1_ps(float(k));
     const __m128 lt0 = _mm_cmplt_ps(r, best0), lt1 = _mm_cmplt_ps(r, best1);
@@ -198,19 +198,16 @@ int ClipProgram::insideMask4(const Group& g, int du, int dv) const {
   return (concave & (in_a | in_b)) | (~concave & in_a & in_b);  // (4.4)
 }
 #else
-int ClipProgram::insideMask4(const Group& g, int du, int dv) const {
+int ClipProgram::insideMask4(const Group& g, const uint8_t* active, int count, int du, int dv) const {
   const float fdv = float(dv);
   int inside = 0;
   for (int lane = 0; lane < 4; ++lane) {
     const float x = float(du + lane);
     auto value = [&](const ClipAffine& a) { return a.c0 + a.cv * fdv + a.cu * x; };
-    if (g.count == 1) {
-      inside |= int(!(value(planes_[g.first]) >= 0.0f)) << lane;
-      continue;
-    }
     float best0 = std::numeric_limits<float>::infinity(), best1 = best0;
     int a = 0, b = 0;
-    for (int k = 0; k < g.count; ++k) {
+    for (int j = 0; j < count; ++j) {
+      const int k = active[j];
       const float r = value(ranks_[g.first + k]);
       if (r < best0) {
         best1 = best0;
@@ -273,9 +270,41 @@ uint64_t ClipProgram::insideRow(const Group& g, int dv, int du0, uint64_t candid
     const float row = p.c0 + p.cv * fdv;
     return candidates & ~nonNegativeBits(candidates, [&](int b) { return row + p.cu * float(du0 + b); });
   }
+  // Partners that can be among the two closest somewhere on the span: a rank is monotone along the row, so
+  // its range over the span is between its end values; a partner whose smallest rank exceeds the second
+  // smallest of the largest ranks is never among the two closest (4.4).
+  const int lo = lowestBit(candidates), hi = highestBit(candidates);
+  float range_lo[kMaxGroupSize], largest0 = std::numeric_limits<float>::infinity(), largest1 = largest0;
+  for (int k = 0; k < g.count; ++k) {
+    const ClipAffine& r = ranks_[g.first + k];
+    const float row = r.c0 + r.cv * fdv;
+    const float a = row + r.cu * float(du0 + lo), b = row + r.cu * float(du0 + hi);
+    range_lo[k] = std::min(a, b);
+    const float range_hi = std::max(a, b);
+    if (range_hi < largest0) {
+      largest1 = largest0;
+      largest0 = range_hi;
+    } else if (range_hi < largest1) {
+      largest1 = range_hi;
+    }
+  }
+  uint8_t active[kMaxGroupSize];
+  int count = 0;
+  for (int k = 0; k < g.count; ++k)
+    if (range_lo[k] <= largest1) active[count++] = uint8_t(k);
+  if (count == 2) {  // the same two partners everywhere on the span: two monotone plane tests (4.4)
+    const int a = g.first + active[0], b = g.first + active[1];
+    auto insideOf = [&](const ClipAffine& p) {
+      const float row = p.c0 + p.cv * fdv;
+      return candidates &
+             ~nonNegativeBits(candidates, [&](int bit) { return row + p.cu * float(du0 + bit); });
+    };
+    const uint64_t in_a = insideOf(planes_[a]), in_b = insideOf(planes_[b]);
+    return ((concave_[a] >> active[1]) & 1u) ? (in_a | in_b) : (in_a & in_b);
+  }
   uint64_t inside = 0;
-  for (int b = lowestBit(candidates), hi = highestBit(candidates); b <= hi; b += 4)
-    if ((candidates >> b) & 0xF) inside |= uint64_t(insideMask4(g, du0 + b, dv)) << b;
+  for (int b = lo; b <= hi; b += 4)
+    if ((candidates >> b) & 0xF) inside |= uint64_t(insideMask4(g, active, count, du0 + b, dv)) << b;
   return inside & candidates;
 }
 

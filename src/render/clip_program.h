@@ -81,8 +81,9 @@ class ClipProgram {
     uint16_t first, count;
   };
   enum Op : uint16_t { kGroup = 0, kAnd = 1, kOr = 2, kLevelIntersection = 3, kLevelUnion = 4 };
-  /// Inside masks of group g for four pixels (bit k: pixel du + k).
-  int insideMask4(const Group& g, int du, int dv) const;
+  /// Inside masks of group g for four pixels (bit k: pixel du + k) from the partners `active[0..count)`
+  /// (ascending indices within the group, at least two) that can be among the two closest there.
+  int insideMask4(const Group& g, const uint8_t* active, int count, int du, int dv) const;
   /// Inside bits of group g along a row (same bit layout as keepRow), restricted to `candidates`.
   uint64_t insideRow(const Group& g, int dv, int du0, uint64_t candidates) const;
 

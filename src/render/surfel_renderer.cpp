@@ -41,6 +41,10 @@ double millisecondsSince(Clock::time_point start) {
 constexpr int kTileBufferSize = kTileSize * kTileStride;
 constexpr int kBlockSize = 8;  ///< occlusion culling granularity inside a tile
 constexpr int kBlocksPerTile = kTileSize / kBlockSize;
+/// Pass 1 tests splats with a box of at least this many pixels against the block bounds so far.
+constexpr int kOcclusionTestArea = 256;
+/// Tiles with at most this many splats (large splats: few per tile) are drawn front to back.
+constexpr uint32_t kSortMaxSplats = 64;
 
 /// Tile-local buffers of the two passes (structure of arrays), pixel (x, y) of the tile at (x0, y0) at
 /// (y - y0) * kTileStride + x - x0.
@@ -94,17 +98,18 @@ inline __m128 laneMask(int bits) {
   return _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(_mm_set1_epi32(bits), lane_bits), lane_bits));
 }
 
-/// Lanes where `all` is set, `patch` equals the front patch, or the normals agree (kCrossPatchBlendCosine).
-inline __m128 blendsWithFront(__m128 all, __m128 patch, const float normal[3], const TileBuffers& tb, int i) {
+/// Of the lanes `candidates`, those where the front fragment has the same patch or a normal within
+/// acos(kCrossPatchBlendCosine) (the normals are read only where the patches differ).
+inline __m128 blendsWithFront(__m128 candidates, __m128 patch, const float normal[3], const TileBuffers& tb,
+                              int i) {
   const __m128i front = _mm_loadu_si128(reinterpret_cast<const __m128i*>(tb.front_patch + i));
-  const float* const front_normal[3] = {tb.front_normal[0] + i, tb.front_normal[1] + i,
-                                        tb.front_normal[2] + i};
   const __m128 same = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_castps_si128(patch), front));
+  if (!(_mm_movemask_ps(_mm_andnot_ps(same, candidates)))) return candidates;
   const __m128 cosine =
-      _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(normal[0]), _mm_loadu_ps(front_normal[0])),
-                            _mm_mul_ps(_mm_set1_ps(normal[1]), _mm_loadu_ps(front_normal[1]))),
-                 _mm_mul_ps(_mm_set1_ps(normal[2]), _mm_loadu_ps(front_normal[2])));
-  return _mm_or_ps(_mm_or_ps(all, same), _mm_cmpge_ps(cosine, _mm_set1_ps(kCrossPatchBlendCosine)));
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(normal[0]), _mm_loadu_ps(tb.front_normal[0] + i)),
+                            _mm_mul_ps(_mm_set1_ps(normal[1]), _mm_loadu_ps(tb.front_normal[1] + i))),
+                 _mm_mul_ps(_mm_set1_ps(normal[2]), _mm_loadu_ps(tb.front_normal[2] + i)));
+  return _mm_and_ps(candidates, _mm_or_ps(same, _mm_cmpge_ps(cosine, _mm_set1_ps(kCrossPatchBlendCosine))));
 }
 #endif
 
@@ -227,19 +232,21 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       }
       SplatRaster& raster = staged[counts.drawn];
       SplatShading& shading = staged_shading[counts.drawn];
+      // Cavity walls of complemented patches face the other way (4.2): shading and back-face culling use
+      // the reversed normal (the footprint does not depend on its sign).
+      const double orientation = clipper && clipper->flipsNormal(uint32_t(i)) ? -1.0 : 1.0;
       SplatSetup result;
       if (circular) {
-        result = setupCircularEwaSplat(cloud.positions[i], cloud.normals[i], cloud.radii[i], frame, params,
-                                       &raster, shading.normal);
+        result = setupCircularEwaSplat(cloud.positions[i], orientation * cloud.normals[i], cloud.radii[i],
+                                       frame, params, &raster, shading.normal);
       } else {
         Vec3 normal, axis1, axis2;
         surfelFrame(cloud, i, &normal, &axis1, &axis2);
+        normal *= orientation;
         result = setupEwaSplat(cloud.positions[i], normal, axis1, axis2, frame, params, &raster, nullptr);
         const Vec3 unit_normal = normal.normalized();
         for (int k = 0; k < 3; ++k) shading.normal[k] = float(unit_normal[k]);
       }
-      if (clipper && clipper->flipsNormal(uint32_t(i)))  // cavity wall of a complemented patch (4.2)
-        for (float& component : shading.normal) component = -component;
       if (result == SplatSetup::kInvalid) {
         ++counts.invalid;
         continue;
@@ -381,6 +388,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
     };
     std::vector<ClipItem> clip_items, sorted_clip_items;
     std::vector<uint64_t> candidate_rows(kTileSize);
+    std::vector<uint32_t> sorted_items;
     alignas(16) float clip_depth[kTileSize * kTileStride];  // depth of the candidate fragments
 #pragma omp for schedule(dynamic, 1)
     for (int tile = 0; tile < tiles; ++tile) {
@@ -394,6 +402,17 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       const SplatShading* staged_shading = ws.staged_shading.data();
       const uint32_t* items = ws.bin_items.data() + ws.tile_offsets[tile];
       const uint32_t splat_count = ws.tile_offsets[tile + 1] - ws.tile_offsets[tile];
+      if (splat_count > 1 && splat_count <= kSortMaxSplats) {
+        // Few (large) splats: front to back (nearest depth, ties by surfel order), so that the occlusion
+        // test of pass 1 rejects the hidden ones. Both passes give order-independent results up to the
+        // rounding of the sums; the order is the same for any thread count.
+        sorted_items.assign(items, items + splat_count);
+        std::sort(sorted_items.begin(), sorted_items.end(), [&](uint32_t a, uint32_t b) {
+          const float za = ws.staged[a].z_lo, zb = ws.staged[b].z_lo;
+          return za != zb ? za < zb : a < b;
+        });
+        items = sorted_items.data();
+      }
       auto index = [&](int x, int y) { return (y - rect.y0) * kTileStride + x - rect.x0; };
       if (splat_count == 0) {
         for (int y = rect.y0; y <= rect.y1; ++y) shader.clearSpan(rect.x1 - rect.x0 + 1, rect.x0, y, out);
@@ -497,6 +516,22 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       // visible fragment there (occlusion culling; exact, z >= z_lo; clipping only removes fragments).
       float block_max[kBlocksPerTile * kBlocksPerTile];
       auto updateBlockMax = [&]() {
+#if defined(__SSE2__)
+        // Whole blocks (pixels outside a partial tile keep bound = +inf: conservative).
+        for (int by = 0; by < kBlocksPerTile; ++by) {
+          for (int bx = 0; bx < kBlocksPerTile; ++bx) {
+            __m128 largest = _mm_set1_ps(-infinity);
+            for (int r = 0; r < kBlockSize; ++r) {
+              const float* row = tb.bound + (by * kBlockSize + r) * kTileStride + bx * kBlockSize;
+              largest = _mm_max_ps(largest, _mm_max_ps(_mm_loadu_ps(row), _mm_loadu_ps(row + 4)));
+            }
+            alignas(16) float lanes[4];
+            _mm_store_ps(lanes, largest);
+            block_max[by * kBlocksPerTile + bx] =
+                std::max(std::max(lanes[0], lanes[1]), std::max(lanes[2], lanes[3]));
+          }
+        }
+#else
         for (int by = 0; by < kBlocksPerTile; ++by) {
           for (int bx = 0; bx < kBlocksPerTile; ++bx) {
             float largest = -infinity;
@@ -508,6 +543,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
             block_max[by * kBlocksPerTile + bx] = largest;
           }
         }
+#endif
       };
       auto occluded = [&](const SplatRaster& s) {
         const int bx0 = (std::max(int(s.x0), rect.x0) - rect.x0) / kBlockSize;
@@ -523,6 +559,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       // The result of pass 1 (per-pixel minima) does not depend on the order of the splats: unclipped
       // splats go first, then the clipped ones front to back, so that most of their hidden fragments are
       // rejected by depth before the (costlier) clip test.
+      bool block_max_stale = true;
       for (uint32_t k = 0; k < splat_count; ++k) {
         if (k + kPrefetchDistance < splat_count) {
           __builtin_prefetch(staged + items[k + kPrefetchDistance]);
@@ -535,7 +572,15 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
           keep_rows.resize(keep_rows.size() + rows, 0);
           continue;
         }
+        // A large splat is first tested against the bounds so far (they only decrease: a splat hidden now
+        // stays hidden); small ones are not worth the refresh.
+        if (int(s.x1 - s.x0 + 1) * int(s.y1 - s.y0 + 1) >= kOcclusionTestArea) {
+          if (block_max_stale) updateBlockMax();
+          block_max_stale = false;
+          if (occluded(s)) continue;
+        }
         visibilitySplat(k, nullptr);
+        block_max_stale = true;
       }
       if (!clip_items.empty()) {
         sorted_clip_items = clip_items;
@@ -630,14 +675,13 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
         const __m128 steps = _mm_set1_ps(float(kWeightTableSteps)), half = _mm_set1_ps(0.5f);
         const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
         const __m128 tolerance4 = _mm_set1_ps(tolerance);
-        const __m128 all_patches = separate_patches ? _mm_setzero_ps() : _mm_castsi128_ps(_mm_set1_epi32(-1));
         const __m128 all_lanes = _mm_castsi128_ps(_mm_set1_epi32(-1));
         rasterizeSplat4(s, rect, [&](int i, int x, int y, __m128 r2, __m128 z, __m128 mask) {
           if (clip_geometry) mask = _mm_and_ps(mask, laneMask(int(rows[y - row0] >> (x - rect.x0)) & 0xF));
-          const __m128 pass =
-              _mm_and_ps(_mm_and_ps(mask, _mm_cmple_ps(z, _mm_loadu_ps(tb.bound + i))),
-                         _mm_and_ps(_mm_cmple_ps(_mm_sub_ps(z, tolerance4), _mm_loadu_ps(tb.front + i)),
-                                    blendsWithFront(all_patches, patch, shading.normal, tb, i)));
+          __m128 pass = _mm_and_ps(_mm_and_ps(mask, _mm_cmple_ps(z, _mm_loadu_ps(tb.bound + i))),
+                                   _mm_cmple_ps(_mm_sub_ps(z, tolerance4), _mm_loadu_ps(tb.front + i)));
+          if (!_mm_movemask_ps(pass)) return;
+          if (separate_patches) pass = blendsWithFront(pass, patch, shading.normal, tb, i);
           const int bits = _mm_movemask_ps(pass);
           if (!bits) return;
           fragments += kBitCount[bits];

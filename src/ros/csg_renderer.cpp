@@ -133,7 +133,9 @@ CsgRendererParams readCsgRendererParams(const ros::NodeHandle& pnh) {
   pnh.param("near_clip", p.near_clip, p.near_clip);
   pnh.param("far_clip", p.far_clip, p.far_clip);
   SplatConfig& s = p.splat;
+  s.outputs = kOutputColor | kOutputDepth | kOutputWeight | kOutputPatchId;  // what the node uses
   pnh.param("ewa_filter", s.ewa_filter, s.ewa_filter);
+  pnh.param("lowpass_variance", s.lowpass_variance, s.lowpass_variance);
   pnh.param("cutoff_radius", s.cutoff_radius, s.cutoff_radius);
   pnh.param("depth_tolerance_scale", s.depth_tolerance_scale, s.depth_tolerance_scale);
   pnh.param("shading", s.shading, s.shading);
