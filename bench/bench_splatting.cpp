@@ -73,28 +73,38 @@ int main(int argc, char** argv) {
   std::printf("EWA splatting, sphere at 1280x720 (silhouette radius %.0f px), median of 5 frames\n\n",
               silhouette_px);
   std::printf(
-      "| surfels | threads | EWA | outputs | total ms | set-up ms | bin ms | visibility ms | accumulate ms | "
-      "shade ms | Msplats/s | fragments/splat |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "| surfels | threads | EWA | outputs | faces | total ms | set-up ms | bin ms | visibility ms | "
+      "accumulate ms "
+      "| shade ms | Msplats/s | fragments/splat |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  struct Variant {
+    bool ewa;
+    uint32_t outputs;
+    bool cull;
+  };
+  const Variant variants[] = {{true, rc::kOutputAll, false},
+                              {false, rc::kOutputAll, false},
+                              {true, rc::kOutputColor | rc::kOutputDepth, false},
+                              {true, rc::kOutputColor | rc::kOutputDepth, true}};
   for (int count : {100000, 1000000}) {
     const rc::SurfelCloud cloud = sampleSphere(1.0, count);
     for (int threads : {1, 2})
-      for (bool ewa : {true, false})
-        for (uint32_t outputs : {uint32_t(rc::kOutputAll), uint32_t(rc::kOutputColor | rc::kOutputDepth)}) {
-          if (!ewa && outputs != rc::kOutputAll) continue;
-          rc::SplatConfig config;
-          config.threads = threads;
-          config.ewa_filter = ewa;
-          config.outputs = outputs;
-          rc::SurfelRenderer renderer(config);
-          rc::RenderImages images;
-          const Timing t = medianOf5(renderer, cloud, camera, &images);
-          rc::RenderStats stats;
-          renderer.render(cloud, camera, &images, nullptr, &stats);
-          std::printf("| %d | %d | %s | %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n",
-                      count, threads, ewa ? "on" : "off", outputs == rc::kOutputAll ? "all" : "colour+depth",
-                      t.total, t.setup, t.bin, t.visibility, t.accumulate, t.shade, count / (t.total * 1e3),
-                      double(stats.fragments) / stats.splats);
-        }
+      for (const Variant& v : variants) {
+        rc::SplatConfig config;
+        config.threads = threads;
+        config.ewa_filter = v.ewa;
+        config.outputs = v.outputs;
+        config.backface_culling = v.cull;
+        rc::SurfelRenderer renderer(config);
+        rc::RenderImages images;
+        const Timing t = medianOf5(renderer, cloud, camera, &images);
+        rc::RenderStats stats;
+        renderer.render(cloud, camera, &images, nullptr, &stats);
+        std::printf("| %d | %d | %s | %s | %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n",
+                    count, threads, v.ewa ? "on" : "off",
+                    v.outputs == rc::kOutputAll ? "all" : "colour+depth", v.cull ? "front" : "both", t.total,
+                    t.setup, t.bin, t.visibility, t.accumulate, t.shade, count / (t.total * 1e3),
+                    double(stats.fragments) / stats.splats);
+      }
   }
 
   std::printf(
