@@ -1,0 +1,535 @@
+#include "sph/sph_fluid_solver.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+namespace rc {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+void require(bool ok, const char* field, const std::string& what) {
+  if (!ok) throw std::invalid_argument(std::string("SphFluidConfig.") + field + ": " + what);
+}
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.3g", v);
+  return buf;
+}
+
+}  // namespace
+
+const char* toString(SphStepLimit limit) {
+  switch (limit) {
+    case SphStepLimit::kFixed:
+      return "fixed";
+    case SphStepLimit::kMaxDt:
+      return "max_dt";
+    case SphStepLimit::kSpeed:
+      return "speed (CFL)";
+    case SphStepLimit::kSoundSpeed:
+      return "sound speed";
+    case SphStepLimit::kViscosity:
+      return "viscosity";
+    case SphStepLimit::kForce:
+      return "force";
+  }
+  return "?";
+}
+
+void SphFluidConfig::validate() const {
+  require(dimension == 2 || dimension == 3, "dimension", "must be 2 or 3, got " + std::to_string(dimension));
+  require(smoothing_length > 0.0 && std::isfinite(smoothing_length), "smoothing_length",
+          "must be finite and > 0, got " + num(smoothing_length));
+  require(rest_density > 0.0 && std::isfinite(rest_density), "rest_density",
+          "must be finite and > 0, got " + num(rest_density));
+  require(stiffness > 0.0 && std::isfinite(stiffness), "stiffness",
+          "must be finite and > 0, got " + num(stiffness));
+  require(gamma >= 1.0 && std::isfinite(gamma), "gamma", "must be finite and >= 1, got " + num(gamma));
+  require(negative_pressure_scale >= 0.0 && negative_pressure_scale <= 1.0, "negative_pressure_scale",
+          "(zeta) must be in [0, 1], got " + num(negative_pressure_scale));
+  require(viscosity >= 0.0 && std::isfinite(viscosity), "viscosity",
+          "must be finite and >= 0, got " + num(viscosity));
+  require(xsph >= 0.0 && xsph <= 1.0, "xsph", "(xi) must be in [0, 1], got " + num(xsph));
+  require(gravity.allFinite(), "gravity", "must be finite");
+  require(dimension == 3 || gravity.z() == 0.0, "gravity", "z must be 0 in 2D, got " + num(gravity.z()));
+  require(cfl > 0.0 && cfl <= 1.0, "cfl", "must be in (0, 1], got " + num(cfl));
+  require(fixed_dt >= 0.0 && std::isfinite(fixed_dt), "fixed_dt",
+          "must be finite and >= 0 (0 = adaptive), got " + num(fixed_dt));
+  require(max_dt > 0.0 && std::isfinite(max_dt), "max_dt", "must be finite and > 0, got " + num(max_dt));
+  require(instability_energy_growth > 1.0, "instability_energy_growth",
+          "must be > 1, got " + num(instability_energy_growth));
+  require(num_threads >= 0, "num_threads", "must be >= 0 (0 = all), got " + std::to_string(num_threads));
+}
+
+double SphFluidConfig::soundSpeed() const {
+  return std::sqrt(stiffness * gamma / rest_density);
+}
+
+namespace {
+const SphFluidConfig& validated(const SphFluidConfig& config) {
+  config.validate();
+  return config;
+}
+}  // namespace
+
+SphFluidSolver::SphFluidSolver(const SphFluidConfig& config, SphParticles particles)
+    : config_(validated(config)),
+      kernels_(config_.dimension, config_.smoothing_length),
+      particles_(std::move(particles)) {
+  num_threads_ = config_.num_threads > 0 ? config_.num_threads : omp_get_max_threads();
+  validateParticles();
+}
+
+void SphFluidSolver::validateParticles() const {
+  const SphParticles& p = particles_;
+  const size_t n = p.size();
+  auto fail = [](const std::string& what) { throw std::invalid_argument("SphParticles: " + what); };
+  if (p.velocities.size() != n || p.masses.size() != n || p.densities.size() != n ||
+      p.pressures.size() != n || p.forces.size() != n || p.kinds.size() != n || p.phases.size() != n)
+    fail("all arrays must have the size of positions (" + std::to_string(n) + ")");
+  for (size_t i = 0; i < n; ++i) {
+    if (!p.positions[i].allFinite()) fail("position " + std::to_string(i) + " is not finite");
+    if (!p.velocities[i].allFinite()) fail("velocity " + std::to_string(i) + " is not finite");
+    if (!(p.masses[i] > 0.0) || !std::isfinite(p.masses[i]))
+      fail("mass " + std::to_string(i) + " must be finite and > 0, got " + num(p.masses[i]));
+    if (static_cast<uint8_t>(p.kinds[i]) > 2) fail("kind " + std::to_string(i) + " is unknown");
+    if (config_.dimension == 2 && (p.positions[i].z() != 0.0 || p.velocities[i].z() != 0.0))
+      fail("particle " + std::to_string(i) + " has z != 0 in a 2D simulation");
+  }
+}
+
+void SphFluidSolver::addPlane(const SphPlane& plane) {
+  if (!plane.normal.allFinite() || !(plane.normal.norm() > 0.0))
+    throw std::invalid_argument("SphPlane.normal must be finite and non-zero");
+  if (!std::isfinite(plane.offset)) throw std::invalid_argument("SphPlane.offset must be finite");
+  if (!(plane.restitution >= 0.0 && plane.restitution <= 1.0))
+    throw std::invalid_argument("SphPlane.restitution must be in [0, 1], got " + num(plane.restitution));
+  if (!(plane.friction >= 0.0 && plane.friction <= 1.0))
+    throw std::invalid_argument("SphPlane.friction must be in [0, 1], got " + num(plane.friction));
+  if (config_.dimension == 2 && plane.normal.z() != 0.0)
+    throw std::invalid_argument("SphPlane.normal must have z = 0 in 2D");
+  SphPlane p = plane;
+  const double len = plane.normal.norm();
+  p.normal /= len;
+  p.offset /= len;
+  planes_.push_back(p);
+}
+
+double SphFluidSolver::pressureOf(double rho) const {
+  const double ratio = rho / config_.rest_density;
+  const double p =
+      config_.stiffness * ((config_.gamma == 1.0 ? ratio : std::pow(ratio, config_.gamma)) - 1.0);  // (8.15)
+  return p >= 0.0 ? p : config_.negative_pressure_scale * p;                                        // (8.16)
+}
+
+// e(rho) = int_{rho_0}^{rho} p(r) / r^2 dr >= 0, the compression energy per unit mass.
+double SphFluidSolver::compressionEnergyOf(double rho) const {
+  const double rho0 = config_.rest_density, k = config_.stiffness, g = config_.gamma;
+  if (!(rho > 0.0)) return 0.0;
+  double e = g == 1.0
+                 ? k / rho0 * std::log(rho / rho0)
+                 : k * std::pow(rho0, -g) * (std::pow(rho, g - 1.0) - std::pow(rho0, g - 1.0)) / (g - 1.0);
+  e += k * (1.0 / rho - 1.0 / rho0);
+  return rho >= rho0 ? e : config_.negative_pressure_scale * e;
+}
+
+void SphFluidSolver::computeForces() {
+  validateParticles();
+  computeForces(particles_.velocities);
+  measureState();
+}
+
+void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
+  const size_t n = particles_.size();
+  accelerations_.resize(n);
+  xsph_.resize(n);
+  // Small systems run on fewer threads (barriers cost more than the work); results do not depend on it.
+  const int threads = static_cast<int>(std::max<size_t>(1, std::min<size_t>(num_threads_, n / 2048)));
+  grid_.build(particles_.positions, config_.smoothing_length, threads);
+  const std::vector<uint32_t>& order = grid_.order();
+  s_pos_.resize(n);
+  s_vel_.resize(n);
+  s_acc_.resize(n);
+  s_xsph_.resize(n);
+  s_mass_.resize(n);
+  s_rho_.resize(n);
+  s_press_.resize(n);
+  s_press_term_.resize(n);
+  s_kind_.resize(n);
+  row_begin_.resize(n);
+  row_count_.resize(n);
+  if (thread_lists_.size() < size_t(threads)) thread_lists_.resize(threads);
+  thread_first_.assign(threads + 1, 0);
+  for (int t = 0; t <= threads; ++t) thread_first_[t] = n * t / threads;
+
+#pragma omp parallel num_threads(threads)
+  {
+    const int t = omp_get_thread_num();
+    const size_t first = thread_first_[t], last = thread_first_[t + 1];
+    for (size_t s = first; s < last; ++s) {  // gather into cell order
+      const uint32_t i = order[s];
+      s_pos_[s] = particles_.positions[i];
+      s_kind_[s] = particles_.kinds[i];
+      s_vel_[s] = s_kind_[s] == SphParticleKind::kStaticBoundary ? Vec3::Zero() : velocities[i];
+      s_mass_[s] = particles_.masses[i];
+    }
+#pragma omp barrier
+    densityPass(t);
+#pragma omp barrier
+    if (config_.boundary_pressure == SphBoundaryPressure::kExtrapolated) {
+      boundaryPressurePass(t);
+#pragma omp barrier
+    }
+    forcePass(t);
+#pragma omp barrier
+    for (size_t s = first; s < last; ++s) {  // scatter back
+      const uint32_t i = order[s];
+      particles_.densities[i] = s_rho_[s];
+      particles_.pressures[i] = s_press_[s];
+      accelerations_[i] = s_acc_[s];
+      particles_.forces[i] = s_mass_[s] * s_acc_[s];
+      xsph_[i] = s_xsph_[s];
+    }
+  }
+  size_t entries = 0;
+  for (size_t s = 0; s < n; ++s) entries += row_count_[s];
+  stats_.neighbors_per_particle = n ? double(entries) / double(n) : 0.0;
+  forces_valid_ = true;
+}
+
+// Density (8.4) and pressure (8.15)-(8.16) of the sorted particles [first, last); records the neighbour rows.
+void SphFluidSolver::densityPass(int t) {
+  const size_t first = thread_first_[t], last = thread_first_[t + 1];
+  std::vector<uint32_t>& list = thread_lists_[t];
+  size_t used = 0;
+  const double h2 = kernels_.h2;
+  SphSortedGrid::Run runs[9];
+  int num_runs = 0;
+  size_t candidates = 0;
+  uint32_t current_cell = std::numeric_limits<uint32_t>::max();
+  const Vec3* pos = s_pos_.data();
+  const double* mass = s_mass_.data();
+  for (size_t s = first; s < last; ++s) {
+    const uint32_t c = grid_.cellOfSorted(s);
+    if (c != current_cell) {
+      current_cell = c;
+      num_runs = grid_.neighborRuns(c, runs);
+      candidates = 0;
+      for (int r = 0; r < num_runs; ++r) candidates += runs[r].end - runs[r].begin;
+    }
+    if (used + candidates > list.size()) list.resize(std::max(2 * list.size(), used + candidates + 4096));
+    uint32_t* out = list.data() + used;
+    const double px = pos[s].x(), py = pos[s].y(), pz = pos[s].z();
+    double sum = 0.0;  // sum_j m_j (1 - d^2/h^2)^3
+    size_t found = 0;
+    for (int r = 0; r < num_runs; ++r) {
+      for (uint32_t j = runs[r].begin; j < runs[r].end; ++j) {
+        const double dx = pos[j].x() - px, dy = pos[j].y() - py, dz = pos[j].z() - pz;
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 < h2 && j != s) {
+          const double q = 1.0 - d2 / h2;
+          sum += mass[j] * (q * q * q);
+          out[found++] = j;
+        }
+      }
+    }
+    const double rho = kernels_.poly6_coeff * (mass[s] + sum);  // (8.4), self term included
+    row_begin_[s] = static_cast<uint32_t>(used);
+    row_count_[s] = static_cast<uint32_t>(found);
+    used += found;
+    s_rho_[s] = rho;
+    double p = pressureOf(rho);
+    if (s_kind_[s] != SphParticleKind::kFluid) p = std::max(p, 0.0);  // walls never pull
+    s_press_[s] = p;
+    s_press_term_[s] = p / (rho * rho);
+  }
+}
+
+// Boundary pressures extrapolated from the fluid (Adami et al. 2012, eq. 27; see SphBoundaryPressure) of the
+// sorted boundary particles [first, last). Reads only fluid pressures and densities of the density pass.
+void SphFluidSolver::boundaryPressurePass(int t) {
+  const size_t first = thread_first_[t], last = thread_first_[t + 1];
+  const uint32_t* list = thread_lists_[t].data();
+  const double h2 = kernels_.h2, rho0 = config_.rest_density;
+  const Vec3 gravity = config_.gravity;
+  for (size_t s = first; s < last; ++s) {
+    if (s_kind_[s] == SphParticleKind::kFluid) continue;
+    const Vec3 xw = s_pos_[s];
+    double sum_w = 0.0, sum_pw = 0.0;
+    Vec3 sum_rho_r = Vec3::Zero();
+    const uint32_t* row = list + row_begin_[s];
+    for (uint32_t e = 0, ne = row_count_[s]; e < ne; ++e) {
+      const uint32_t f = row[e];
+      if (s_kind_[f] != SphParticleKind::kFluid) continue;
+      const Vec3 r = xw - s_pos_[f];
+      const double q = 1.0 - r.squaredNorm() / h2;
+      const double w = q * q * q;  // poly6 up to its constant, which cancels
+      sum_w += w;
+      sum_pw += s_press_[f] * w;
+      sum_rho_r += (s_rho_[f] * w) * r;
+    }
+    const double p = sum_w > 0.0 ? std::max(0.0, (sum_pw + gravity.dot(sum_rho_r)) / sum_w) : 0.0;
+    // Invert (8.15) for the wall density.
+    const double ratio = p / config_.stiffness + 1.0;
+    const double rho = rho0 * (config_.gamma == 1.0 ? ratio : std::pow(ratio, 1.0 / config_.gamma));
+    s_rho_[s] = rho;
+    s_press_[s] = p;
+    s_press_term_[s] = p / (rho * rho);
+  }
+}
+
+// Accelerations (8.14) with the symmetric pressure force (8.17) and viscosity (8.18), and the XSPH velocity
+// correction (8.19), of the sorted fluid particles [first, last). Pair terms are computed so that the term of
+// (i, j) is exactly the negative of the term of (j, i).
+void SphFluidSolver::forcePass(int t) {
+  const size_t first = thread_first_[t], last = thread_first_[t + 1];
+  const uint32_t* list = thread_lists_[t].data();
+  const double inv_h = kernels_.inv_h;
+  const double spiky_grad = -3.0 * kernels_.spiky_coeff * inv_h;  // w^'(d) = spiky_grad (1 - d/h)^2
+  const double poly6_grad = -6.0 * kernels_.poly6_coeff / kernels_.h2;
+  const bool poly6_pressure = config_.pressure_kernel == SphPressureKernel::kPoly6;
+  const double visc = config_.viscosity * kernels_.viscosity_coeff;
+  const double xi = config_.xsph, poly6 = kernels_.poly6_coeff, h2 = kernels_.h2;
+  const Vec3 gravity = config_.gravity;
+  for (size_t s = first; s < last; ++s) {
+    if (s_kind_[s] != SphParticleKind::kFluid) {
+      s_acc_[s].setZero();
+      s_xsph_[s].setZero();
+      continue;
+    }
+    const Vec3 xi_pos = s_pos_[s], vi = s_vel_[s];
+    const double mi = s_mass_[s], rhoi = s_rho_[s], pti = s_press_term_[s];
+    Vec3 force = Vec3::Zero(), smooth = Vec3::Zero();
+    const uint32_t* row = list + row_begin_[s];
+    for (uint32_t e = 0, ne = row_count_[s]; e < ne; ++e) {
+      const uint32_t j = row[e];
+      const Vec3 r = xi_pos - s_pos_[j];
+      const double d2 = r.squaredNorm();
+      const double d = std::sqrt(d2);
+      const double mm = mi * s_mass_[j];
+      const double u = 1.0 - d * inv_h;
+      // -grad_i of pressure: -m_i m_j (p_i/rho_i^2 + p_j/rho_j^2) grad W^(r_ij)   (8.17)
+      if (poly6_pressure) {
+        const double q = 1.0 - d2 / h2;  // grad W = poly6_grad q^2 r
+        force -= ((pti + s_press_term_[j]) * mm * (poly6_grad * q * q)) * r;
+      } else if (d > 0.0) {
+        force -= ((pti + s_press_term_[j]) * mm * (spiky_grad * u * u / d)) * r;
+      }
+      const Vec3 dv = s_vel_[j] - vi;
+      // mu V_i V_j lap W (v_j - v_i)   (8.12), (8.18)
+      force += (visc * mm / (rhoi * s_rho_[j]) * u) * dv;
+      if (s_kind_[j] == SphParticleKind::kFluid) {
+        const double q = 1.0 - d2 / h2;
+        smooth += (s_mass_[j] / (0.5 * (rhoi + s_rho_[j])) * poly6 * q * q * q) * dv;  // (8.19)
+      }
+    }
+    s_acc_[s] = force / mi + gravity;
+    s_xsph_[s] = xi * smooth;
+  }
+}
+
+void SphFluidSolver::chooseTimeStep(double requested_dt) {
+  const double h = config_.smoothing_length, cfl = config_.cfl;
+  const SphParticles& p = particles_;
+  double max_speed = 0.0, max_acc = 0.0, max_rho = config_.rest_density;
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p.kinds[i] == SphParticleKind::kStaticBoundary) continue;
+    max_speed = std::max(max_speed, p.velocities[i].norm());
+    if (p.kinds[i] != SphParticleKind::kFluid) continue;
+    max_acc = std::max(max_acc, accelerations_[i].norm());
+    max_rho = std::max(max_rho, p.densities[i]);
+  }
+  const double c = std::sqrt(config_.stiffness * config_.gamma / config_.rest_density *
+                             std::pow(max_rho / config_.rest_density, config_.gamma - 1.0));
+  stats_.dt_speed = max_speed > 0.0 ? cfl * h / max_speed : kInf;
+  stats_.dt_sound = cfl * h / c;
+  // Explicit viscosity is stable for dt <= 2 / lambda_max, lambda_max = 2 nu int L dV = 2 nu (15 | 40/3) /
+  // h^2 (3D | 2D) on a filled neighbourhood.
+  const double nu = config_.viscosity / config_.rest_density;
+  const double lap_integral = (config_.dimension == 3 ? 15.0 : 40.0 / 3.0) / (h * h);
+  stats_.dt_viscosity = nu > 0.0 ? cfl / (nu * lap_integral) : kInf;
+  stats_.dt_force = max_acc > 0.0 ? cfl * std::sqrt(h / max_acc) : kInf;
+  if (config_.fixed_dt > 0.0) {
+    stats_.dt = config_.fixed_dt;
+    stats_.limit = SphStepLimit::kFixed;
+  } else {
+    stats_.dt = config_.max_dt;
+    stats_.limit = SphStepLimit::kMaxDt;
+    const std::pair<double, SphStepLimit> limits[] = {{stats_.dt_speed, SphStepLimit::kSpeed},
+                                                      {stats_.dt_sound, SphStepLimit::kSoundSpeed},
+                                                      {stats_.dt_viscosity, SphStepLimit::kViscosity},
+                                                      {stats_.dt_force, SphStepLimit::kForce}};
+    for (const auto& l : limits)
+      if (l.first < stats_.dt) {
+        stats_.dt = l.first;
+        stats_.limit = l.second;
+      }
+  }
+  if (requested_dt > 0.0 && requested_dt < stats_.dt) stats_.dt = requested_dt;
+}
+
+void SphFluidSolver::collideWithPlanes(size_t i) {
+  Vec3& x = particles_.positions[i];
+  Vec3& v = particles_.velocities[i];
+  for (const SphPlane& plane : planes_) {
+    const double depth = plane.offset - plane.normal.dot(x);
+    if (depth <= 0.0) continue;
+    x += depth * plane.normal;
+    const double vn = plane.normal.dot(v);
+    if (vn < 0.0) {
+      const Vec3 tangential = v - vn * plane.normal;
+      v = (1.0 - plane.friction) * tangential - plane.restitution * vn * plane.normal;
+    }
+  }
+}
+
+const SphStepStats& SphFluidSolver::step() {
+  return advanceOneStep(0.0);
+}
+
+const SphStepStats& SphFluidSolver::advance(double duration) {
+  if (!(duration >= 0.0) || !std::isfinite(duration))
+    throw std::invalid_argument("SphFluidSolver::advance: duration must be finite and >= 0, got " +
+                                num(duration));
+  const double end = time_ + duration;
+  while (time_ < end) {
+    const double remaining = end - time_;
+    advanceOneStep(remaining);
+    if (remaining <= stats_.dt) {
+      time_ = end;
+      stats_.time = end;
+      break;
+    }
+  }
+  return stats_;
+}
+
+const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  SphParticles& p = particles_;
+  const size_t n = p.size();
+  if (!forces_valid_ || accelerations_.size() != n) {
+    validateParticles();
+    computeForces(p.velocities);
+    measureState();
+  }
+  chooseTimeStep(requested_dt);
+  const double dt = stats_.dt;
+  const double energy_before = stats_.kinetic_energy + stats_.compression_energy;
+  // Kick, drift (with the XSPH correction), predict.
+  predicted_.resize(n);
+  double gravity_work = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    if (p.kinds[i] == SphParticleKind::kStaticBoundary) {
+      predicted_[i].setZero();
+      continue;
+    }
+    if (p.kinds[i] == SphParticleKind::kMovingBoundary) {
+      p.positions[i] += dt * p.velocities[i];
+      predicted_[i] = p.velocities[i];
+      continue;
+    }
+    const Vec3 old = p.positions[i];
+    p.velocities[i] += 0.5 * dt * accelerations_[i];
+    p.positions[i] += dt * (p.velocities[i] + xsph_[i]);
+    collideWithPlanes(i);
+    predicted_[i] = p.velocities[i] + 0.5 * dt * accelerations_[i];
+    gravity_work += p.masses[i] * config_.gravity.dot(p.positions[i] - old);
+  }
+  stats_.unstable = false;
+  stats_.instability.clear();
+  bool finite = true;
+  for (size_t i = 0; i < n && finite; ++i) finite = p.positions[i].allFinite() && predicted_[i].allFinite();
+  if (finite) {
+    computeForces(predicted_);
+    for (size_t i = 0; i < n; ++i)  // final kick
+      if (p.kinds[i] == SphParticleKind::kFluid) p.velocities[i] += 0.5 * dt * accelerations_[i];
+  }
+  time_ += dt;
+  ++step_count_;
+  stats_.step = step_count_;
+  stats_.time = time_;
+  if (!measureState()) finite = false;
+  const double kinetic = stats_.kinetic_energy;
+  if (!finite || !std::isfinite(kinetic)) {
+    stats_.unstable = true;
+    stats_.instability = "non-finite positions or velocities";
+  } else {
+    // Energy available to the kinetic energy: what was there, gravity's work, what moving walls may add.
+    const double available =
+        energy_before + std::max(gravity_work, 0.0) + fluid_mass_ * max_boundary_speed2_ +
+        1e-16 * fluid_mass_ *
+            (config_.soundSpeed() * config_.soundSpeed() + config_.gravity.norm() * config_.smoothing_length);
+    if (kinetic > config_.instability_energy_growth * available) {
+      stats_.unstable = true;
+      stats_.instability = "kinetic energy grew from " + num(energy_before) + " (+ gravity work " +
+                           num(gravity_work) + ") to " + num(kinetic) + " in one step";
+    }
+  }
+  stats_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (stats_.unstable) {
+    stats_.instability = "SPH step " + std::to_string(step_count_) + " (t = " + num(time_) +
+                         ") unstable: " + stats_.instability + "; likely cause: " + likelyCause();
+    if (config_.throw_on_instability) throw SphInstabilityError(step_count_, stats_.instability);
+  }
+  return stats_;
+}
+
+bool SphFluidSolver::measureState() {
+  const SphParticles& p = particles_;
+  double kinetic = 0.0, compression = 0.0, max_speed = 0.0, max_err = 0.0, fluid_mass = 0.0,
+         boundary_v2 = 0.0;
+  bool finite = true;
+  for (size_t i = 0; i < p.size(); ++i) {  // serial: sums in a fixed order
+    if (p.kinds[i] == SphParticleKind::kMovingBoundary)
+      boundary_v2 = std::max(boundary_v2, p.velocities[i].squaredNorm());
+    if (p.kinds[i] != SphParticleKind::kFluid) continue;
+    const double v2 = p.velocities[i].squaredNorm();
+    if (!std::isfinite(v2) || !p.positions[i].allFinite()) finite = false;
+    kinetic += 0.5 * p.masses[i] * v2;
+    compression += p.masses[i] * compressionEnergyOf(p.densities[i]);
+    max_speed = std::max(max_speed, std::sqrt(v2));
+    max_err = std::max(max_err, std::abs(p.densities[i] - config_.rest_density) / config_.rest_density);
+    fluid_mass += p.masses[i];
+  }
+  stats_.kinetic_energy = kinetic;
+  stats_.compression_energy = compression;
+  stats_.max_speed = max_speed;
+  stats_.max_density_error = max_err;
+  fluid_mass_ = fluid_mass;
+  max_boundary_speed2_ = boundary_v2;
+  return finite && std::isfinite(kinetic);
+}
+
+std::string SphFluidSolver::likelyCause() const {
+  const double dt = stats_.dt;
+  const std::pair<double, const char*> limits[] = {{stats_.dt_sound, "sound-speed"},
+                                                   {stats_.dt_speed, "CFL (speed)"},
+                                                   {stats_.dt_viscosity, "viscosity"},
+                                                   {stats_.dt_force, "force"}};
+  double worst = 1.0;
+  const char* name = nullptr;
+  double limit = 0.0;
+  for (const auto& l : limits)
+    if (dt / l.first > worst) {
+      worst = dt / l.first;
+      name = l.second;
+      limit = l.first;
+    }
+  if (name) return "dt " + num(dt) + " exceeds the " + name + " limit " + num(limit);
+  return "dt " + num(dt) + " is within all limits (sound " + num(stats_.dt_sound) + ", viscosity " +
+         num(stats_.dt_viscosity) +
+         "); check the particle spacing against h, boundary velocities and "
+         "stiffness";
+}
+
+}  // namespace rc

@@ -1,0 +1,78 @@
+// 2D dam-break validation of the SPH fluid (thesis 8.1, REFERENCES): surge front x/L against
+// t* = t sqrt(2 g / L) for a column of width L and height 2L, against Martin & Moyce (1952) and Koshizuka &
+// Oka (1996); the reference tables and their sources are in src/sph/sph_dam_break_surge.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "sph/sph_dam_break_surge.h"
+
+namespace rc {
+namespace {
+
+/// Coarse dam break: L = 0.1 m, 20 particles across the column (800 fluid particles), h = 3 dx, spiky
+/// pressure gradient, mu = 1 Pa s, XSPH 0.1, c = 10 sqrt(2 g 2L), tank 5L wide.
+SphDamBreak2D coarseDamBreak() {
+  SphDamBreak2D scene;
+  scene.column_width = 0.1;
+  scene.column_height = 0.2;
+  scene.tank_width = 0.5;
+  scene.tank_height = 0.25;
+  scene.dx = 0.005;
+  scene.smoothing_ratio = 3.0;
+  return scene;
+}
+
+SphFluidConfig damBreakConfig(const SphDamBreak2D& scene) {
+  SphFluidConfig c;
+  const double speed_of_sound = 10.0 * std::sqrt(2.0 * 9.81 * scene.column_height);
+  c.stiffness = speed_of_sound * speed_of_sound * c.rest_density;
+  c.viscosity = 1.0;
+  c.xsph = 0.1;
+  c.negative_pressure_scale = 0.01;
+  c.pressure_kernel = SphPressureKernel::kSpiky;
+  return c;
+}
+
+void printRun(const char* name, const SphSurgeRun& run, const std::vector<SphSurgeSample>& reference) {
+  std::printf("%s: %zu fluid particles, %llu steps, max |x/L - ref| = %.3f, max relative %.3f\n", name,
+              run.fluid_particles, (unsigned long long)run.steps, run.max_abs_error, run.max_rel_error);
+  for (const SphSurgeSample& s : run.front)
+    std::printf("  t* %.3f  x/L %.3f  ref %.3f\n", s.t_star, s.x_over_l,
+                interpolateSurge(reference, s.t_star));
+}
+
+TEST(SphValidation, DamBreakSurgeFrontFollowsMartinMoyce) {
+  const SphDamBreak2D scene = coarseDamBreak();
+  const SphSurgeRun run = runDamBreakSurge(scene, damBreakConfig(scene), martinMoyceSurge(), 3.0);
+  printRun("Martin & Moyce n^2 = 2", run, martinMoyceSurge());
+  ASSERT_EQ(run.front.size(), martinMoyceSurge().size());  // all samples have t* <= 3
+  EXPECT_LT(run.max_rel_error, 0.10);
+  EXPECT_GT(run.front.back().x_over_l, 3.0);  // the surge has travelled (x/L = 1 at rest)
+}
+
+// The two experiments differ by about 11% themselves at t* = 2.7 (Koshizuka & Oka's front is slower; Martin &
+// Moyce interpolate to x/L = 3.33 there, Koshizuka & Oka measured 3.00); the simulation, which follows Martin
+// & Moyce, is 11% ahead of Koshizuka & Oka there, so the bound is 15%.
+TEST(SphValidation, DamBreakSurgeFrontFollowsKoshizukaOka) {
+  const SphDamBreak2D scene = coarseDamBreak();
+  const SphSurgeRun run = runDamBreakSurge(scene, damBreakConfig(scene), koshizukaOkaSurge(), 3.0);
+  printRun("Koshizuka & Oka", run, koshizukaOkaSurge());
+  EXPECT_LT(run.max_rel_error, 0.15);
+}
+
+TEST(SphValidation, SurgeReferenceInterpolates) {
+  EXPECT_DOUBLE_EQ(interpolateSurge(martinMoyceSurge(), 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(interpolateSurge(martinMoyceSurge(), 2.51), 3.0);
+  EXPECT_NEAR(interpolateSurge(koshizukaOkaSurge(), 0.5 * (0.381 + 0.769)), 0.5 * (1.111 + 1.252), 1e-12);
+  EXPECT_DOUBLE_EQ(interpolateSurge(koshizukaOkaSurge(), 10.0), 3.624);  // clamped
+  EXPECT_THROW(interpolateSurge({}, 1.0), std::invalid_argument);
+  const SphDamBreak2D scene = coarseDamBreak();
+  EXPECT_THROW(runDamBreakSurge(scene, damBreakConfig(scene), {{1.0, 1.0}, {0.5, 1.2}}),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rc
