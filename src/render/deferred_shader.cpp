@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 
@@ -45,14 +46,45 @@ float DeferredShader::highlight(float cosine) const {
   return specular_table_[step] + (t - float(step)) * (specular_table_[step + 1] - specular_table_[step]);
 }
 
+#if defined(__SSE2__)
+namespace {
+/// Four output values written around the caches (the images are not read again by the renderer); plain
+/// stores where the address is not 16-byte aligned.
+inline void stream(float* address, __m128 value) {
+  if ((reinterpret_cast<uintptr_t>(address) & 15) == 0) {
+    _mm_stream_ps(address, value);
+  } else {
+    _mm_storeu_ps(address, value);
+  }
+}
+}  // namespace
+#endif
+
 void DeferredShader::clearSpan(int count, int x, int y, RenderImages* out) const {
   const size_t p = size_t(y) * width_ + x;
-  if (outputs_ & kOutputWeight) std::fill_n(out->weight.begin() + p, count, 0.0f);
+  int k = 0;
+#if defined(__SSE2__)
+  const __m128 zero = _mm_setzero_ps(), infinity = _mm_set1_ps(std::numeric_limits<float>::infinity());
+  const __m128 no_patch = _mm_castsi128_ps(_mm_set1_epi32(-1));
+  uint32_t background;
+  std::memcpy(&background, &config_.background, sizeof(background));
+  const __m128 background4 = _mm_castsi128_ps(_mm_set1_epi32(int32_t(background)));
+  for (; k + 4 <= count; k += 4) {
+    if (outputs_ & kOutputWeight) stream(out->weight.data() + p + k, zero);
+    if (outputs_ & kOutputDepth) stream(out->depth.data() + p + k, infinity);
+    if (outputs_ & kOutputNormal)
+      for (int c = 0; c < 3; ++c) stream(out->normal[p + k].data() + 4 * c, zero);
+    if (outputs_ & kOutputPatchId) stream(reinterpret_cast<float*>(out->patch_id.data() + p + k), no_patch);
+    if (outputs_ & kOutputColor) stream(reinterpret_cast<float*>(out->color.data() + p + k), background4);
+  }
+#endif
+  const size_t q = p + k, rest = size_t(count - k);
+  if (outputs_ & kOutputWeight) std::fill_n(out->weight.begin() + q, rest, 0.0f);
   if (outputs_ & kOutputDepth)
-    std::fill_n(out->depth.begin() + p, count, std::numeric_limits<float>::infinity());
-  if (outputs_ & kOutputNormal) std::fill_n(out->normal.begin() + p, count, Eigen::Vector3f::Zero());
-  if (outputs_ & kOutputPatchId) std::fill_n(out->patch_id.begin() + p, count, -1);
-  if (outputs_ & kOutputColor) std::fill_n(out->color.begin() + p, count, config_.background);
+    std::fill_n(out->depth.begin() + q, rest, std::numeric_limits<float>::infinity());
+  if (outputs_ & kOutputNormal) std::fill_n(out->normal.begin() + q, rest, Eigen::Vector3f::Zero());
+  if (outputs_ & kOutputPatchId) std::fill_n(out->patch_id.begin() + q, rest, -1);
+  if (outputs_ & kOutputColor) std::fill_n(out->color.begin() + q, rest, config_.background);
 }
 
 void DeferredShader::shadePixel(const AccumulatedSpan& span, int k, int x, int y, size_t p,
@@ -95,6 +127,12 @@ void DeferredShader::shadePixel(const AccumulatedSpan& span, int k, int x, int y
                    toChannel(base[2] * intensity + added), alpha};
 }
 
+void DeferredShader::finish() const {
+#if defined(__SSE2__)
+  _mm_sfence();  // the streamed stores are visible to other threads after this
+#endif
+}
+
 void DeferredShader::shadeSpan(const AccumulatedSpan& span, int count, int x, int y,
                                RenderImages* out) const {
   const size_t p0 = size_t(y) * width_ + x;
@@ -113,11 +151,11 @@ void DeferredShader::shadeSpan(const AccumulatedSpan& span, int count, int x, in
       continue;
     }
     const size_t p = p0 + k;
-    if (outputs_ & kOutputWeight) _mm_storeu_ps(out->weight.data() + p, w);
-    if (outputs_ & kOutputDepth)
-      _mm_storeu_ps(out->depth.data() + p, _mm_div_ps(_mm_loadu_ps(span.depth + k), w));
+    if (outputs_ & kOutputWeight) stream(out->weight.data() + p, w);
+    if (outputs_ & kOutputDepth) stream(out->depth.data() + p, _mm_div_ps(_mm_loadu_ps(span.depth + k), w));
     if (outputs_ & kOutputPatchId)
-      std::memcpy(out->patch_id.data() + p, span.patch_id + k, 4 * sizeof(int32_t));
+      stream(reinterpret_cast<float*>(out->patch_id.data() + p),
+             _mm_loadu_ps(reinterpret_cast<const float*>(span.patch_id + k)));
     if (!(outputs_ & (kOutputNormal | kOutputColor))) continue;
     // Unit normal (zero where the blended normals cancel).
     __m128 n[3];
@@ -126,14 +164,18 @@ void DeferredShader::shadeSpan(const AccumulatedSpan& span, int count, int x, in
         _mm_add_ps(_mm_add_ps(_mm_mul_ps(n[0], n[0]), _mm_mul_ps(n[1], n[1])), _mm_mul_ps(n[2], n[2]));
     const __m128 inv_length =
         _mm_and_ps(_mm_cmpgt_ps(length2, _mm_set1_ps(1e-40f)), _mm_div_ps(one, _mm_sqrt_ps(length2)));
-    alignas(16) float normal[3][4];
-    for (int c = 0; c < 3; ++c) {
-      n[c] = _mm_mul_ps(n[c], inv_length);
-      _mm_store_ps(normal[c], n[c]);
+    for (int c = 0; c < 3; ++c) n[c] = _mm_mul_ps(n[c], inv_length);
+    if (outputs_ & kOutputNormal) {  // x y z x | y z x y | z x y z
+      const __m128 xy_lo = _mm_unpacklo_ps(n[0], n[1]), xy_hi = _mm_unpackhi_ps(n[0], n[1]);
+      const __m128 zx = _mm_shuffle_ps(n[2], n[0], _MM_SHUFFLE(1, 1, 0, 0));
+      const __m128 yz = _mm_shuffle_ps(n[1], n[2], _MM_SHUFFLE(1, 1, 1, 1));
+      const __m128 zzxy = _mm_shuffle_ps(n[2], xy_hi, _MM_SHUFFLE(3, 2, 2, 2));
+      const __m128 xyzz = _mm_shuffle_ps(xy_hi, n[2], _MM_SHUFFLE(3, 3, 3, 2));
+      float* normals = out->normal[p].data();
+      stream(normals, _mm_shuffle_ps(xy_lo, zx, _MM_SHUFFLE(2, 0, 1, 0)));
+      stream(normals + 4, _mm_shuffle_ps(yz, xy_hi, _MM_SHUFFLE(1, 0, 2, 0)));
+      stream(normals + 8, _mm_shuffle_ps(zzxy, xyzz, _MM_SHUFFLE(2, 1, 2, 0)));
     }
-    if (outputs_ & kOutputNormal)
-      for (int l = 0; l < 4; ++l)
-        out->normal[p + l] = Eigen::Vector3f(normal[0][l], normal[1][l], normal[2][l]);
     if (!(outputs_ & kOutputColor)) continue;
     // Base colour.
     const __m128 color_weight = _mm_loadu_ps(span.color_weight + k);
@@ -197,7 +239,7 @@ void DeferredShader::shadeSpan(const AccumulatedSpan& span, int count, int x, in
       packed = _mm_or_si128(packed, _mm_slli_epi32(channel, 8 * c));
     }
     static_assert(sizeof(Rgba) == 4, "Rgba is four bytes");
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out->color.data() + p), packed);
+    stream(reinterpret_cast<float*>(out->color.data() + p), _mm_castsi128_ps(packed));
   }
 #endif
   for (; k < count; ++k) shadePixel(span, k, x + k, y, p0 + k, out);

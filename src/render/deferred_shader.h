@@ -32,6 +32,8 @@ class DeferredShader {
   void shadeSpan(const AccumulatedSpan& span, int count, int x, int y, RenderImages* out) const;
   /// Writes background pixels (x .. x + count - 1, y).
   void clearSpan(int count, int x, int y, RenderImages* out) const;
+  /// Each thread that shaded calls this once at the end (image writes bypass the caches).
+  void finish() const;
 
  private:
   static constexpr int kSpecularTableSteps = 1024;  ///< cos^shininess over [0, 1], interpolated

@@ -734,6 +734,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       }
       shade_ms += millisecondsSince(start_shade);
     }
+    shader.finish();
   }
   local_stats.fragments = fragments;
   local_stats.clipped_fragments = clipped_fragments;
