@@ -271,6 +271,136 @@ SplatSetup setupEwaSplat(const Vec3& center, const Vec3& normal, const Vec3& axi
   return result;
 }
 
+namespace {
+
+/// The common case of setupCameraSurfel for a circular surfel (camera frame, unit normal), in scalar
+/// arithmetic: same formulas, but without the general path's matrices. Returns false where the general path
+/// must decide (edge-on surfels, plane depth not defined over the whole box).
+bool setupCircularCommonCase(const Vec3& c, const Vec3& n, double radius, const CameraFrame& camera,
+                             const EwaParams& params, SplatRaster* raster, SplatSetup* result) {
+  if (!(c.z() >= camera.near_clip && c.z() <= camera.far_clip)) {
+    *result = SplatSetup::kCulled;
+    return true;
+  }
+  // Screen footprint r^2 J (I - n n^T) J^T of the affine approximation of the projection at the centre.
+  const double r2 = radius * radius;
+  double n_dot_view, view_length2, f00, f01, f11, center_u, center_v;
+  if (camera.perspective) {
+    const double inv_z = 1.0 / c.z();
+    const double j00 = camera.fx * inv_z, j02 = -camera.fx * c.x() * inv_z * inv_z;
+    const double j11 = camera.fy * inv_z, j12 = -camera.fy * c.y() * inv_z * inv_z;
+    const double jn0 = j00 * n.x() + j02 * n.z(), jn1 = j11 * n.y() + j12 * n.z();
+    f00 = r2 * (j00 * j00 + j02 * j02 - jn0 * jn0);
+    f01 = r2 * (j02 * j12 - jn0 * jn1);
+    f11 = r2 * (j11 * j11 + j12 * j12 - jn1 * jn1);
+    center_u = camera.cx + camera.fx * c.x() * inv_z;
+    center_v = camera.cy + camera.fy * c.y() * inv_z;
+    n_dot_view = n.dot(c);
+    view_length2 = c.squaredNorm();
+  } else {
+    const double k = camera.ortho_scale, jn0 = k * n.x(), jn1 = k * n.y();
+    f00 = r2 * (k * k - jn0 * jn0);
+    f01 = -r2 * jn0 * jn1;
+    f11 = r2 * (k * k - jn1 * jn1);
+    center_u = camera.cx + camera.ortho_scale * c.x();
+    center_v = camera.cy + camera.ortho_scale * c.y();
+    n_dot_view = n.z();
+    view_length2 = 1.0;
+  }
+  if (params.backface_culling && n_dot_view > 0) {
+    *result = SplatSetup::kCulled;
+    return true;
+  }
+  const double scale2 = f00 + f11, det2 = f00 * f11 - f01 * f01;
+  if (n_dot_view * n_dot_view < kEdgeOnCosine * kEdgeOnCosine * view_length2 ||
+      !(det2 > 1e-18 * scale2 * scale2))
+    return false;  // edge-on
+
+  // EWA: object-space Gaussian plus the screen-space low-pass filter; conic scaled to r2 = 1 at the cut-off.
+  const double sigma2 = kKernelSigmaPerRadius * kKernelSigmaPerRadius;
+  double c00 = sigma2 * f00, c01 = sigma2 * f01, c11 = sigma2 * f11;
+  if (params.ewa_filter) {
+    c00 += params.lowpass_variance;
+    c11 += params.lowpass_variance;
+  }
+  c00 += 1e-6;
+  c11 += 1e-6;
+  const double cutoff_sigmas = params.cutoff_radius / kKernelSigmaPerRadius;
+  const double det = c00 * c11 - c01 * c01;
+  if (!(det > 0) || !std::isfinite(det)) {
+    *result = SplatSetup::kInvalid;
+    return true;
+  }
+  const double conic_scale = 1.0 / (det * cutoff_sigmas * cutoff_sigmas);
+  const double half_u = cutoff_sigmas * std::sqrt(c00), half_v = cutoff_sigmas * std::sqrt(c11);
+  const int32_t x0 = std::max(0, ceilToPixel(center_u - half_u, camera.width));
+  const int32_t x1 = std::min(int32_t(camera.width) - 1, floorToPixel(center_u + half_u, camera.width));
+  const int32_t y0 = std::max(0, ceilToPixel(center_v - half_v, camera.height));
+  const int32_t y1 = std::min(int32_t(camera.height) - 1, floorToPixel(center_v + half_v, camera.height));
+  if (x0 > x1 || y0 > y1) {
+    *result = SplatSetup::kCulled;
+    return true;
+  }
+
+  // Depth: range of the cut-off disc, fuzzy tolerance (3.2.1) and the plane along the pixel rays.
+  const double z_half_extent = params.cutoff_radius * radius * std::sqrt(std::max(0.0, 1.0 - n.z() * n.z()));
+  double z_lo = c.z() - z_half_extent, z_hi = c.z() + z_half_extent;
+  const double cos_view = std::abs(n_dot_view) / std::sqrt(view_length2);
+  float depth_num[3], depth_den[2];
+  if (camera.perspective) {
+    const double d1 = n.x() / camera.fx, d2 = n.y() / camera.fy;
+    const double d0 = d1 * (center_u - camera.cx) + d2 * (center_v - camera.cy) + n.z();
+    const double du_lo = x0 - center_u, du_hi = x1 - center_u;
+    const double dv_lo = y0 - center_v, dv_hi = y1 - center_v;
+    const double d_min = d0 + std::min(d1 * du_lo, d1 * du_hi) + std::min(d2 * dv_lo, d2 * dv_hi);
+    const double d_max = d0 + std::max(d1 * du_lo, d1 * du_hi) + std::max(d2 * dv_lo, d2 * dv_hi);
+    if (!(d_min * d_max > 0)) return false;  // the plane is seen edge-on inside the box
+    const double numerator = n.dot(c);
+    const double z_a = numerator / d_min, z_b = numerator / d_max;
+    z_lo = std::min({double(float(z_lo)), z_a, z_b});
+    z_hi = std::max({double(float(z_hi)), z_a, z_b});
+    const double inv_d0 = 1.0 / d0;
+    depth_num[0] = float(numerator * inv_d0);
+    depth_num[1] = depth_num[2] = 0;
+    depth_den[0] = float(d1 * inv_d0);
+    depth_den[1] = float(d2 * inv_d0);
+  } else {
+    const double inv = -1.0 / (camera.ortho_scale * n.z());
+    const double du_extent = std::max(x1 - center_u, center_u - x0);
+    const double dv_extent = std::max(y1 - center_v, center_v - y0);
+    const double z_extent = std::abs(n.x() * inv) * du_extent + std::abs(n.y() * inv) * dv_extent;
+    z_lo = std::min<double>(float(z_lo), c.z() - z_extent);
+    z_hi = std::max<double>(float(z_hi), c.z() + z_extent);
+    depth_num[0] = float(c.z());
+    depth_num[1] = float(n.x() * inv);
+    depth_num[2] = float(n.y() * inv);
+    depth_den[0] = depth_den[1] = 0;
+  }
+  raster->x0 = uint16_t(x0);
+  raster->x1 = uint16_t(x1);
+  raster->y0 = uint16_t(y0);
+  raster->y1 = uint16_t(y1);
+  raster->center_u = float(center_u);
+  raster->center_v = float(center_v);
+  raster->conic_a = float(c11 * conic_scale);
+  raster->conic_b = float(-c01 * conic_scale);
+  raster->conic_c = float(c00 * conic_scale);
+  for (int k = 0; k < 3; ++k) raster->depth_num[k] = depth_num[k];
+  raster->depth_den[0] = depth_den[0];
+  raster->depth_den[1] = depth_den[1];
+  raster->z_lo = float(z_lo);
+  raster->z_hi = float(z_hi);
+  raster->depth_tolerance =
+      float(params.depth_tolerance_scale * kFacingDepthTolerance * (params.cutoff_radius * radius) /
+                std::max(cos_view, kMinToleranceCosine) +
+            1e-5 * std::abs(c.z()));
+  raster->flags = 0;
+  *result = SplatSetup::kDrawn;
+  return true;
+}
+
+}  // namespace
+
 SplatSetup setupCircularEwaSplat(const Vec3& center, const Vec3& normal, double radius,
                                  const CameraFrame& camera, const EwaParams& params, SplatRaster* raster,
                                  float* unit_normal_out) {
@@ -285,6 +415,9 @@ SplatSetup setupCircularEwaSplat(const Vec3& center, const Vec3& normal, double 
   surfel.n = camera.camera_R_world * unit_normal;
   surfel.has_axes = false;
   surfel.radius = std::abs(radius);
+  SplatSetup result;
+  if (setupCircularCommonCase(surfel.c, surfel.n, surfel.radius, camera, params, raster, &result))
+    return result;
   return setupCameraSurfel(surfel, camera, params, raster, nullptr, nullptr, nullptr, nullptr);
 }
 
