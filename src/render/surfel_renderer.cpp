@@ -374,6 +374,15 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   // patch of the pixel's front fragment, so a face behind a silhouette does not bleed in. Clipped splats are
   // tested once, in pass 1; their keep bits (per row, bit x - x0) are reused by pass 2.
   const bool separate_patches = clipper != nullptr;
+  // Sums that no requested image needs are not accumulated (SIMD path); the colour weight differs from the
+  // weight only with colour-only clipping (texture discontinuities, 4.3).
+  const bool accumulate_depth = (config_.outputs & kOutputDepth) != 0;
+  const bool accumulate_patch = (config_.outputs & kOutputPatchId) != 0;
+  const bool accumulate_color = (config_.outputs & kOutputColor) != 0;
+  const bool accumulate_normal =
+      (config_.outputs & kOutputNormal) != 0 || (accumulate_color && config_.shading);
+  bool separate_color_weight = !kSimd;
+  for (const uint32_t surfel : ws.clip_surfels) separate_color_weight |= clipper->clipsColorOnly(surfel);
   size_t fragments = 0, clipped_fragments = 0;
   double visibility_ms = 0, accumulate_ms = 0, shade_ms = 0;
 #pragma omp parallel num_threads(threads) reduction(+ : fragments, clipped_fragments, visibility_ms, \
@@ -702,14 +711,19 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
             _mm_storeu_ps(buffer + i, _mm_add_ps(_mm_loadu_ps(buffer + i), value));
           };
           add(tb.weight, w);
-          add(tb.depth, _mm_mul_ps(w, z));
-          add(tb.normal[0], _mm_mul_ps(w, normal0));
-          add(tb.normal[1], _mm_mul_ps(w, normal1));
-          add(tb.normal[2], _mm_mul_ps(w, normal2));
-          add(tb.color_weight, color_w);
-          add(tb.color[0], _mm_mul_ps(color_w, color0));
-          add(tb.color[1], _mm_mul_ps(color_w, color1));
-          add(tb.color[2], _mm_mul_ps(color_w, color2));
+          if (accumulate_depth) add(tb.depth, _mm_mul_ps(w, z));
+          if (accumulate_normal) {
+            add(tb.normal[0], _mm_mul_ps(w, normal0));
+            add(tb.normal[1], _mm_mul_ps(w, normal1));
+            add(tb.normal[2], _mm_mul_ps(w, normal2));
+          }
+          if (accumulate_color) {
+            if (separate_color_weight) add(tb.color_weight, color_w);
+            add(tb.color[0], _mm_mul_ps(color_w, color0));
+            add(tb.color[1], _mm_mul_ps(color_w, color1));
+            add(tb.color[2], _mm_mul_ps(color_w, color2));
+          }
+          if (!accumulate_patch) return;
           const __m128 max_weight = _mm_loadu_ps(tb.max_weight + i);
           const __m128 larger = _mm_cmpgt_ps(w, max_weight);
           _mm_storeu_ps(tb.max_weight + i, select(larger, w, max_weight));
@@ -725,7 +739,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
       for (int y = rect.y0; y <= rect.y1; ++y) {
         const int i = index(rect.x0, y);
         const AccumulatedSpan span = {tb.weight + i,
-                                      tb.color_weight + i,
+                                      (separate_color_weight ? tb.color_weight : tb.weight) + i,
                                       tb.depth + i,
                                       {tb.color[0] + i, tb.color[1] + i, tb.color[2] + i},
                                       {tb.normal[0] + i, tb.normal[1] + i, tb.normal[2] + i},
