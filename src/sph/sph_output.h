@@ -1,0 +1,37 @@
+// Particle files of an SPH run: PLY (binary, via the io module) and VTK XML PolyData (.vtp, for ParaView),
+// with the fields velocity, density, pressure and kind; a ParaView collection (.pvd) lists the frames.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/surfel_cloud.h"
+#include "sph/sph_particles.h"
+
+namespace rc {
+
+/// Positions plus attribute columns velocity (float32 x 3), density, pressure (float32) and kind (uint8,
+/// SphParticleKind).
+SurfelCloud sphParticlesToCloud(const SphParticles& particles);
+
+/// Binary little-endian PLY: x y z (float32), velocity_0..2, density, pressure, kind. Throws IoError.
+void writeSphPly(const std::string& path, const SphParticles& particles);
+
+enum class VtpEncoding { kAscii, kAppendedRaw };
+
+/// VTK XML PolyData: Points (Float64 x 3), one vertex cell per particle (Verts), PointData velocity (Float32
+/// x 3), density, pressure (Float32), kind (UInt8). kAppendedRaw stores the arrays as raw little-endian bytes
+/// after the XML (header_type UInt64). Throws IoError if the file cannot be written.
+void writeSphVtp(const std::string& path, const SphParticles& particles,
+                 VtpEncoding encoding = VtpEncoding::kAppendedRaw);
+
+/// One entry of a ParaView collection: a file (relative to the .pvd) and its simulated time.
+struct SphPvdEntry {
+  std::string file;
+  double time = 0.0;
+};
+
+/// ParaView collection file (time series of .vtp files). Throws IoError on a write failure.
+void writeSphPvd(const std::string& path, const std::vector<SphPvdEntry>& entries);
+
+}  // namespace rc

@@ -1,0 +1,450 @@
+#include "sph/sph_scene_file.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "sph/sph_kernels.h"
+#include "sph/sph_scene.h"
+
+namespace rc {
+
+namespace {
+
+/// More particles than this in one scene is taken as a typo in a spacing.
+constexpr double kMaxParticles = 2e8;
+
+/// Error context: "<file>:<line>:<column>: <problem>" (the style of src/render/scene.cpp).
+struct Source {
+  std::string name;
+
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& problem) const {
+    std::ostringstream s;
+    s << name;
+    if (node.IsDefined() && node.Mark().line >= 0)
+      s << ":" << node.Mark().line + 1 << ":" << node.Mark().column + 1;
+    s << ": " << problem;
+    throw SphSceneError(s.str());
+  }
+
+  YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& where) const {
+    const YAML::Node value = map[key];
+    if (!value) fail(map, where + ": missing '" + key + "'");
+    return value;
+  }
+
+  void allowKeys(const YAML::Node& map, const std::set<std::string>& keys, const std::string& where) const {
+    if (!map.IsMap()) fail(map, where + ": expected a map");
+    for (const auto& kv : map) {
+      const std::string key = kv.first.as<std::string>();
+      if (!keys.count(key)) {
+        std::string known;
+        for (const std::string& k : keys) known += (known.empty() ? "" : ", ") + k;
+        fail(kv.first, where + ": unknown key '" + key + "' (known: " + known + ")");
+      }
+    }
+  }
+
+  double number(const YAML::Node& node, const std::string& what) const {
+    if (!node.IsScalar()) fail(node, what + ": expected a number");
+    try {
+      const double v = node.as<double>();
+      if (!std::isfinite(v)) fail(node, what + ": not a finite number");
+      return v;
+    } catch (const YAML::Exception&) {
+      fail(node, what + ": expected a number, got '" + node.Scalar() + "'");
+    }
+  }
+
+  double positive(const YAML::Node& node, const std::string& what) const {
+    const double v = number(node, what);
+    if (!(v > 0)) fail(node, what + " must be positive, got " + node.Scalar());
+    return v;
+  }
+
+  double nonNegative(const YAML::Node& node, const std::string& what) const {
+    const double v = number(node, what);
+    if (!(v >= 0)) fail(node, what + " must be >= 0, got " + node.Scalar());
+    return v;
+  }
+
+  double unitInterval(const YAML::Node& node, const std::string& what) const {
+    const double v = number(node, what);
+    if (!(v >= 0 && v <= 1)) fail(node, what + " must lie in [0, 1], got " + node.Scalar());
+    return v;
+  }
+
+  long integer(const YAML::Node& node, const std::string& what, long lo, long hi) const {
+    const double v = number(node, what);
+    if (v != std::floor(v) || v < lo || v > hi)
+      fail(node, what + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
+                     "], got " + node.Scalar());
+    return long(v);
+  }
+
+  bool boolean(const YAML::Node& node, const std::string& what) const {
+    if (!node.IsScalar()) fail(node, what + ": expected true or false");
+    try {
+      return node.as<bool>();
+    } catch (const YAML::Exception&) {
+      fail(node, what + ": expected true or false, got '" + node.Scalar() + "'");
+    }
+  }
+
+  std::string string(const YAML::Node& node, const std::string& what) const {
+    if (!node.IsScalar()) fail(node, what + ": expected a string");
+    return node.as<std::string>();
+  }
+
+  /// [x, y, z]; in 2D also [x, y] (z = 0). With `planar` (velocities, directions) z must be 0 in 2D.
+  Vec3 vec(const YAML::Node& node, const std::string& what, int dimension, bool planar) const {
+    const bool ok = node.IsSequence() && (node.size() == 3 || (dimension == 2 && node.size() == 2));
+    if (!ok) fail(node, what + (dimension == 2 ? ": expected [x, y] or [x, y, z]" : ": expected [x, y, z]"));
+    Vec3 v(number(node[0], what), number(node[1], what), node.size() == 3 ? number(node[2], what) : 0.0);
+    if (dimension == 2 && planar && v.z() != 0) fail(node[2], what + ": z must be 0 in 2D");
+    return v;
+  }
+};
+
+/// A box [lo, hi] with lo < hi in the simulated dimensions.
+struct Box {
+  Vec3 lo, hi;
+};
+
+Box readBox(const Source& src, const YAML::Node& node, const std::string& where, int dimension) {
+  Box b;
+  b.lo = src.vec(src.require(node, "lo", where), where + ".lo", dimension, false);
+  b.hi = src.vec(src.require(node, "hi", where), where + ".hi", dimension, false);
+  for (int k = 0; k < dimension; ++k)
+    if (!(b.lo[k] < b.hi[k])) src.fail(node["hi"], where + ": hi must exceed lo in every coordinate");
+  return b;
+}
+
+/// Reads the scene after the YAML has been parsed.
+class SceneReader {
+ public:
+  SceneReader(const Source& src, SphScene* scene) : src_(src), scene_(*scene) {}
+
+  void read(const YAML::Node& root) {
+    src_.allowKeys(root,
+                   {"name", "dimension", "spacing", "enable", "solver", "fluid", "boundary", "moving",
+                    "frames", "output"},
+                   "scene");
+    if (root["name"]) scene_.name = src_.string(root["name"], "name");
+    dimension_ = int(src_.integer(src_.require(root, "dimension", "scene"), "dimension", 2, 3));
+    scene_.config.dimension = dimension_;
+    if (root["spacing"]) spacing_ = src_.positive(root["spacing"], "spacing");
+    readEnable(root["enable"]);
+    readSolver(src_.require(root, "solver", "scene"));
+    const YAML::Node fluid = src_.require(root, "fluid", "scene");
+    if (!fluid.IsSequence() || fluid.size() == 0) src_.fail(fluid, "fluid: expected a list of boxes");
+    for (size_t i = 0; i < fluid.size(); ++i) readFluid(fluid[i], "fluid[" + std::to_string(i) + "]");
+    if (root["boundary"]) readBoundary(root["boundary"]);
+    if (root["moving"]) {
+      const YAML::Node moving = root["moving"];
+      if (!moving.IsSequence()) src_.fail(moving, "moving: expected a list of boxes");
+      for (size_t i = 0; i < moving.size(); ++i) readMoving(moving[i], "moving[" + std::to_string(i) + "]");
+    }
+    readFrames(src_.require(root, "frames", "scene"));
+    if (root["output"]) readOutput(root["output"]);
+  }
+
+ private:
+  void readEnable(const YAML::Node& node) {
+    if (!node) return;
+    if (!node.IsSequence()) src_.fail(node, "enable: expected a list of physics names");
+    const std::vector<std::string>& known = sphOptionalPhysics();
+    std::string names;
+    for (const std::string& k : known) names += (names.empty() ? "" : ", ") + k;
+    for (size_t i = 0; i < node.size(); ++i) {
+      const std::string what = src_.string(node[i], "enable[" + std::to_string(i) + "]");
+      if (std::find(known.begin(), known.end(), what) == known.end())
+        src_.fail(node[i], "enable: unknown physics '" + what + "' (known: " + names + ")");
+      src_.fail(node[i], "enable: '" + what +
+                             "' is not implemented yet (only the fluid of thesis 8.1 is; remove it from "
+                             "'enable')");
+    }
+  }
+
+  void readSolver(const YAML::Node& node) {
+    src_.allowKeys(node,
+                   {"smoothing_length", "smoothing_ratio", "rest_density", "stiffness", "speed_of_sound",
+                    "gamma", "negative_pressure_scale", "pressure_kernel", "boundary_pressure", "viscosity",
+                    "xsph", "gravity", "cfl", "fixed_dt", "max_dt", "instability_energy_growth", "threads"},
+                   "solver");
+    SphFluidConfig& c = scene_.config;
+    auto field = [&](const char* key, const char* config_field) -> YAML::Node {
+      const YAML::Node v = node[key];
+      if (v) field_nodes_[config_field] = v;
+      return v;
+    };
+    // h: kernel support radius, given directly or as a multiple of the scene spacing.
+    const YAML::Node h = field("smoothing_length", "smoothing_length");
+    const YAML::Node ratio = field("smoothing_ratio", "smoothing_length");
+    if (h && ratio) src_.fail(ratio, "solver: give smoothing_length or smoothing_ratio, not both");
+    if (h) {
+      c.smoothing_length = src_.positive(h, "solver.smoothing_length");
+    } else if (ratio) {
+      if (spacing_ <= 0) src_.fail(ratio, "solver.smoothing_ratio needs the scene's 'spacing'");
+      c.smoothing_length = src_.positive(ratio, "solver.smoothing_ratio") * spacing_;
+    } else {
+      src_.fail(node, "solver: missing 'smoothing_length' (or 'smoothing_ratio')");
+    }
+    if (field("rest_density", "rest_density"))
+      c.rest_density = src_.positive(node["rest_density"], "solver.rest_density");
+    if (field("gamma", "gamma")) c.gamma = src_.number(node["gamma"], "solver.gamma");
+    const YAML::Node stiffness = field("stiffness", "stiffness");
+    const YAML::Node sound = field("speed_of_sound", "stiffness");
+    if (stiffness && sound) src_.fail(sound, "solver: give stiffness or speed_of_sound, not both");
+    if (stiffness) c.stiffness = src_.positive(stiffness, "solver.stiffness");
+    if (sound) {  // c^2 = K Gamma / rho_0
+      const double speed = src_.positive(sound, "solver.speed_of_sound");
+      if (!(c.gamma >= 1)) src_.fail(node["gamma"], "solver.gamma must be >= 1");
+      c.stiffness = speed * speed * c.rest_density / c.gamma;
+    }
+    if (field("negative_pressure_scale", "negative_pressure_scale"))
+      c.negative_pressure_scale =
+          src_.number(node["negative_pressure_scale"], "solver.negative_pressure_scale");
+    if (const YAML::Node k = field("pressure_kernel", "pressure_kernel")) {
+      const std::string s = src_.string(k, "solver.pressure_kernel");
+      if (s == "spiky")
+        c.pressure_kernel = SphPressureKernel::kSpiky;
+      else if (s == "poly6")
+        c.pressure_kernel = SphPressureKernel::kPoly6;
+      else
+        src_.fail(k, "solver.pressure_kernel: unknown kernel '" + s + "' (spiky, poly6)");
+    }
+    if (const YAML::Node b = field("boundary_pressure", "boundary_pressure")) {
+      const std::string s = src_.string(b, "solver.boundary_pressure");
+      if (s == "extrapolated")
+        c.boundary_pressure = SphBoundaryPressure::kExtrapolated;
+      else if (s == "summation")
+        c.boundary_pressure = SphBoundaryPressure::kSummation;
+      else
+        src_.fail(b, "solver.boundary_pressure: unknown method '" + s + "' (extrapolated, summation)");
+    }
+    if (field("viscosity", "viscosity")) c.viscosity = src_.number(node["viscosity"], "solver.viscosity");
+    if (field("xsph", "xsph")) c.xsph = src_.number(node["xsph"], "solver.xsph");
+    if (field("gravity", "gravity"))
+      c.gravity = src_.vec(node["gravity"], "solver.gravity", dimension_, true);
+    if (field("cfl", "cfl")) c.cfl = src_.number(node["cfl"], "solver.cfl");
+    if (field("fixed_dt", "fixed_dt")) c.fixed_dt = src_.number(node["fixed_dt"], "solver.fixed_dt");
+    if (field("max_dt", "max_dt")) c.max_dt = src_.number(node["max_dt"], "solver.max_dt");
+    if (field("instability_energy_growth", "instability_energy_growth"))
+      c.instability_energy_growth =
+          src_.number(node["instability_energy_growth"], "solver.instability_energy_growth");
+    if (field("threads", "num_threads"))
+      c.num_threads = int(src_.integer(node["threads"], "solver.threads", 0, 4096));
+    try {
+      c.validate();
+    } catch (const std::invalid_argument& e) {
+      // "SphFluidConfig.<field>: ..." -> the line of that field.
+      const std::string message = e.what();
+      const std::string prefix = "SphFluidConfig.";
+      YAML::Node at = node;
+      if (message.rfind(prefix, 0) == 0) {
+        const std::string name = message.substr(prefix.size(), message.find(':') - prefix.size());
+        const auto it = field_nodes_.find(name);
+        if (it != field_nodes_.end()) at = it->second;
+      }
+      src_.fail(at, "solver: " + message);
+    }
+  }
+
+  double blockSpacing(const YAML::Node& node, const std::string& where) const {
+    if (node["spacing"]) return src_.positive(node["spacing"], where + ".spacing");
+    if (spacing_ <= 0)
+      src_.fail(node, where + ": missing 'spacing' (and the scene has no default 'spacing')");
+    return spacing_;
+  }
+
+  /// Mass of a lattice particle of spacing dx (rest density with full support).
+  double massFor(double dx) {
+    auto it = masses_.find(dx);
+    if (it == masses_.end())
+      it = masses_
+               .emplace(dx, latticeParticleMass(SphKernels(dimension_, scene_.config.smoothing_length),
+                                                scene_.config.rest_density, dx))
+               .first;
+    return it->second;
+  }
+
+  /// Guards against a typo in a spacing before anything is allocated.
+  void reserveLattice(const YAML::Node& node, const std::string& where, const Vec3& lo, const Vec3& hi,
+                      double dx, int layers) {
+    double n = 1;
+    for (int k = 0; k < dimension_; ++k) n *= std::floor((hi[k] - lo[k]) / dx + 1e-9) + 2.0 * layers;
+    planned_ += n;
+    if (planned_ > kMaxParticles)
+      src_.fail(node, where + ": the scene would exceed " + std::to_string(long(kMaxParticles)) +
+                          " particles (spacing too small?)");
+  }
+
+  void addBox(const YAML::Node& node, const std::string& where, const Box& box, double dx,
+              SphParticleKind kind, const Vec3& velocity) {
+    reserveLattice(node, where, box.lo, box.hi, dx, 0);
+    const size_t first = scene_.particles.size();
+    try {
+      addLatticeBox(scene_.particles, box.lo, box.hi, dx, massFor(dx), dimension_, kind);
+    } catch (const std::invalid_argument& e) {
+      src_.fail(node, where + ": " + e.what());
+    }
+    for (size_t i = first; i < scene_.particles.size(); ++i) scene_.particles.velocities[i] = velocity;
+  }
+
+  void readFluid(const YAML::Node& node, const std::string& where) {
+    src_.allowKeys(node, {"lo", "hi", "spacing", "velocity"}, where);
+    const Box box = readBox(src_, node, where, dimension_);
+    const double dx = blockSpacing(node, where);
+    const Vec3 v =
+        node["velocity"] ? src_.vec(node["velocity"], where + ".velocity", dimension_, true) : Vec3::Zero();
+    addBox(node, where, box, dx, SphParticleKind::kFluid, v);
+  }
+
+  void readMoving(const YAML::Node& node, const std::string& where) {
+    src_.allowKeys(node, {"lo", "hi", "spacing", "velocity"}, where);
+    const Box box = readBox(src_, node, where, dimension_);
+    const double dx = blockSpacing(node, where);
+    const Vec3 v = src_.vec(src_.require(node, "velocity", where), where + ".velocity", dimension_, true);
+    addBox(node, where, box, dx, SphParticleKind::kMovingBoundary, v);
+  }
+
+  void readBoundary(const YAML::Node& node) {
+    src_.allowKeys(node, {"walls", "boxes", "planes", "box_planes"}, "boundary");
+    auto list = [&](const char* key) {
+      const YAML::Node l = node[key];
+      if (l && !l.IsSequence()) src_.fail(l, std::string("boundary.") + key + ": expected a list");
+      return l ? l : YAML::Node(YAML::NodeType::Sequence);
+    };
+    const YAML::Node walls = list("walls");
+    for (size_t i = 0; i < walls.size(); ++i) {
+      const std::string where = "boundary.walls[" + std::to_string(i) + "]";
+      const YAML::Node w = walls[i];
+      src_.allowKeys(w, {"lo", "hi", "spacing", "layers", "closed_top"}, where);
+      const Box box = readBox(src_, w, where, dimension_);
+      const double dx = blockSpacing(w, where);
+      const int layers = w["layers"] ? int(src_.integer(w["layers"], where + ".layers", 1, 100)) : 3;
+      const bool closed_top = w["closed_top"] ? src_.boolean(w["closed_top"], where + ".closed_top") : false;
+      reserveLattice(w, where, box.lo, box.hi, dx, layers);
+      try {
+        addBoundaryWalls(scene_.particles, box.lo, box.hi, dx, layers, massFor(dx), dimension_, closed_top);
+      } catch (const std::invalid_argument& e) {
+        src_.fail(w, where + ": " + e.what());
+      }
+    }
+    const YAML::Node boxes = list("boxes");
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      const std::string where = "boundary.boxes[" + std::to_string(i) + "]";
+      src_.allowKeys(boxes[i], {"lo", "hi", "spacing"}, where);
+      addBox(boxes[i], where, readBox(src_, boxes[i], where, dimension_), blockSpacing(boxes[i], where),
+             SphParticleKind::kStaticBoundary, Vec3::Zero());
+    }
+    const YAML::Node planes = list("planes");
+    for (size_t i = 0; i < planes.size(); ++i) {
+      const std::string where = "boundary.planes[" + std::to_string(i) + "]";
+      const YAML::Node p = planes[i];
+      src_.allowKeys(p, {"normal", "offset", "point", "restitution", "friction"}, where);
+      SphPlane plane;
+      const YAML::Node n = src_.require(p, "normal", where);
+      plane.normal = src_.vec(n, where + ".normal", dimension_, true);
+      if (!(plane.normal.norm() > 0)) src_.fail(n, where + ".normal must be non-zero");
+      plane.normal.normalize();
+      if (p["offset"] && p["point"]) src_.fail(p["point"], where + ": give offset or point, not both");
+      if (p["offset"]) plane.offset = src_.number(p["offset"], where + ".offset");
+      if (p["point"])
+        plane.offset = plane.normal.dot(src_.vec(p["point"], where + ".point", dimension_, false));
+      if (p["restitution"]) plane.restitution = src_.unitInterval(p["restitution"], where + ".restitution");
+      if (p["friction"]) plane.friction = src_.unitInterval(p["friction"], where + ".friction");
+      scene_.planes.push_back(plane);
+    }
+    const YAML::Node box_planes = list("box_planes");
+    for (size_t i = 0; i < box_planes.size(); ++i) {
+      const std::string where = "boundary.box_planes[" + std::to_string(i) + "]";
+      const YAML::Node b = box_planes[i];
+      src_.allowKeys(b, {"lo", "hi", "closed_top", "restitution", "friction"}, where);
+      const Box box = readBox(src_, b, where, dimension_);
+      const bool closed_top = b["closed_top"] ? src_.boolean(b["closed_top"], where + ".closed_top") : false;
+      const double restitution =
+          b["restitution"] ? src_.unitInterval(b["restitution"], where + ".restitution") : 0.0;
+      const double friction = b["friction"] ? src_.unitInterval(b["friction"], where + ".friction") : 0.0;
+      for (const SphPlane& plane : boxPlanes(box.lo, box.hi, dimension_, closed_top, restitution, friction))
+        scene_.planes.push_back(plane);
+    }
+  }
+
+  void readFrames(const YAML::Node& node) {
+    src_.allowKeys(node, {"count", "time"}, "frames");
+    scene_.frame_count =
+        int(src_.integer(src_.require(node, "count", "frames"), "frames.count", 1, 100000000));
+    scene_.frame_time = src_.positive(src_.require(node, "time", "frames"), "frames.time");
+  }
+
+  void readOutput(const YAML::Node& node) {
+    src_.allowKeys(node, {"particles"}, "output");
+    const YAML::Node p = node["particles"];
+    if (!p) return;
+    src_.allowKeys(p, {"every", "formats"}, "output.particles");
+    SphParticleOutput& out = scene_.output;
+    out.every = p["every"] ? int(src_.integer(p["every"], "output.particles.every", 1, 100000000)) : 1;
+    const YAML::Node formats = src_.require(p, "formats", "output.particles");
+    if (!formats.IsSequence()) src_.fail(formats, "output.particles.formats: expected a list (ply, vtp)");
+    for (size_t i = 0; i < formats.size(); ++i) {
+      const std::string f = src_.string(formats[i], "output.particles.formats");
+      if (f == "ply")
+        out.ply = true;
+      else if (f == "vtp")
+        out.vtp = true;
+      else
+        src_.fail(formats[i], "output.particles.formats: unknown format '" + f + "' (ply, vtp)");
+    }
+  }
+
+  const Source& src_;
+  SphScene& scene_;
+  int dimension_ = 3;
+  double spacing_ = 0.0;
+  double planned_ = 0.0;
+  std::map<double, double> masses_;
+  std::map<std::string, YAML::Node> field_nodes_;
+};
+
+}  // namespace
+
+const std::vector<std::string>& sphOptionalPhysics() {
+  // elasticity (8.2), phase_transition (8.2.4), temperature (heat conduction driving 8.2.4), surface (8.2.7).
+  static const std::vector<std::string> names = {"elasticity", "phase_transition", "temperature", "surface"};
+  return names;
+}
+
+SphScene parseSphScene(const std::string& yaml_text, const std::string& source_name) {
+  const Source src{source_name};
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw SphSceneError(source_name + ":" + std::to_string(e.mark.line + 1) + ":" +
+                        std::to_string(e.mark.column + 1) + ": YAML syntax: " + e.msg);
+  }
+  if (!root.IsMap()) src.fail(root, "expected a map of scene keys (dimension, solver, fluid, frames, ...)");
+  SphScene scene;
+  scene.path = source_name;
+  scene.name = std::filesystem::path(source_name).stem().string();
+  SceneReader(src, &scene).read(root);
+  return scene;
+}
+
+SphScene loadSphScene(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SphSceneError(path + ": cannot open the scene file");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parseSphScene(text.str(), path);
+}
+
+}  // namespace rc

@@ -1,0 +1,280 @@
+#include "sph/sph_scene_run.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+
+#include "sph/sph_output.h"
+
+namespace rc {
+
+namespace {
+
+/// A frame is finished with SphFluidSolver::advance once the time left is within this many steps.
+constexpr double kFinishWithinSteps = 4.0;
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+struct FluidMeasures {
+  double mass = 0.0, potential = 0.0;
+  Vec3 momentum = Vec3::Zero();
+};
+
+FluidMeasures measureFluid(const SphParticles& p, const Vec3& gravity) {
+  FluidMeasures m;
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p.kinds[i] != SphParticleKind::kFluid) continue;
+    m.mass += p.masses[i];
+    m.momentum += p.masses[i] * p.velocities[i];
+    m.potential -= p.masses[i] * gravity.dot(p.positions[i]);
+  }
+  return m;
+}
+
+/// Writes the particle files of one output frame.
+class FrameWriter {
+ public:
+  FrameWriter(const SphScene& scene, const std::string& out_dir, SphRunStats* stats)
+      : scene_(scene), dir_(out_dir), stats_(*stats) {
+    active_ = !out_dir.empty() && scene.output.enabled();
+    if (active_) std::filesystem::create_directories(dir_);
+  }
+
+  void maybeWrite(int frame, const SphFluidSolver& solver) {
+    if (!active_ || frame % scene_.output.every != 0) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    char stem[64];
+    std::snprintf(stem, sizeof(stem), "_%04d", frame);
+    const std::string base = scene_.name + stem;
+    if (scene_.output.ply) {
+      const std::string path = (dir_ / (base + ".ply")).string();
+      writeSphPly(path, solver.particles());
+      stats_.files.push_back(path);
+    }
+    if (scene_.output.vtp) {
+      const std::string path = (dir_ / (base + ".vtp")).string();
+      writeSphVtp(path, solver.particles());
+      stats_.files.push_back(path);
+      pvd_.push_back({base + ".vtp", solver.time()});
+      const std::string pvd = (dir_ / (scene_.name + ".pvd")).string();
+      writeSphPvd(pvd, pvd_);  // rewritten each time: a stopped run stays viewable
+      if (pvd_.size() == 1) stats_.files.push_back(pvd);
+    }
+    stats_.output_seconds += secondsSince(t0);
+  }
+
+ private:
+  const SphScene& scene_;
+  std::filesystem::path dir_;
+  SphRunStats& stats_;
+  bool active_ = false;
+  std::vector<SphPvdEntry> pvd_;
+};
+
+void appendNumber(std::string& out, const char* key, double v) {
+  char buf[64];
+  if (std::isfinite(v))
+    std::snprintf(buf, sizeof(buf), "\"%s\":%.6g", key, v);
+  else
+    std::snprintf(buf, sizeof(buf), "\"%s\":null", key);
+  if (out.size() > 1) out += ',';
+  out += buf;
+}
+
+void appendString(std::string& out, const char* key, const std::string& s) {
+  if (out.size() > 1) out += ',';
+  out += '"';
+  out += key;
+  out += "\":\"";
+  for (char ch : s) {
+    if (ch == '"' || ch == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (static_cast<unsigned char>(ch) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\u%04x", unsigned(ch));
+      out += buf;
+    } else {
+      out += ch;
+    }
+  }
+  out += '"';
+}
+
+void appendVector(std::string& out, const char* key, const Vec3& v) {
+  char buf[128];
+  auto num = [](double x) {
+    char b[32];
+    if (std::isfinite(x))
+      std::snprintf(b, sizeof(b), "%.6g", x);
+    else
+      std::snprintf(b, sizeof(b), "null");
+    return std::string(b);
+  };
+  std::snprintf(buf, sizeof(buf), "\"%s\":[%s,%s,%s]", key, num(v.x()).c_str(), num(v.y()).c_str(),
+                num(v.z()).c_str());
+  if (out.size() > 1) out += ',';
+  out += buf;
+}
+
+}  // namespace
+
+SphFluidSolver makeSphSolver(const SphScene& scene) {
+  SphFluidSolver solver(scene.config, scene.particles);
+  for (const SphPlane& plane : scene.planes) solver.addPlane(plane);
+  return solver;
+}
+
+SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options) {
+  SphRunStats stats;
+  stats.scene = scene.name;
+  stats.particles = solver.particles().size();
+  stats.fluid_particles = solver.particles().count(SphParticleKind::kFluid);
+  stats.frame_count = scene.frame_count;
+  stats.threads = solver.config().num_threads > 0 ? solver.config().num_threads : omp_get_max_threads();
+  stats.min_dt = std::numeric_limits<double>::infinity();
+  const Vec3 gravity = solver.config().gravity;
+  const FluidMeasures start = measureFluid(solver.particles(), gravity);
+  stats.momentum_start = start.momentum;
+  const uint64_t first_step = solver.stepCount();
+  const double start_time = solver.time();
+  FrameWriter writer(scene, options.out_dir, &stats);
+  writer.maybeWrite(0, solver);
+
+  bool have_energy = false;
+  double energy_first = 0.0;
+  auto energyNow = [&](const SphStepStats& st) {
+    return st.kinetic_energy + st.compression_energy + measureFluid(solver.particles(), gravity).potential;
+  };
+  auto record = [&](const SphStepStats& st) {
+    stats.max_density_error = std::max(stats.max_density_error, st.max_density_error);
+    if (!have_energy) {
+      energy_first = energyNow(st);
+      have_energy = true;
+    }
+    if (st.unstable && stats.instability.empty()) {  // only when the solver does not throw
+      stats.instability = st.instability;
+      stats.instability_step = st.step;
+    }
+  };
+
+  auto step_started = std::chrono::steady_clock::now();
+  double frame_seconds = 0.0;
+  double last_dt = 0.0;
+  SphStepLimit last_limit = SphStepLimit::kMaxDt;
+  try {
+    for (int frame = 1; frame <= scene.frame_count; ++frame) {
+      // The end time as SphFluidSolver::advance(frame_time) computes it.
+      const double frame_end = solver.time() + scene.frame_time;
+      const uint64_t frame_first = solver.stepCount();
+      frame_seconds = 0.0;
+      while (solver.time() < frame_end) {
+        const double remaining = frame_end - solver.time();
+        if (last_dt > 0.0 && remaining <= kFinishWithinSteps * last_dt) {
+          // advance() shortens the last step to end on frame_end; for time >= frame_end / 2 the difference
+          // above is exact (Sterbenz), so advance() ends on the same frame_end.
+          const uint64_t before = solver.stepCount();
+          step_started = std::chrono::steady_clock::now();
+          const SphStepStats& st = solver.advance(remaining);
+          const double seconds = secondsSince(step_started);
+          frame_seconds += seconds;
+          const uint64_t steps = solver.stepCount() - before;
+          if (steps > 0) stats.max_step_us = std::max(stats.max_step_us, 1e6 * seconds / double(steps));
+          record(st);
+          break;
+        }
+        step_started = std::chrono::steady_clock::now();
+        const SphStepStats& st = solver.step();
+        frame_seconds += st.seconds;
+        stats.max_step_us = std::max(stats.max_step_us, 1e6 * st.seconds);
+        stats.min_dt = std::min(stats.min_dt, st.dt);
+        last_dt = st.dt;
+        last_limit = st.limit;
+        record(st);
+      }
+      stats.wall_seconds += frame_seconds;
+      stats.frames = frame;
+      writer.maybeWrite(frame, solver);
+      if (options.on_frame) {
+        SphFrameReport report;
+        report.frame = frame;
+        report.frame_count = scene.frame_count;
+        report.steps = solver.stepCount() - first_step;
+        report.frame_steps = solver.stepCount() - frame_first;
+        report.time = solver.time();
+        report.dt = last_dt;
+        report.limit = last_limit;
+        report.frame_seconds = frame_seconds;
+        options.on_frame(report);
+      }
+      if (!stats.instability.empty()) break;
+    }
+  } catch (const SphInstabilityError& e) {
+    stats.wall_seconds += frame_seconds + secondsSince(step_started);  // the frame so far and the failed step
+    stats.instability = e.what();
+    stats.instability_step = e.step();
+  }
+
+  stats.steps = solver.stepCount() - first_step;
+  stats.simulated_time = solver.time() - start_time;
+  if (stats.steps > 0) {
+    stats.mean_dt = stats.simulated_time / double(stats.steps);
+    stats.mean_step_us = 1e6 * stats.wall_seconds / double(stats.steps);
+    stats.us_per_particle_step = stats.mean_step_us / double(std::max<size_t>(stats.particles, 1));
+  }
+  if (!std::isfinite(stats.min_dt)) stats.min_dt = stats.mean_dt;
+  const FluidMeasures end = measureFluid(solver.particles(), gravity);
+  stats.mass_drift = start.mass > 0.0 ? (end.mass - start.mass) / start.mass : 0.0;
+  stats.momentum_end = end.momentum;
+  stats.boundary_impulse = end.momentum - start.momentum - start.mass * gravity * stats.simulated_time;
+  stats.energy_first = stats.energy_end = stats.energy_change = std::numeric_limits<double>::quiet_NaN();
+  if (have_energy) {
+    const SphStepStats& last = solver.lastStats();
+    stats.energy_first = energy_first;
+    stats.energy_end = last.kinetic_energy + last.compression_energy + end.potential;
+    stats.energy_change =
+        (stats.energy_end - stats.energy_first) / std::max(std::abs(stats.energy_first), 1e-300);
+  }
+  return stats;
+}
+
+std::string sphRunStatsJson(const SphRunStats& s) {
+  std::string out = "{";
+  appendString(out, "scene", s.scene);
+  appendNumber(out, "particles", double(s.particles));
+  appendNumber(out, "fluid_particles", double(s.fluid_particles));
+  appendNumber(out, "frames", s.frames);
+  appendNumber(out, "frame_count", s.frame_count);
+  appendNumber(out, "steps", double(s.steps));
+  appendNumber(out, "threads", s.threads);
+  appendNumber(out, "simulated_time_s", s.simulated_time);
+  appendNumber(out, "mean_dt_s", s.mean_dt);
+  appendNumber(out, "min_dt_s", s.min_dt);
+  appendNumber(out, "mean_step_us", s.mean_step_us);
+  appendNumber(out, "max_step_us", s.max_step_us);
+  appendNumber(out, "us_per_particle_step", s.us_per_particle_step);
+  appendNumber(out, "wall_s", s.wall_seconds);
+  appendNumber(out, "output_s", s.output_seconds);
+  appendNumber(out, "mass_drift", s.mass_drift);
+  appendVector(out, "momentum_start", s.momentum_start);
+  appendVector(out, "momentum_end", s.momentum_end);
+  appendVector(out, "boundary_impulse", s.boundary_impulse);
+  appendNumber(out, "energy_first", s.energy_first);
+  appendNumber(out, "energy_end", s.energy_end);
+  appendNumber(out, "energy_change", s.energy_change);
+  appendNumber(out, "max_density_error", s.max_density_error);
+  appendNumber(out, "files", double(s.files.size()));
+  appendString(out, "instability", s.instability.empty() ? "none" : s.instability);
+  if (!s.instability.empty()) appendNumber(out, "instability_step", double(s.instability_step));
+  out += "}";
+  return out;
+}
+
+}  // namespace rc

@@ -1,0 +1,74 @@
+// Runs a loaded SPH scene frame by frame (the code path of the rc_sph tool): steps the solver, writes the
+// particle outputs the scene asks for, reports progress per frame, and collects run statistics (step sizes,
+// timings, conservation measures, instability).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "sph/sph_fluid_solver.h"
+#include "sph/sph_scene_file.h"
+
+namespace rc {
+
+/// Progress after one frame.
+struct SphFrameReport {
+  int frame = 0;  ///< 1-based
+  int frame_count = 0;
+  uint64_t steps = 0;        ///< all steps so far
+  uint64_t frame_steps = 0;  ///< steps of this frame
+  double time = 0.0;         ///< simulated time at the end of the frame
+  double dt = 0.0;           ///< last full (not shortened) step
+  SphStepLimit limit = SphStepLimit::kMaxDt;
+  double frame_seconds = 0.0;  ///< wall time of the frame's steps
+};
+
+struct SphRunOptions {
+  std::string out_dir;  ///< particle files go here (created); empty: none are written
+  std::function<void(const SphFrameReport&)> on_frame;
+};
+
+struct SphRunStats {
+  std::string scene;
+  size_t particles = 0, fluid_particles = 0;
+  int frames = 0;  ///< completed frames
+  int frame_count = 0;
+  uint64_t steps = 0;
+  int threads = 0;
+  double simulated_time = 0.0;
+  double mean_dt = 0.0;       ///< simulated time / steps
+  double min_dt = 0.0;        ///< smallest step not shortened to end a frame
+  double mean_step_us = 0.0;  ///< wall time per step
+  double max_step_us = 0.0;   ///< slowest step (steps ending a frame are timed as a group: their mean)
+  double us_per_particle_step = 0.0;
+  double wall_seconds = 0.0;  ///< stepping only (no output)
+  double output_seconds = 0.0;
+  /// Conservation: fluid mass (relative change), fluid momentum, and the impulse the boundaries (walls,
+  /// planes, moving boxes) exerted: P_end - P_start - M g t (zero for a free fluid: then it is the momentum
+  /// error).
+  double mass_drift = 0.0;
+  Vec3 momentum_start = Vec3::Zero(), momentum_end = Vec3::Zero(), boundary_impulse = Vec3::Zero();
+  /// Fluid energy E = kinetic + compression (equation of state) - sum m g . x, after step 1 and at the end;
+  /// energy_change = (end - first) / |first| (viscosity, XSPH and plane hits dissipate, moving boundaries
+  /// add work). NaN (null in JSON) when no step completed.
+  double energy_first = 0.0, energy_end = 0.0, energy_change = 0.0;
+  double max_density_error = 0.0;  ///< max over all steps of max |rho - rho_0| / rho_0 (fluid)
+  std::string instability;         ///< empty: stable; else the solver's message (step and likely cause)
+  uint64_t instability_step = 0;
+  std::vector<std::string> files;  ///< written particle files (and the .pvd)
+};
+
+/// A solver for the scene (its config, particles and planes).
+SphFluidSolver makeSphSolver(const SphScene& scene);
+
+/// Runs scene.frame_count frames of scene.frame_time on `solver` (made by makeSphSolver, possibly with
+/// changed threads). Frames end exactly on multiples of frame_time, like SphFluidSolver::advance(frame_time)
+/// per frame, and give the same state bitwise. An unstable step stops the run (it is reported in
+/// SphRunStats::instability, nothing is thrown); I/O errors throw.
+SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options = {});
+
+/// The statistics as one line of JSON (no newline); non-finite numbers become null.
+std::string sphRunStatsJson(const SphRunStats& stats);
+
+}  // namespace rc

@@ -1,0 +1,414 @@
+// SPH scene files (config/sph), the scene runner of rc_sph and the particle outputs (PLY, VTK .vtp).
+#include "sph/sph_scene_file.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+
+#include "io/cloud_io.h"
+#include "sph/sph_output.h"
+#include "sph/sph_scene.h"
+#include "sph/sph_scene_run.h"
+
+namespace rc {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kSceneDir =
+    std::string(__FILE__).substr(0, std::string(__FILE__).rfind("/test/")) + "/config/sph/";
+
+fs::path tempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("rc_test_sph_scene_file_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+struct ExpectedCounts {
+  size_t fluid, walls, moving, planes;
+};
+
+// Every shipped scene must be listed here (and so loaded by this test).
+TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
+  const std::map<std::string, ExpectedCounts> expected = {
+      {"dam_break_2d", {20 * 40, 106 * 53 - 100 * 50, 0, 0}},
+      {"hydrostatic_tank_2d", {20 * 20, 26 * 27 - 20 * 24, 0, 0}},
+      {"dam_break_3d", {20 * 30 * 30, 64 * 52 * 34 - 60 * 50 * 30, 0, 5}},
+  };
+  size_t loaded = 0;
+  for (const auto& entry : fs::directory_iterator(kSceneDir)) {
+    if (entry.path().extension() != ".yaml") continue;
+    const std::string stem = entry.path().stem().string();
+    const auto it = expected.find(stem);
+    ASSERT_NE(it, expected.end()) << entry.path() << " is not covered by this test";
+    const SphScene scene = loadSphScene(entry.path().string());
+    EXPECT_EQ(scene.name, stem);
+    EXPECT_EQ(scene.particles.count(SphParticleKind::kFluid), it->second.fluid) << stem;
+    EXPECT_EQ(scene.particles.count(SphParticleKind::kStaticBoundary), it->second.walls) << stem;
+    EXPECT_EQ(scene.particles.count(SphParticleKind::kMovingBoundary), it->second.moving) << stem;
+    EXPECT_EQ(scene.planes.size(), it->second.planes) << stem;
+    EXPECT_TRUE(scene.enabled_physics.empty());
+    EXPECT_NO_THROW(scene.config.validate());
+    EXPECT_NO_THROW(makeSphSolver(scene));
+    ++loaded;
+  }
+  EXPECT_EQ(loaded, expected.size());
+  const SphScene d3 = loadSphScene(kSceneDir + "dam_break_3d.yaml");
+  EXPECT_EQ(d3.config.dimension, 3);
+  EXPECT_NEAR(d3.config.soundSpeed(), 24.3, 1e-12);  // speed_of_sound: K = rho_0 c^2 / Gamma
+  EXPECT_EQ(d3.output.every, 2);
+  EXPECT_TRUE(d3.output.vtp && !d3.output.ply);
+  const SphScene tank = loadSphScene(kSceneDir + "hydrostatic_tank_2d.yaml");
+  EXPECT_FALSE(tank.output.enabled());  // no output unless asked for
+  EXPECT_EQ(tank.config.pressure_kernel, SphPressureKernel::kPoly6);
+  EXPECT_EQ(tank.config.negative_pressure_scale, 0.0);
+}
+
+/// The dam break of test_sph_validation.cpp, built by hand.
+SphFluidConfig handDamBreakConfig() {
+  SphFluidConfig c;
+  c.stiffness = 392400.0;
+  c.viscosity = 1.0;
+  c.xsph = 0.1;
+  c.negative_pressure_scale = 0.01;
+  c.pressure_kernel = SphPressureKernel::kSpiky;
+  return c;
+}
+
+SphDamBreak2D handDamBreak() {
+  SphDamBreak2D scene;
+  scene.column_width = 0.1;
+  scene.column_height = 0.2;
+  scene.tank_width = 0.5;
+  scene.tank_height = 0.25;
+  scene.dx = 0.005;
+  scene.smoothing_ratio = 3.0;
+  return scene;
+}
+
+bool sameBits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)) == 0;
+}
+
+TEST(SphSceneFile, DamBreakFileRunsBitwiseLikeTheHandBuiltScene) {
+  SphScene scene = loadSphScene(kSceneDir + "dam_break_2d.yaml");
+  SphFluidConfig hand_config = handDamBreakConfig();
+  SphParticles hand_particles = makeDamBreak2D(handDamBreak(), hand_config);
+  EXPECT_EQ(scene.config.smoothing_length, hand_config.smoothing_length);
+  EXPECT_EQ(scene.config.stiffness, hand_config.stiffness);
+  EXPECT_EQ(scene.config.gravity, hand_config.gravity);
+  ASSERT_TRUE(sameBits(scene.particles.positions, hand_particles.positions));
+  ASSERT_EQ(scene.particles.masses, hand_particles.masses);
+  ASSERT_EQ(scene.particles.kinds, hand_particles.kinds);
+
+  scene.frame_count = 20;
+  SphFluidSolver from_file = makeSphSolver(scene);
+  int reports = 0;
+  SphRunOptions options;  // no out_dir: nothing written
+  options.on_frame = [&](const SphFrameReport& r) {
+    ++reports;
+    EXPECT_EQ(r.frame, reports);
+    EXPECT_EQ(r.frame_count, 20);
+  };
+  const SphRunStats stats = runSphScene(scene, from_file, options);
+  EXPECT_EQ(reports, 20);
+  EXPECT_TRUE(stats.instability.empty()) << stats.instability;
+  EXPECT_TRUE(stats.files.empty());
+
+  SphFluidSolver by_hand(hand_config, hand_particles);
+  for (int f = 0; f < 20; ++f) by_hand.advance(0.01);
+  EXPECT_EQ(from_file.time(), by_hand.time());
+  EXPECT_EQ(from_file.stepCount(), by_hand.stepCount());
+  EXPECT_TRUE(sameBits(from_file.particles().positions, by_hand.particles().positions));
+  EXPECT_TRUE(sameBits(from_file.particles().velocities, by_hand.particles().velocities));
+  EXPECT_EQ(from_file.particles().pressures, by_hand.particles().pressures);
+
+  // Statistics: the counts and step sizes of the run.
+  EXPECT_EQ(stats.frames, 20);
+  EXPECT_EQ(stats.steps, by_hand.stepCount());
+  EXPECT_EQ(stats.particles, 1418u);
+  EXPECT_EQ(stats.fluid_particles, 800u);
+  EXPECT_NEAR(stats.simulated_time, 0.2, 1e-12);
+  EXPECT_NEAR(stats.mean_dt * double(stats.steps), 0.2, 1e-12);
+  // Sound-speed limited: cfl h / c, c = sqrt(K / rho_0) at rest (Gamma = 1).
+  const double dt_sound = 0.4 * 0.015 / std::sqrt(392.4);
+  EXPECT_LE(stats.min_dt, dt_sound * (1 + 1e-12));
+  EXPECT_GT(stats.min_dt, 0.5 * dt_sound);
+  EXPECT_EQ(stats.mass_drift, 0.0);
+  EXPECT_GT(stats.mean_step_us, 0.0);
+  EXPECT_GE(stats.max_step_us, stats.mean_step_us);
+  // The fluid falls and spreads: the floor and walls stop the fall, so they pushed up on it.
+  EXPECT_GT(stats.boundary_impulse.y(), 0.0);
+  EXPECT_GT(stats.momentum_end.x(), 0.0);
+  EXPECT_LT(std::abs(stats.energy_change), 0.2);  // viscosity dissipates; no source of energy
+  const std::string json = sphRunStatsJson(stats);
+  EXPECT_NE(json.find("\"steps\":" + std::to_string(stats.steps)), std::string::npos) << json;
+  EXPECT_NE(json.find("\"instability\":\"none\""), std::string::npos) << json;
+  EXPECT_EQ(json.find('\n'), std::string::npos);
+}
+
+/// The error message of parsing `yaml` (empty if it parses).
+std::string parseError(const std::string& yaml) {
+  try {
+    parseSphScene(yaml, "bad.yaml");
+  } catch (const SphSceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const char* kGoodHead =
+    "dimension: 2\n"                                    // 1
+    "spacing: 0.02\n"                                   // 2
+    "solver: {smoothing_ratio: 2.5, stiffness: 1e5}\n"  // 3
+    "fluid:\n"                                          // 4
+    "  - {lo: [0, 0], hi: [0.2, 0.2]}\n"                // 5
+    "frames: {count: 2, time: 0.01}\n";                 // 6
+
+void expectErrorAt(const std::string& yaml, int line, const std::string& words) {
+  const std::string message = parseError(yaml);
+  EXPECT_EQ(message.rfind("bad.yaml:" + std::to_string(line) + ":", 0), 0u) << message;
+  EXPECT_NE(message.find(words), std::string::npos) << message;
+}
+
+TEST(SphSceneFile, BadInputsNameFileLineAndProblem) {
+  ASSERT_EQ(parseError(kGoodHead), "");
+  const std::string head = kGoodHead;
+  expectErrorAt(head + "colour: red\n", 7, "unknown key 'colour'");
+  expectErrorAt(head + "boundary:\n  walls:\n    - {lo: [0, 0], hi: [1, 1], layer: 3}\n", 9,
+                "unknown key 'layer'");
+  expectErrorAt(head + "moving:\n  - {lo: [0, 0], hi: [0.1, 0.1], spacing: -0.01, velocity: [1, 0]}\n", 8,
+                "spacing must be positive");
+  expectErrorAt(head + "boundary:\n  planes:\n    - {normal: yes, offset: 0}\n", 9,
+                "normal: expected [x, y]");
+  expectErrorAt("dimension: 2\nspacing: 0.02\nsolver: {smoothing_ratio: 2.5, stiffness: stiff}\n", 3,
+                "stiffness: expected a number, got 'stiff'");
+  expectErrorAt(head + "enable: [temperature]\n", 7, "'temperature' is not implemented yet");
+  expectErrorAt(head + "enable:\n  - elasticity\n", 8, "'elasticity' is not implemented yet");
+  expectErrorAt(head + "enable: [magnetism]\n", 7, "unknown physics 'magnetism'");
+  // Values the solver rejects point at their own line.
+  expectErrorAt("dimension: 2\nspacing: 0.02\nsolver:\n  smoothing_ratio: 2.5\n  xsph: 1.5\n", 5, "xsph");
+  expectErrorAt(head + "output: {particles: {formats: [obj]}}\n", 7, "unknown format 'obj'");
+  expectErrorAt(head + "boundary: {walls: [{lo: [0, 0], hi: [0.1, 0.3], closed_top: maybe}]}\n", 7,
+                "closed_top: expected true or false");
+  expectErrorAt(
+      "dimension: 2\nspacing: 0.02\nsolver: {smoothing_ratio: 2.5}\nfluid:\n  - {lo: [0, 0], hi: [0, "
+      "0.2]}\n",
+      5, "hi must exceed lo");
+  expectErrorAt("dimension: 3\nsolver: {smoothing_length: 0.1}\nfluid: [{lo: [0, 0], hi: [1, 1]}]\n", 3,
+                "expected [x, y, z]");
+  expectErrorAt("dimension: 2\nsolver: {smoothing_length: 0.1, gravity: [0, -9.81, 1]}\n", 2,
+                "z must be 0 in 2D");
+  expectErrorAt(
+      "dimension: 2\nspacing: 1e-7\nsolver: {smoothing_ratio: 2}\nfluid: [{lo: [0, 0], hi: [1, 1]}]\n", 4,
+      "exceed");
+  expectErrorAt("dimension: 2\nsolver: {smoothing_length: 0.1}\nfluid: [{lo: [0, 0], hi: [1, 1]}]\n", 3,
+                "missing 'spacing'");
+  expectErrorAt(head.substr(0, head.rfind("frames")), 1, "missing 'frames'");
+  expectErrorAt("dimension: 4\n", 1, "dimension must be an integer in [2, 3]");
+  expectErrorAt("dimension: 2\nsolver: {smoothing_length: 0.1\n", 3, "YAML syntax");
+  // Through a file: the message names the file's path.
+  const fs::path dir = tempDir("bad");
+  const std::string path = (dir / "typo.yaml").string();
+  std::ofstream(path) << head << "fraems: 3\n";
+  try {
+    loadSphScene(path);
+    ADD_FAILURE() << "no error";
+  } catch (const SphSceneError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(path + ":7:1: scene: unknown key 'fraems'", 0), 0u) << e.what();
+  }
+  EXPECT_THROW(loadSphScene((dir / "missing.yaml").string()), SphSceneError);
+}
+
+TEST(SphSceneFile, MovingBoxesPlanesAndPerBoxSpacing) {
+  const SphScene scene = parseSphScene(
+      "dimension: 3\n"
+      "spacing: 0.05\n"
+      "solver: {smoothing_ratio: 2, speed_of_sound: 10, gamma: 2, rest_density: 500}\n"
+      "fluid: [{lo: [0, 0, 0], hi: [0.2, 0.2, 0.2], velocity: [1, 0, 0]}]\n"
+      "boundary:\n"
+      "  boxes: [{lo: [0, -0.1, 0], hi: [0.2, 0, 0.2], spacing: 0.025}]\n"
+      "  planes: [{normal: [0, 2, 0], point: [0, -0.1, 0], restitution: 0.5, friction: 0.25}]\n"
+      "  box_planes: [{lo: [0, -1, 0], hi: [1, 1, 1], closed_top: true}]\n"
+      "moving: [{lo: [-0.1, 0, 0], hi: [0, 0.2, 0.2], velocity: [0.5, 0, 0]}]\n"
+      "frames: {count: 3, time: 0.005}\n"
+      "output: {particles: {every: 3, formats: [ply, vtp]}}\n",
+      "ok.yaml");
+  EXPECT_EQ(scene.name, "ok");
+  EXPECT_DOUBLE_EQ(scene.config.stiffness, 10.0 * 10.0 * 500.0 / 2.0);
+  EXPECT_DOUBLE_EQ(scene.config.smoothing_length, 0.1);
+  const SphParticles& p = scene.particles;
+  ASSERT_EQ(p.count(SphParticleKind::kFluid), 64u);
+  ASSERT_EQ(p.count(SphParticleKind::kStaticBoundary), 8u * 4u * 8u);
+  ASSERT_EQ(p.count(SphParticleKind::kMovingBoundary), 2u * 4u * 4u);
+  const SphKernels kernels(3, 0.1);
+  for (size_t i = 0; i < p.size(); ++i) {
+    const bool fine = p.kinds[i] == SphParticleKind::kStaticBoundary;
+    EXPECT_DOUBLE_EQ(p.masses[i], latticeParticleMass(kernels, 500.0, fine ? 0.025 : 0.05));
+    const Vec3 v = p.kinds[i] == SphParticleKind::kFluid            ? Vec3(1, 0, 0)
+                   : p.kinds[i] == SphParticleKind::kMovingBoundary ? Vec3(0.5, 0, 0)
+                                                                    : Vec3::Zero();
+    EXPECT_EQ(p.velocities[i], v);
+  }
+  ASSERT_EQ(scene.planes.size(), 1u + 6u);
+  EXPECT_EQ(scene.planes[0].normal, Vec3(0, 1, 0));
+  EXPECT_DOUBLE_EQ(scene.planes[0].offset, -0.1);
+  EXPECT_EQ(scene.planes[0].restitution, 0.5);
+  EXPECT_EQ(scene.planes[0].friction, 0.25);
+  EXPECT_EQ(scene.planes.back().normal, Vec3(0, -1, 0));  // closed top
+  EXPECT_EQ(scene.output.every, 3);
+  EXPECT_TRUE(scene.output.ply && scene.output.vtp);
+}
+
+TEST(SphSceneFile, UnstableRunIsReportedWithItsStep) {
+  // The dam break with 25 x the sound-speed step (test_sph_fluid.cpp): unstable within a few steps.
+  SphScene scene = loadSphScene(kSceneDir + "dam_break_2d.yaml");
+  scene.config.fixed_dt = 25.0 * scene.config.cfl * scene.config.smoothing_length / scene.config.soundSpeed();
+  scene.output = SphParticleOutput();
+  SphFluidSolver solver = makeSphSolver(scene);
+  const SphRunStats stats = runSphScene(scene, solver);
+  ASSERT_FALSE(stats.instability.empty());
+  EXPECT_GT(stats.instability_step, 0u);
+  EXPECT_EQ(stats.instability_step, stats.steps);
+  EXPECT_NE(stats.instability.find("step " + std::to_string(stats.instability_step) + " "), std::string::npos)
+      << stats.instability;
+  EXPECT_LT(stats.frames, scene.frame_count);
+  const std::string json = sphRunStatsJson(stats);
+  EXPECT_NE(json.find("\"instability_step\":" + std::to_string(stats.instability_step)), std::string::npos);
+  EXPECT_EQ(json.find("\"instability\":\"none\""), std::string::npos);
+}
+
+/// Attribute `name` of the `in` text: the value, or "" if absent.
+std::string xmlAttribute(const std::string& tag, const std::string& name) {
+  const std::regex re(name + "=\"([^\"]*)\"");
+  std::smatch m;
+  return std::regex_search(tag, m, re) ? m[1].str() : "";
+}
+
+/// Checks a .vtp file: structure, array names, types, lengths (ascii token counts or appended byte counts).
+void checkVtp(const std::string& path, size_t n, bool appended) {
+  std::ifstream in(path, std::ios::binary);
+  ASSERT_TRUE(in) << path;
+  std::stringstream buf;
+  buf << in.rdbuf();
+  const std::string file = buf.str();
+  const size_t appended_at = file.find("<AppendedData");
+  const std::string xml = file.substr(0, appended_at);
+  EXPECT_EQ(xml.rfind("<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\"", 0), 0u);
+  EXPECT_NE(file.find("</VTKFile>"), std::string::npos);
+  const std::regex piece_re("<Piece [^>]*>");
+  std::smatch piece;
+  ASSERT_TRUE(std::regex_search(xml, piece, piece_re));
+  EXPECT_EQ(xmlAttribute(piece[0].str(), "NumberOfPoints"), std::to_string(n));
+  EXPECT_EQ(xmlAttribute(piece[0].str(), "NumberOfVerts"), std::to_string(n));
+  for (const char* section : {"<PointData", "</PointData>", "<Points>", "</Points>", "<Verts>", "</Verts>"})
+    EXPECT_NE(xml.find(section), std::string::npos) << section;
+  const std::map<std::string, std::pair<std::string, size_t>> expected = {
+      {"velocity", {"Float32", 3}}, {"density", {"Float32", 1}}, {"pressure", {"Float32", 1}},
+      {"kind", {"UInt8", 1}},       {"Points", {"Float64", 3}},  {"connectivity", {"Int64", 1}},
+      {"offsets", {"Int64", 1}}};
+  const std::map<std::string, size_t> type_size = {
+      {"Float32", 4}, {"Float64", 8}, {"Int64", 8}, {"UInt8", 1}};
+  const std::regex array_re("<DataArray [^>]*>");
+  size_t arrays = 0;
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), array_re); it != std::sregex_iterator(); ++it) {
+    const std::string tag = (*it)[0].str();
+    const std::string name = xmlAttribute(tag, "Name");
+    ASSERT_TRUE(expected.count(name)) << tag;
+    const auto& [type, components] = expected.at(name);
+    EXPECT_EQ(xmlAttribute(tag, "type"), type) << name;
+    const std::string nc = xmlAttribute(tag, "NumberOfComponents");
+    EXPECT_EQ(nc.empty() ? size_t(1) : size_t(std::stoul(nc)), components) << name;
+    const size_t values = n * components;
+    if (appended) {
+      EXPECT_EQ(xmlAttribute(tag, "format"), "appended");
+      ASSERT_NE(appended_at, std::string::npos);
+      const size_t data = file.find('_', appended_at) + 1;
+      const size_t at = data + std::stoull(xmlAttribute(tag, "offset"));
+      ASSERT_LE(at + 8, file.size());
+      uint64_t bytes = 0;
+      std::memcpy(&bytes, file.data() + at, 8);
+      EXPECT_EQ(bytes, values * type_size.at(type)) << name;
+      EXPECT_LE(at + 8 + bytes, file.size());
+      if (name == "offsets" && n > 0) {  // vertex cells 1, 2, ..., n
+        int64_t last = 0;
+        std::memcpy(&last, file.data() + at + 8 + bytes - 8, 8);
+        EXPECT_EQ(last, int64_t(n));
+      }
+    } else {
+      EXPECT_EQ(xmlAttribute(tag, "format"), "ascii");
+      const size_t body = xml.find('>', it->position()) + 1;
+      const std::string text = xml.substr(body, xml.find("</DataArray>", body) - body);
+      std::istringstream tokens(text);
+      size_t count = 0;
+      for (std::string t; tokens >> t;) ++count;
+      EXPECT_EQ(count, values) << name;
+    }
+    ++arrays;
+  }
+  EXPECT_EQ(arrays, expected.size());
+}
+
+TEST(SphSceneFile, OutputsParseBack) {
+  SphScene scene = loadSphScene(kSceneDir + "dam_break_2d.yaml");
+  scene.frame_count = 2;
+  scene.output.every = 2;
+  scene.output.ply = scene.output.vtp = true;
+  const fs::path dir = tempDir("out");
+  SphFluidSolver solver = makeSphSolver(scene);
+  SphRunOptions options;
+  options.out_dir = (dir / "frames").string();
+  const SphRunStats stats = runSphScene(scene, solver, options);
+  ASSERT_TRUE(stats.instability.empty());
+  // Frames 0 and 2, ply + vtp, and the collection.
+  const fs::path frames = dir / "frames";
+  std::vector<std::string> expected_files = {
+      (frames / "dam_break_2d_0000.ply").string(), (frames / "dam_break_2d_0000.vtp").string(),
+      (frames / "dam_break_2d.pvd").string(), (frames / "dam_break_2d_0002.ply").string(),
+      (frames / "dam_break_2d_0002.vtp").string()};
+  EXPECT_EQ(stats.files, expected_files);
+  EXPECT_FALSE(fs::exists(frames / "dam_break_2d_0001.ply"));
+
+  const SphParticles& p = solver.particles();
+  const SurfelCloud cloud = readCloud((frames / "dam_break_2d_0002.ply").string());
+  ASSERT_EQ(cloud.size(), p.size());
+  const Attribute* velocity = cloud.attributes.find("velocity");
+  const Attribute* density = cloud.attributes.find("density");
+  const Attribute* pressure = cloud.attributes.find("pressure");
+  const Attribute* kind = cloud.attributes.find("kind");
+  ASSERT_TRUE(velocity && density && pressure && kind);
+  EXPECT_EQ(velocity->count, 3u);
+  EXPECT_EQ(kind->type, ScalarType::kUInt8);
+  double max_speed = 0.0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    EXPECT_NEAR((cloud.positions[i] - p.positions[i]).norm(), 0.0, 1e-6);  // float32
+    for (uint32_t k = 0; k < 3; ++k) EXPECT_FLOAT_EQ(velocity->get(i, k), float(p.velocities[i][k]));
+    EXPECT_FLOAT_EQ(density->get(i), float(p.densities[i]));
+    EXPECT_FLOAT_EQ(pressure->get(i), float(p.pressures[i]));
+    EXPECT_EQ(kind->get(i), double(uint8_t(p.kinds[i])));
+    max_speed = std::max(max_speed, p.velocities[i].norm());
+  }
+  EXPECT_GT(max_speed, 0.0);  // frame 2 is not the rest state
+
+  checkVtp((frames / "dam_break_2d_0002.vtp").string(), p.size(), true);
+  checkVtp((frames / "dam_break_2d_0000.vtp").string(), p.size(), true);
+  const std::string ascii = (dir / "ascii.vtp").string();
+  writeSphVtp(ascii, p, VtpEncoding::kAscii);
+  checkVtp(ascii, p.size(), false);
+  // The collection lists both frames with their times.
+  std::ifstream pvd((frames / "dam_break_2d.pvd").string());
+  std::stringstream text;
+  text << pvd.rdbuf();
+  EXPECT_NE(text.str().find("timestep=\"0\" part=\"0\" file=\"dam_break_2d_0000.vtp\""), std::string::npos);
+  EXPECT_NE(text.str().find("timestep=\"0.02\" part=\"0\" file=\"dam_break_2d_0002.vtp\""), std::string::npos)
+      << text.str();
+}
+
+}  // namespace
+}  // namespace rc
