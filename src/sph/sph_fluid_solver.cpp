@@ -41,6 +41,8 @@ const char* toString(SphStepLimit limit) {
       return "viscosity";
     case SphStepLimit::kForce:
       return "force";
+    case SphStepLimit::kElastic:
+      return "elastic wave speed";
   }
   return "?";
 }
@@ -200,10 +202,34 @@ void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
       xsph_[i] = s_xsph_[s];
     }
   }
+  addTermForces(velocities);
   size_t entries = 0;
   for (size_t s = 0; s < n; ++s) entries += row_count_[s];
   stats_.neighbors_per_particle = n ? double(entries) / double(n) : 0.0;
   forces_valid_ = true;
+}
+
+void SphFluidSolver::addForceTerm(std::shared_ptr<SphForceTerm> term) {
+  if (!term) throw std::invalid_argument("SphFluidSolver::addForceTerm: term is null");
+  force_terms_.push_back(std::move(term));
+  forces_valid_ = false;
+}
+
+// Forces of the extra terms (8.2) on the integrated particles, added to forces and accelerations.
+void SphFluidSolver::addTermForces(const std::vector<Vec3>& velocities) {
+  stats_.term_energy = 0.0;
+  if (force_terms_.empty()) return;
+  const size_t n = particles_.size();
+  term_forces_.assign(n, Vec3::Zero());
+  for (const auto& term : force_terms_) {
+    term->addForces(particles_, velocities, term_forces_);
+    stats_.term_energy += term->potentialEnergy();
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (particles_.kinds[i] != SphParticleKind::kFluid) continue;
+    particles_.forces[i] += term_forces_[i];
+    accelerations_[i] += term_forces_[i] / particles_.masses[i];
+  }
 }
 
 // Density (8.4) and pressure (8.15)-(8.16) of the sorted particles [first, last); records the neighbour rows.
@@ -358,6 +384,9 @@ void SphFluidSolver::chooseTimeStep(double requested_dt) {
   const double lap_integral = (config_.dimension == 3 ? 15.0 : 40.0 / 3.0) / (h * h);
   stats_.dt_viscosity = nu > 0.0 ? cfl / (nu * lap_integral) : kInf;
   stats_.dt_force = max_acc > 0.0 ? cfl * std::sqrt(h / max_acc) : kInf;
+  stats_.dt_elastic = kInf;
+  for (const auto& term : force_terms_)
+    stats_.dt_elastic = std::min(stats_.dt_elastic, term->stableTimeStep(p, cfl));
   if (config_.fixed_dt > 0.0) {
     stats_.dt = config_.fixed_dt;
     stats_.limit = SphStepLimit::kFixed;
@@ -367,7 +396,8 @@ void SphFluidSolver::chooseTimeStep(double requested_dt) {
     const std::pair<double, SphStepLimit> limits[] = {{stats_.dt_speed, SphStepLimit::kSpeed},
                                                       {stats_.dt_sound, SphStepLimit::kSoundSpeed},
                                                       {stats_.dt_viscosity, SphStepLimit::kViscosity},
-                                                      {stats_.dt_force, SphStepLimit::kForce}};
+                                                      {stats_.dt_force, SphStepLimit::kForce},
+                                                      {stats_.dt_elastic, SphStepLimit::kElastic}};
     for (const auto& l : limits)
       if (l.first < stats_.dt) {
         stats_.dt = l.first;
@@ -424,7 +454,7 @@ const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
   }
   chooseTimeStep(requested_dt);
   const double dt = stats_.dt;
-  const double energy_before = stats_.kinetic_energy + stats_.compression_energy;
+  const double energy_before = stats_.kinetic_energy + stats_.compression_energy + stats_.term_energy;
   // Kick, drift (with the XSPH correction), predict.
   predicted_.resize(n);
   double gravity_work = 0.0;
@@ -515,7 +545,8 @@ std::string SphFluidSolver::likelyCause() const {
   const std::pair<double, const char*> limits[] = {{stats_.dt_sound, "sound-speed"},
                                                    {stats_.dt_speed, "CFL (speed)"},
                                                    {stats_.dt_viscosity, "viscosity"},
-                                                   {stats_.dt_force, "force"}};
+                                                   {stats_.dt_force, "force"},
+                                                   {stats_.dt_elastic, "elastic wave speed"}};
   double worst = 1.0;
   const char* name = nullptr;
   double limit = 0.0;

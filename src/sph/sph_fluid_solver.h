@@ -3,10 +3,12 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "sph/sph_force_term.h"
 #include "sph/sph_kernels.h"
 #include "sph/sph_particles.h"
 #include "sph/sph_sorted_grid.h"
@@ -65,7 +67,7 @@ struct SphPlane {
   double friction = 0.0;     ///< tangential velocity scaled by (1 - friction) on a hit, in [0, 1]
 };
 
-enum class SphStepLimit { kFixed, kMaxDt, kSpeed, kSoundSpeed, kViscosity, kForce };
+enum class SphStepLimit { kFixed, kMaxDt, kSpeed, kSoundSpeed, kViscosity, kForce, kElastic };
 const char* toString(SphStepLimit limit);
 
 struct SphStepStats {
@@ -78,10 +80,12 @@ struct SphStepStats {
   double dt_sound = 0.0;                ///< cfl h / c, c the sound speed at the largest fluid density
   double dt_viscosity = 0.0;            ///< cfl h^2 rho_0 / (mu (15 | 40/3)), 3D | 2D: 2 / max eigenvalue
   double dt_force = 0.0;                ///< cfl sqrt(h / max |a|)
+  double dt_elastic = 0.0;              ///< min over the force terms (elastic wave speed, 8.2)
   double max_speed = 0.0;               ///< fluid particles, after the step
   double max_density_error = 0.0;       ///< max |rho - rho_0| / rho_0 over fluid particles
   double kinetic_energy = 0.0;          ///< fluid particles
   double compression_energy = 0.0;      ///< sum m e(rho) of the equation of state (fluid particles)
+  double term_energy = 0.0;             ///< potential energy of the force terms (elastic, 8.2)
   double neighbors_per_particle = 0.0;  ///< mean, all particles, self excluded
   double seconds = 0.0;                 ///< wall time of the step
   bool unstable = false;
@@ -120,6 +124,11 @@ class SphFluidSolver {
   void addPlane(const SphPlane& plane);
   const std::vector<SphPlane>& planes() const { return planes_; }
 
+  /// Adds a force term (e.g. an SphElasticSolid, 8.2) evaluated with every force computation; its
+  /// stableTimeStep enters the adaptive step as SphStepLimit::kElastic. Throws for a null term.
+  void addForceTerm(std::shared_ptr<SphForceTerm> term);
+  const std::vector<std::shared_ptr<SphForceTerm>>& forceTerms() const { return force_terms_; }
+
   /// One time step. Throws SphInstabilityError if it is unstable and config().throw_on_instability.
   const SphStepStats& step();
   /// Steps until `duration` more time has passed (the last step is shortened to end on it).
@@ -139,6 +148,7 @@ class SphFluidSolver {
   void densityPass(int t);
   void boundaryPressurePass(int t);
   void forcePass(int t);
+  void addTermForces(const std::vector<Vec3>& velocities);
   double pressureOf(double density) const;
   double compressionEnergyOf(double density) const;
   void chooseTimeStep(double requested_dt);
@@ -152,6 +162,8 @@ class SphFluidSolver {
   SphKernels kernels_;
   SphParticles particles_;
   std::vector<SphPlane> planes_;
+  std::vector<std::shared_ptr<SphForceTerm>> force_terms_;
+  std::vector<Vec3> term_forces_;
   SphStepStats stats_;
   double time_ = 0.0;
   uint64_t step_count_ = 0;

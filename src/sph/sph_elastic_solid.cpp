@@ -1,0 +1,433 @@
+#include "sph/sph_elastic_solid.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Dense>
+#include <Eigen/SVD>
+
+namespace rc {
+
+namespace {
+
+using Mat3 = Eigen::Matrix3d;
+
+void require(bool ok, const char* field, const std::string& what) {
+  if (!ok) throw std::invalid_argument(std::string("SphElasticConfig.") + field + ": " + what);
+}
+
+bool isRotation(const Mat3& q) {
+  return q.allFinite() && (q.transpose() * q - Mat3::Identity()).norm() < 1e-9 && q.determinant() > 0.0;
+}
+
+}  // namespace
+
+void SphElasticConfig::validate() const {
+  require(lattice_spacing > 0.0 && std::isfinite(lattice_spacing), "lattice_spacing",
+          "must be finite and > 0, got " + std::to_string(lattice_spacing));
+  require(youngs_modulus > 0.0 && std::isfinite(youngs_modulus), "youngs_modulus",
+          "must be finite and > 0, got " + std::to_string(youngs_modulus));
+  require(poisson_ratio >= 0.0 && poisson_ratio < 0.5, "poisson_ratio",
+          "must be in [0, 0.5), got " + std::to_string(poisson_ratio));
+  require(hourglass_control >= 0.0 && std::isfinite(hourglass_control), "hourglass_control",
+          "must be finite and >= 0, got " + std::to_string(hourglass_control));
+  require(goal_stiffness > 0.0 && std::isfinite(goal_stiffness), "goal_stiffness",
+          "(K_e) must be finite and > 0, got " + std::to_string(goal_stiffness));
+  require(deformation_allowance >= 0.0 && deformation_allowance <= 1.0, "deformation_allowance",
+          "(s) must be in [0, 1], got " + std::to_string(deformation_allowance));
+  require(min_neighbors >= 2, "min_neighbors", "must be >= 2, got " + std::to_string(min_neighbors));
+}
+
+void assignLatticePoints(const SphLattice& lattice, const Mat3& transform, const std::vector<Vec3>& offsets,
+                         SphLatticeAssignment& out) {
+  const size_t n = offsets.size();
+  out.indices.resize(n);
+  out.assigned.assign(n, 1);
+  thread_local std::vector<double> dist2;
+  dist2.resize(n);
+  const Mat3 inverse = transform.inverse();
+  for (size_t k = 0; k < n; ++k) {  // (8.21)
+    const Vec3 q = inverse * offsets[k];
+    out.indices[k] = lattice.nearestIndex(q);
+    dist2[k] = (lattice.point(out.indices[k]) - q).squaredNorm();
+    if (out.indices[k].isZero()) out.assigned[k] = 0;  // the centre particle's own point
+  }
+  // One particle per lattice point: the closest keeps it (ties: lower index). Sort by (point, distance,
+  // index); all but the first of each point lose it.
+  thread_local std::vector<uint32_t> order;
+  order.resize(n);
+  for (size_t k = 0; k < n; ++k) order[k] = static_cast<uint32_t>(k);
+  const auto& idx = out.indices;
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const Eigen::Vector3i &ia = idx[a], &ib = idx[b];
+    if (ia.x() != ib.x()) return ia.x() < ib.x();
+    if (ia.y() != ib.y()) return ia.y() < ib.y();
+    if (ia.z() != ib.z()) return ia.z() < ib.z();
+    if (dist2[a] != dist2[b]) return dist2[a] < dist2[b];
+    return a < b;
+  });
+  for (size_t p = 1; p < n; ++p)
+    if (idx[order[p]] == idx[order[p - 1]]) out.assigned[order[p]] = 0;
+}
+
+void rotationSvd(const Mat3& a, int dimension, Mat3& u, Vec3& sigma, Mat3& v) {
+  if (dimension == 2) {
+    Eigen::JacobiSVD<Eigen::Matrix2d> svd(a.topLeftCorner<2, 2>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix2d u2 = svd.matrixU(), v2 = svd.matrixV();
+    Eigen::Vector2d s2 = svd.singularValues();
+    if ((u2 * v2.transpose()).determinant() < 0.0) {  // reflection: flip the smallest singular value
+      u2.col(1) = -u2.col(1);
+      s2(1) = -s2(1);
+    }
+    u.setIdentity();
+    v.setIdentity();
+    u.topLeftCorner<2, 2>() = u2;
+    v.topLeftCorner<2, 2>() = v2;
+    sigma = Vec3(s2(0), s2(1), 1.0);
+    return;
+  }
+  Eigen::JacobiSVD<Mat3> svd(a, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  u = svd.matrixU();
+  v = svd.matrixV();
+  sigma = svd.singularValues();
+  if ((u * v.transpose()).determinant() < 0.0) {  // (8.24) must be a rotation
+    u.col(2) = -u.col(2);
+    sigma(2) = -sigma(2);
+  }
+}
+
+SphElasticSolid::SphElasticSolid(const SphElasticConfig& config, const SphKernels& kernels, uint8_t phase,
+                                 const Mat3& lattice_orientation)
+    : config_(config),
+      kernels_(kernels),
+      lattice_(kernels.dimension, config.lattice_spacing > 0.0 ? config.lattice_spacing : 1.0),
+      phase_(phase),
+      orientation_(lattice_orientation) {
+  config_.validate();
+  if (phase == 0) throw std::invalid_argument("SphElasticSolid: phase 0 is the fluid phase");
+  if (!isRotation(lattice_orientation))
+    throw std::invalid_argument("SphElasticSolid: lattice_orientation must be a rotation");
+  if (kernels.dimension == 2 && (lattice_orientation.col(2) - Vec3::UnitZ()).norm() > 1e-12)
+    throw std::invalid_argument("SphElasticSolid: in 2D lattice_orientation must be a rotation about z");
+  if (!(kernels.h > 1.01 * config.lattice_spacing))
+    throw std::invalid_argument("SphElasticSolid: the smoothing length " + std::to_string(kernels.h) +
+                                " must exceed the lattice spacing " + std::to_string(config.lattice_spacing) +
+                                " (no neighbours otherwise)");
+  if (config_.min_neighbors < kernels.dimension)
+    throw std::invalid_argument("SphElasticConfig.min_neighbors: must be >= the dimension");
+  const double y = config_.youngs_modulus, nu = config_.poisson_ratio;
+  lame_mu_ = y / (2.0 * (1.0 + nu));
+  lame_lambda_ = y * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  // Stiffness bound of the strain model on a full lattice neighbourhood (Gershgorin-like): a neighbour's
+  // force coefficient a_j = W_j |D^-1 l_j| for the stress part and W_j / tr D for the hourglass part.
+  const int r = static_cast<int>(std::ceil(kernels.h / config.lattice_spacing)) + 1;
+  const int rz = kernels.dimension == 3 ? r : 0;
+  std::vector<Vec3> ls;
+  Mat3 d = Mat3::Zero();
+  double sum_w = 0.0;
+  for (int k = -rz; k <= rz; ++k)
+    for (int j = -r; j <= r; ++j)
+      for (int i = -r; i <= r; ++i) {
+        const Vec3 l = lattice_.point(Eigen::Vector3i(i, j, k));
+        const double w = kernels.poly6(l.squaredNorm());
+        if (l.squaredNorm() == 0.0 || w <= 0.0) continue;
+        ls.push_back(l);
+        d += w * l * l.transpose();
+        sum_w += w;
+      }
+  if (kernels.dimension == 2) d(2, 2) = 1.0;
+  const Mat3 d_inv = d.inverse();
+  double sum_a = 0.0;
+  for (const Vec3& l : ls) sum_a += kernels.poly6(l.squaredNorm()) * (d_inv * l).norm();
+  const double trace = kernels.dimension == 3 ? d.trace() : d.trace() - 1.0;
+  strain_omega2_mass_ =
+      4.0 * lattice_.cellVolume() *
+      ((lame_lambda_ + 2.0 * lame_mu_) * sum_a * sum_a + config_.hourglass_control * y * sum_w / trace);
+}
+
+size_t SphElasticSolid::addParticles(SphParticles& particles, const std::vector<Vec3>& positions, double mass,
+                                     const Vec3& velocity) const {
+  if (!(mass > 0.0) || !std::isfinite(mass))
+    throw std::invalid_argument("SphElasticSolid::addParticles: mass must be finite and > 0, got " +
+                                std::to_string(mass));
+  const size_t first = particles.size();
+  for (const Vec3& x : positions) {
+    particles.add(x, velocity, mass, SphParticleKind::kFluid);
+    particles.phases.back() = phase_;
+  }
+  return first;
+}
+
+void SphElasticSolid::prepare(const SphParticles& particles) {
+  const size_t n = particles.size();
+  if (transform_.size() != n) {
+    transform_.resize(n, orientation_);
+    rotation_.resize(n, orientation_);
+    strain_.resize(n, Mat3::Zero());
+    has_transform_.resize(n, 0);
+    unassigned_count_.resize(n, 0);
+  }
+  std::vector<Vec3> points;
+  std::vector<uint32_t> members;
+  for (size_t i = 0; i < n; ++i) {
+    const bool solid = particles.phases[i] == phase_ && particles.kinds[i] == SphParticleKind::kFluid;
+    if (!solid) {
+      has_transform_[i] = 0;  // a particle that (re)joins starts from the lattice orientation
+      transform_[i] = rotation_[i] = orientation_;
+      strain_[i].setZero();
+      unassigned_count_[i] = 0;
+      continue;
+    }
+    members.push_back(static_cast<uint32_t>(i));
+    points.push_back(particles.positions[i]);
+  }
+  grid_.build(points, kernels_.h, 1);
+  const size_t m = members.size();
+  solid_.resize(m);
+  s_pos_.resize(m);
+  s_mass_.resize(m);
+  for (size_t s = 0; s < m; ++s) {
+    const uint32_t i = members[grid_.order()[s]];
+    solid_[s] = i;
+    s_pos_[s] = particles.positions[i];
+    s_mass_[s] = particles.masses[i];
+  }
+  contributions_.resize(m);
+  lost_.resize(m);
+  energy_.assign(m, 0.0);
+  max_strain_.assign(m, 0.0);
+  assigned_.assign(m, 0);
+  unassigned_.assign(m, 0);
+  matched_.assign(m, 0);
+}
+
+void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
+  const int dim = lattice_.dimension();
+  const uint32_t i = solid_[s];
+  std::vector<Contribution>& out = contributions_[s];
+  out.clear();
+  lost_[s].clear();
+  // Current neighbours of the same solid.
+  sc.offsets.clear();
+  sc.neighbors.clear();
+  sc.weights.clear();
+  const Vec3 xi = s_pos_[s];
+  SphSortedGrid::Run runs[9];
+  const int num_runs = grid_.neighborRuns(grid_.cellOfSorted(s), runs);
+  for (int r = 0; r < num_runs; ++r)
+    for (uint32_t j = runs[r].begin; j < runs[r].end; ++j) {
+      if (j == s) continue;
+      const Vec3 rij = s_pos_[j] - xi;
+      const double d2 = rij.squaredNorm();
+      if (d2 >= kernels_.h2) continue;
+      sc.offsets.push_back(rij);
+      sc.neighbors.push_back(j);
+      sc.weights.push_back(kernels_.poly6(d2));
+    }
+  // Lattice assignment from the previous transform (8.21).
+  assignLatticePoints(lattice_, transform_[i], sc.offsets, sc.assignment);
+  const size_t nn = sc.offsets.size();
+  Mat3 rl = Mat3::Zero(), ll = Mat3::Zero();
+  size_t count = 0;
+  for (size_t k = 0; k < nn; ++k) {
+    if (!sc.assignment.assigned[k]) {
+      ++unassigned_[s];
+      lost_[s].push_back(solid_[sc.neighbors[k]]);
+      continue;
+    }
+    const Vec3 l = lattice_.point(sc.assignment.indices[k]);
+    rl += sc.weights[k] * sc.offsets[k] * l.transpose();
+    ll += sc.weights[k] * l * l.transpose();
+    ++count;
+  }
+  assigned_[s] = static_cast<uint32_t>(count);
+  if (dim == 2) rl(2, 2) = ll(2, 2) = 1.0;
+  if (count < size_t(config_.min_neighbors)) return;
+  const double scale = ll.trace() / dim;
+  const double det = dim == 3 ? ll.determinant() : ll.topLeftCorner<2, 2>().determinant();
+  if (!(det > 1e-6 * std::pow(scale, dim))) return;  // (near) planar neighbourhood: no fit
+  const Mat3 a = rl * ll.inverse();                  // (8.23)
+  if (!a.allFinite()) return;
+  Mat3 u, v;
+  Vec3 sigma;
+  rotationSvd(a, dim, u, sigma, v);
+  const Mat3 rot = u * v.transpose();  // (8.24)
+  const Vec3 clamped = sigma.cwiseMax(0.25).cwiseMin(4.0);
+  transform_[i] = u * clamped.asDiagonal() * v.transpose();  // A_i for the next assignment
+  rotation_[i] = rot;
+  has_transform_[i] = 1;
+  matched_[s] = 1;
+
+  // Strain (8.26) from the rest positions g_ij = R_i l_ij (8.25): the displacement gradient fits
+  // sum_j W_ij |(r_ij - g_ij) - G g_ij|^2: (8.27) weighted by W_ij (g_ij.e_beta)^2 and solved with the full
+  // normal matrix. As printed, (8.28)'s denominator sum_j W_ij g_ij.e_beta vanishes on a symmetric
+  // neighbourhood, and its diagonal form is not exact for linear displacements on the rotated fcc lattice.
+  Mat3 num = Mat3::Zero(), den = Mat3::Zero();
+  for (size_t k = 0; k < nn; ++k) {
+    if (!sc.assignment.assigned[k]) continue;
+    const Vec3 g = rot * lattice_.point(sc.assignment.indices[k]);
+    num += sc.weights[k] * (sc.offsets[k] - g) * g.transpose();
+    den += sc.weights[k] * g * g.transpose();
+  }
+  if (dim == 2) den(2, 2) = 1.0;
+  const Mat3 grad = num * den.inverse();
+  Mat3 strain = 0.5 * (grad + grad.transpose());
+  if (dim == 2) {
+    strain.row(2).setZero();
+    strain.col(2).setZero();
+  }
+  strain_[i] = strain;
+  max_strain_[s] =
+      Eigen::SelfAdjointEigenSolver<Mat3>(strain, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
+
+  const double volume = lattice_.cellVolume();
+  out.push_back({i, Vec3::Zero()});  // the centre particle first
+  Vec3 centre_force = Vec3::Zero();
+  if (config_.model == SphElasticModel::kStrain) {
+    // Linear elasticity: sigma = lambda tr(eps) I + 2 mu eps. Forces are the negative gradient of the
+    // neighbourhood's energy V_i sigma:eps / 2 through the strain fit (R_i held fixed, corotational):
+    // F_j = -V_i W_ij sigma_i D_i^-1 g_ij with D_i = sum_j W_ij g_ij g_ij^T, F_i = -sum_j F_j. This is the
+    // SPH stress divergence with the kernel gradient corrected to match the strain estimate; the plain V_i
+    // V_j sigma_i grad W form showed the tensile instability (a 10% stretched block blew up at any dt).
+    Mat3 identity = Mat3::Identity();
+    if (dim == 2) identity(2, 2) = 0.0;
+    const Mat3 stress = lame_lambda_ * strain.trace() * identity + 2.0 * lame_mu_ * strain;
+    energy_[s] = 0.5 * volume * (stress.cwiseProduct(strain)).sum();
+    const Mat3 stress_den = stress * den.inverse();
+    // Hourglass control: the strain fit does not see non-affine (zero-energy) modes; they are penalised
+    // by pulling each neighbour towards the fitted affine position A_i l_ij, with energy
+    // gamma Y V / (2 tr D_i) sum_j W_ij |A_i l_ij - r_ij|^2 (zero for any affine deformation; A_i minimises
+    // the sum, so the force is its exact gradient).
+    const double hourglass = config_.hourglass_control * config_.youngs_modulus * volume / den.trace();
+    for (size_t k = 0; k < nn; ++k) {
+      if (!sc.assignment.assigned[k]) continue;
+      const Vec3 l = lattice_.point(sc.assignment.indices[k]);
+      const Vec3 g = rot * l;
+      const Vec3 residual = a * l - sc.offsets[k];
+      energy_[s] += 0.5 * hourglass * sc.weights[k] * residual.squaredNorm();
+      const Vec3 f = (-volume * sc.weights[k]) * (stress_den * g) + (hourglass * sc.weights[k]) * residual;
+      out.push_back({solid_[sc.neighbors[k]], f});
+      centre_force -= f;
+    }
+  } else {
+    // Goal positions g'_ij = U S V^T l_ij (8.29) with the volume-preserving S (8.30); F_ij (8.31), half to
+    // j and minus half to i.
+    const double s_allow = config_.deformation_allowance;
+    Vec3 sv = (s_allow * sigma.array() + (1.0 - s_allow)).matrix().cwiseMax(0.05);
+    if (dim == 2) sv.z() = 1.0;
+    const double volume_factor = dim == 3 ? sv.prod() : sv.x() * sv.y();
+    sv /= std::pow(volume_factor, 1.0 / dim);
+    if (dim == 2) sv.z() = 1.0;
+    const Mat3 goal = u * sv.asDiagonal() * v.transpose();
+    const double k_e = config_.goal_stiffness * s_mass_[s] * volume;
+    double energy = 0.0;
+    for (size_t k = 0; k < nn; ++k) {
+      if (!sc.assignment.assigned[k]) continue;
+      const Vec3 delta = goal * lattice_.point(sc.assignment.indices[k]) - sc.offsets[k];
+      const Vec3 f = (0.5 * k_e * sc.weights[k]) * delta;
+      energy += 0.5 * k_e * sc.weights[k] * delta.squaredNorm();
+      out.push_back({solid_[sc.neighbors[k]], f});
+      centre_force -= f;
+    }
+    energy_[s] = energy;
+  }
+  out[0].force = centre_force;
+
+  // Angular momentum (8.32)-(8.33): the torque of the neighbourhood's forces about the weighted centre c_i
+  // is removed by forces w_k omega x (x_k - c_i), which sum to zero; omega solves I omega = -tau with the
+  // weighted inertia tensor I, so the correction is exact (8.33 spreads tau with weights W/|x - c|).
+  const double w_centre = kernels_.poly6(0.0);
+  double w_sum = w_centre;
+  Vec3 c = Vec3::Zero();  // relative to x_i
+  size_t e = 1;
+  for (size_t k = 0; k < nn; ++k) {
+    if (!sc.assignment.assigned[k]) continue;
+    w_sum += sc.weights[k];
+    c += sc.weights[k] * sc.offsets[k];
+  }
+  c /= w_sum;
+  Vec3 torque = (-c).cross(out[0].force);
+  Mat3 inertia = w_centre * (c.squaredNorm() * Mat3::Identity() - c * c.transpose());
+  for (size_t k = 0; k < nn; ++k) {
+    if (!sc.assignment.assigned[k]) continue;
+    const Vec3 p = sc.offsets[k] - c;
+    torque += p.cross(out[e++].force);
+    inertia += sc.weights[k] * (p.squaredNorm() * Mat3::Identity() - p * p.transpose());
+  }
+  if (dim == 2) {
+    torque.x() = torque.y() = 0.0;  // in-plane forces
+    inertia(2, 2) = std::max(inertia(2, 2), std::numeric_limits<double>::min());
+    inertia.topLeftCorner<2, 2>().setIdentity();
+    inertia(0, 2) = inertia(1, 2) = inertia(2, 0) = inertia(2, 1) = 0.0;
+  }
+  const Vec3 omega = -inertia.inverse() * torque;
+  if (!omega.allFinite()) return;
+  out[0].force += w_centre * omega.cross(-c);
+  e = 1;
+  for (size_t k = 0; k < nn; ++k) {
+    if (!sc.assignment.assigned[k]) continue;
+    out[e++].force += sc.weights[k] * omega.cross(sc.offsets[k] - c);
+  }
+}
+
+void SphElasticSolid::computeForces(const SphParticles& particles, std::vector<Vec3>& forces) {
+  forces.assign(particles.size(), Vec3::Zero());
+  addForces(particles, particles.velocities, forces);
+}
+
+void SphElasticSolid::addForces(const SphParticles& particles, const std::vector<Vec3>& /*velocities*/,
+                                std::vector<Vec3>& forces) {
+  if (forces.size() != particles.size())
+    throw std::invalid_argument("SphElasticSolid::addForces: forces must have one entry per particle");
+  if (particles.phases.size() != particles.size() || particles.kinds.size() != particles.size())
+    throw std::invalid_argument("SphElasticSolid::addForces: particle arrays differ in size");
+  prepare(particles);
+  const long m = static_cast<long>(solid_.size());
+  const int threads = static_cast<int>(std::max<long>(1, std::min<long>(omp_get_max_threads(), m / 256)));
+#pragma omp parallel num_threads(threads)
+  {
+    Scratch scratch;
+#pragma omp for schedule(static)
+    for (long s = 0; s < m; ++s) processNeighborhood(static_cast<size_t>(s), scratch);
+  }
+  // Serial scatter in a fixed order: results do not depend on the thread count.
+  SphElasticStats st;
+  st.solid_particles = solid_.size();
+  for (size_t s = 0; s < solid_.size(); ++s) {
+    unassigned_count_[solid_[s]] = 0;
+  }
+  for (size_t s = 0; s < solid_.size(); ++s) {
+    for (const Contribution& c : contributions_[s]) {
+      forces[c.particle] += c.force;
+      st.net_force += c.force;
+      st.net_torque += particles.positions[c.particle].cross(c.force);
+    }
+    for (uint32_t j : lost_[s]) ++unassigned_count_[j];
+    st.matched_neighborhoods += matched_[s];
+    st.skipped_neighborhoods += 1 - matched_[s];
+    st.assigned_pairs += assigned_[s];
+    st.unassigned_pairs += unassigned_[s];
+    st.energy += energy_[s];
+    st.max_strain = std::max(st.max_strain, max_strain_[s]);
+    if (!matched_[s]) strain_[solid_[s]].setZero();
+  }
+  stats_ = st;
+}
+
+double SphElasticSolid::stableTimeStep(const SphParticles& particles, double cfl) const {
+  if (config_.model == SphElasticModel::kGoalPosition) return cfl * std::sqrt(2.0 / config_.goal_stiffness);
+  double min_mass = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < particles.size(); ++i)
+    if (particles.phases[i] == phase_ && particles.kinds[i] == SphParticleKind::kFluid)
+      min_mass = std::min(min_mass, particles.masses[i]);
+  if (!std::isfinite(min_mass)) return std::numeric_limits<double>::infinity();
+  // Verlet is stable for omega dt < 2; omega_max^2 <= strain_omega2_mass_ / m.
+  return cfl * 2.0 / std::sqrt(strain_omega2_mass_ / min_mass);
+}
+
+}  // namespace rc

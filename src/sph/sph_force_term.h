@@ -1,0 +1,27 @@
+// Extra force terms of the SPH solver, e.g. the elastic forces of solid particles (thesis 8.2).
+#pragma once
+
+#include <vector>
+
+#include "core/surfel_cloud.h"
+#include "sph/sph_particles.h"
+
+namespace rc {
+
+/// A force term that SphFluidSolver adds to its integrated (kFluid kind) particles at every force
+/// evaluation, after density, pressure and viscosity. Forces on boundary particles are ignored.
+class SphForceTerm {
+ public:
+  virtual ~SphForceTerm() = default;
+  /// Adds the term's forces (mass * acceleration) at the particles' current positions and the given
+  /// velocities to `forces` (original particle order, size particles.size()). May update internal state
+  /// that persists between evaluations.
+  virtual void addForces(const SphParticles& particles, const std::vector<Vec3>& velocities,
+                         std::vector<Vec3>& forces) = 0;
+  /// Largest stable time step of the term, already scaled by `cfl` (infinity when the term does not limit).
+  virtual double stableTimeStep(const SphParticles& particles, double cfl) const = 0;
+  /// Potential energy stored by the term at the last evaluation (enters the solver's instability check).
+  virtual double potentialEnergy() const = 0;
+};
+
+}  // namespace rc

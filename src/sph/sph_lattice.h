@@ -1,0 +1,83 @@
+// Closest-sphere-packing lattices for sampling elastic solids (thesis 8.2.1): cubic closest packed (fcc)
+// in 3D (8.20), hexagonal in 2D.
+#pragma once
+
+#include <functional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/surfel_cloud.h"
+#include "core/triangle_mesh.h"
+#include "sph/sph_kernels.h"
+
+namespace rc {
+
+/// The lattice L of (8.20) around the origin with spacing d: points B n for integer n, where the columns of B
+/// are d e1, d (e1/2 + sqrt(3/4) e2), d (e1/2 + sqrt(1/12) e2 + sqrt(2/3) e3). In 2D only the first two
+/// columns are used (n.z = 0, the hexagonal lattice in the x-y plane). Every point has 12 (2D: 6) nearest
+/// neighbours at distance d.
+class SphLattice {
+ public:
+  /// Throws std::invalid_argument unless dimension is 2 or 3 and spacing is finite and > 0.
+  SphLattice(int dimension, double spacing);
+
+  int dimension() const { return dimension_; }
+  double spacing() const { return spacing_; }
+  /// B (columns are the lattice vectors; in 2D the third column is d e3 and unused).
+  const Eigen::Matrix3d& basis() const { return basis_; }
+  /// B n (n.z ignored in 2D).
+  Vec3 point(const Eigen::Vector3i& index) const;
+  /// Index of the lattice point nearest to q (Babai rounding refined over the 27 (2D: 9) neighbouring
+  /// indices; exact for this reduced basis). z of q is ignored in 2D.
+  Eigen::Vector3i nearestIndex(const Vec3& q) const;
+  /// Volume (area in 2D) per lattice point: d^3 / sqrt(2) (2D: sqrt(3)/2 d^2).
+  double cellVolume() const;
+  /// Particle mass that gives a lattice point with full kernel support the rest density under the poly6
+  /// density sum (8.4), self included. Throws std::invalid_argument for a bad rest density or a kernel of
+  /// another dimension.
+  double particleMass(const SphKernels& kernels, double rest_density) const;
+
+ private:
+  int dimension_;
+  double spacing_;
+  Eigen::Matrix3d basis_, inverse_basis_;
+};
+
+/// Placement of a lattice in the world: x = origin + orientation * B n (orientation a rotation; in 2D a
+/// rotation about z).
+struct SphLatticeFrame {
+  Eigen::Matrix3d orientation = Eigen::Matrix3d::Identity();
+  Vec3 origin = Vec3::Zero();
+};
+
+/// World positions of the lattice points inside the box [lo, hi] (bounds of the search) for which
+/// `inside` holds, in increasing (k, j, i) order. Throws std::invalid_argument for an empty or non-finite
+/// box, a frame that is not a rotation (or not about z in 2D), or more than 50 million candidates.
+std::vector<Vec3> sampleLattice(const SphLattice& lattice, const SphLatticeFrame& frame, const Vec3& lo,
+                                const Vec3& hi, const std::function<bool(const Vec3&)>& inside);
+
+/// Lattice points in the closed box [lo, hi] (2D: z ignored). Default frame: origin at lo, axis aligned.
+std::vector<Vec3> sampleLatticeBox(const SphLattice& lattice, const Vec3& lo, const Vec3& hi);
+std::vector<Vec3> sampleLatticeBox(const SphLattice& lattice, const Vec3& lo, const Vec3& hi,
+                                   const SphLatticeFrame& frame);
+
+/// Lattice points in the closed ball (2D: disc) of `radius` around `center`. Default frame: origin at the
+/// centre. Throws std::invalid_argument for a radius not finite and > 0.
+std::vector<Vec3> sampleLatticeSphere(const SphLattice& lattice, const Vec3& center, double radius);
+std::vector<Vec3> sampleLatticeSphere(const SphLattice& lattice, const Vec3& center, double radius,
+                                      const SphLatticeFrame& frame);
+
+/// Generalised winding number of a closed triangle mesh at p (1 inside, 0 outside; solid angles by van
+/// Oosterom & Strackee).
+double meshWindingNumber(const TriangleMesh& mesh, const Vec3& p);
+
+/// Lattice points inside a closed, consistently oriented triangle mesh (|winding number| > 1/2), 3D only.
+/// Default frame: origin at the minimum corner of the mesh bounds. Throws std::invalid_argument for a 2D
+/// lattice, an empty mesh, a vertex index out of range, a non-finite vertex, or a mesh that is not closed
+/// (an edge not shared by exactly one oppositely oriented triangle).
+std::vector<Vec3> sampleLatticeMesh(const SphLattice& lattice, const TriangleMesh& mesh);
+std::vector<Vec3> sampleLatticeMesh(const SphLattice& lattice, const TriangleMesh& mesh,
+                                    const SphLatticeFrame& frame);
+
+}  // namespace rc
