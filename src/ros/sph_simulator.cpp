@@ -1,0 +1,226 @@
+#include "ros/sph_simulator.h"
+
+#include <relaxed_connectivity/SphStats.h>
+#include <visualization_msgs/Marker.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+
+#include "ros/point_cloud2_converter.h"
+#include "sph/sph_output.h"
+#include "sph/sph_scene_run.h"
+#include "sph/sph_surface.h"
+
+namespace rc {
+
+void SphSimulatorParams::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("sph_sim: " + what); };
+  if (frame_id.empty() || frame_id[0] == '/')
+    fail("frame_id '" + frame_id + "' must be non-empty without '/'");
+  if (!(rate > 0) || !std::isfinite(rate)) fail("rate must be > 0 Hz (got " + std::to_string(rate) + ")");
+  if (!(real_time_factor > 0) || !std::isfinite(real_time_factor))
+    fail("real_time_factor must be > 0 (got " + std::to_string(real_time_factor) + ")");
+  if (!(surface_cell_size >= 0) || !std::isfinite(surface_cell_size))
+    fail("surface_cell_size must be >= 0 (got " + std::to_string(surface_cell_size) + ")");
+  if (threads < 0) fail("threads must be >= 0");
+}
+
+SphSimulatorParams readSphSimulatorParams(const ros::NodeHandle& pnh) {
+  SphSimulatorParams p;
+  pnh.param("scene", p.scene, p.scene);
+  pnh.param("frame_id", p.frame_id, p.frame_id);
+  pnh.param("rate", p.rate, p.rate);
+  pnh.param("autostart", p.autostart, p.autostart);
+  pnh.param("real_time_factor", p.real_time_factor, p.real_time_factor);
+  pnh.param("surface", p.surface, p.surface);
+  pnh.param("surface_cell_size", p.surface_cell_size, p.surface_cell_size);
+  pnh.param("threads", p.threads, p.threads);
+  p.validate();
+  return p;
+}
+
+SphSimulator::SphSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : nh_(nh), private_nh_(private_nh), params_(readSphSimulatorParams(private_nh)) {
+  particles_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("particles", 1);
+  surface_pub_ = private_nh_.advertise<visualization_msgs::Marker>("surface", 1);
+  stats_pub_ = private_nh_.advertise<relaxed_connectivity::SphStats>("stats", 1);
+  if (!params_.scene.empty()) {
+    std::string message;
+    if (!load(params_.scene, params_.autostart, &message)) throw std::invalid_argument(message);
+  }
+  command_srv_ = private_nh_.advertiseService("command", &SphSimulator::commandCallback, this);
+  load_srv_ = private_nh_.advertiseService("load_scene", &SphSimulator::loadCallback, this);
+  timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &SphSimulator::timerCallback, this);
+}
+
+bool SphSimulator::load(const std::string& path, bool start, std::string* message) {
+  try {
+    auto scene = std::make_unique<SphScene>(loadSphScene(path));
+    if (params_.threads > 0) scene->config.num_threads = params_.threads;
+    scene->config.throw_on_instability = false;  // reported in the stats, the simulation pauses
+    auto solver = std::make_unique<SphFluidSolver>(makeSphSolver(*scene));
+    std::lock_guard<std::mutex> lock(mutex_);
+    scene_ = std::move(scene);
+    solver_ = std::move(solver);
+    running_ = start;
+    instability_.clear();
+    step_ms_ = 0.0;
+    *message = "loaded " + path + ": " + std::to_string(scene_->particles.size()) + " particles";
+    ROS_INFO_STREAM("sph_sim: " << *message);
+  } catch (const std::exception& e) {
+    *message = e.what();
+    ROS_ERROR_STREAM("sph_sim: cannot load " << path << ": " << e.what());
+    return false;
+  }
+  publish();
+  return true;
+}
+
+void SphSimulator::advance(double duration, uint64_t steps) {
+  const double end = solver_->time() + duration;
+  uint64_t done = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (done < steps && solver_->time() < end) {
+    const SphStepStats& stats = solver_->step();
+    ++done;
+    if (stats.unstable) {
+      instability_ = stats.instability;
+      running_ = false;
+      ROS_ERROR_STREAM("sph_sim: " << instability_ << " (paused; call ~command reset)");
+      break;
+    }
+  }
+  if (done > 0)
+    step_ms_ =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / done;
+}
+
+void SphSimulator::timerCallback(const ros::WallTimerEvent&) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!solver_ || !running_) return;
+    advance(params_.real_time_factor / params_.rate, std::numeric_limits<uint64_t>::max());
+  }
+  publish();
+}
+
+void SphSimulator::publish() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!solver_) return;
+  const ros::Time stamp = ros::Time::now();
+  const SphParticles& particles = solver_->particles();
+  if (particles_pub_.getNumSubscribers() > 0) {
+    SurfelCloud cloud = sphParticlesToCloud(particles);
+    cloud.frame_id = params_.frame_id;
+    cloud.stamp_ns = stamp.toNSec();
+    particles_pub_.publish(PointCloud2Converter::toMessage(cloud, PointCloud2Layout::kCompact));
+  }
+  if (params_.surface && surface_pub_.getNumSubscribers() > 0) {
+    SphSurfaceConfig surface;
+    surface.smoothing_length = solver_->config().smoothing_length;
+    surface.cell_size = params_.surface_cell_size;
+    surface.rest_density = solver_->config().rest_density;
+    const TriangleMesh mesh = extractSphSurface(particles, surface);
+    visualization_msgs::Marker marker;
+    marker.header.frame_id = params_.frame_id;
+    marker.header.stamp = stamp;
+    marker.ns = "sph_surface";
+    marker.type = visualization_msgs::Marker::TRIANGLE_LIST;
+    marker.action = visualization_msgs::Marker::ADD;
+    marker.pose.orientation.w = 1.0;
+    marker.scale.x = marker.scale.y = marker.scale.z = 1.0;
+    marker.color.r = 0.25f;
+    marker.color.g = 0.5f;
+    marker.color.b = 0.95f;
+    marker.color.a = 0.8f;
+    marker.points.reserve(mesh.triangles.size() * 3);
+    for (const auto& triangle : mesh.triangles)
+      for (int k = 0; k < 3; ++k) {
+        geometry_msgs::Point point;
+        const Vec3& vertex = mesh.vertices.positions[triangle[k]];
+        point.x = vertex.x();
+        point.y = vertex.y();
+        point.z = vertex.z();
+        marker.points.push_back(point);
+      }
+    surface_pub_.publish(marker);
+  }
+  relaxed_connectivity::SphStats stats;
+  stats.header.frame_id = params_.frame_id;
+  stats.header.stamp = stamp;
+  stats.scene = scene_->name;
+  stats.running = running_;
+  stats.step = solver_->stepCount();
+  stats.time = solver_->time();
+  const SphStepStats& last = solver_->lastStats();
+  stats.dt = last.dt;
+  stats.dt_limit = toString(last.limit);
+  stats.particles = uint32_t(particles.size());
+  stats.fluid_particles = uint32_t(particles.count(SphParticleKind::kFluid));
+  stats.max_speed = last.max_speed;
+  stats.max_density_error = last.max_density_error;
+  stats.kinetic_energy = last.kinetic_energy;
+  stats.step_ms = step_ms_;
+  stats.instability = instability_;
+  stats_pub_.publish(stats);
+}
+
+bool SphSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& request,
+                                   relaxed_connectivity::SphCommand::Response& response) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!solver_) {
+      response.success = false;
+      response.message = "no scene loaded (call ~load_scene)";
+      return true;
+    }
+    response.success = true;
+    if (request.command == "start") {
+      if (!instability_.empty()) {
+        response.success = false;
+        response.message = "unstable at step " + std::to_string(solver_->stepCount()) + ": reset first";
+      } else {
+        running_ = true;
+        response.message = "running";
+      }
+    } else if (request.command == "pause") {
+      running_ = false;
+      response.message = "paused at t = " + std::to_string(solver_->time()) + " s";
+    } else if (request.command == "step") {
+      running_ = false;
+      if (!instability_.empty()) {
+        response.success = false;
+        response.message = "unstable: reset first";
+      } else {
+        const uint64_t steps = std::max<uint32_t>(1, request.steps);
+        advance(std::numeric_limits<double>::infinity(), steps);
+        response.message = "step " + std::to_string(solver_->stepCount()) +
+                           ", t = " + std::to_string(solver_->time()) + " s" +
+                           (instability_.empty() ? "" : " (" + instability_ + ")");
+      }
+    } else if (request.command == "reset") {
+      solver_ = std::make_unique<SphFluidSolver>(makeSphSolver(*scene_));
+      running_ = false;
+      instability_.clear();
+      response.message = "reset to t = 0";
+    } else {
+      response.success = false;
+      response.message = "unknown command '" + request.command + "' (start, pause, step, reset)";
+    }
+  }
+  publish();
+  return true;
+}
+
+bool SphSimulator::loadCallback(relaxed_connectivity::LoadSphScene::Request& request,
+                                relaxed_connectivity::LoadSphScene::Response& response) {
+  response.success = load(request.path, request.start, &response.message);
+  std::lock_guard<std::mutex> lock(mutex_);
+  response.particles = solver_ ? uint32_t(solver_->particles().size()) : 0;
+  return true;
+}
+
+}  // namespace rc

@@ -1,0 +1,77 @@
+// The sph_sim node (thesis 8): runs an SPH scene file (sph/sph_scene_file.h, config/sph/*.yaml) in real time
+// and publishes the particles for rviz; start, pause, single steps, reset and scene loading by service.
+//
+// Publishes   ~particles (sensor_msgs/PointCloud2: x y z, velocity[3], density, pressure (float32), kind
+//             (uint8: 0 fluid, 1 static boundary, 2 moving boundary)), ~surface (visualization_msgs/Marker,
+//             TRIANGLE_LIST of the fluid surface, 8.2.7; only with ~surface true), ~stats
+//             (relaxed_connectivity/SphStats), all in frame_id
+// Services    ~command (relaxed_connectivity/SphCommand: start | pause | step N | reset),
+//             ~load_scene (relaxed_connectivity/LoadSphScene; a bad file is reported and changes nothing)
+// Parameters  (private) scene (file; empty: wait for ~load_scene), frame_id, rate (frames per second),
+//             autostart, real_time_factor (simulated seconds per wall second), surface, surface_cell_size
+//             (0: h / 2), threads; see config/sph_demo.yaml.
+#pragma once
+
+#include <relaxed_connectivity/LoadSphScene.h>
+#include <relaxed_connectivity/SphCommand.h>
+#include <ros/ros.h>
+
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "sph/sph_fluid_solver.h"
+#include "sph/sph_scene_file.h"
+
+namespace rc {
+
+struct SphSimulatorParams {
+  std::string scene;
+  std::string frame_id = "world";
+  double rate = 30.0;              ///< published frames per second
+  bool autostart = true;           ///< run after loading (else paused at t = 0)
+  double real_time_factor = 1.0;   ///< simulated seconds per wall-clock second while running
+  bool surface = false;            ///< publish the fluid surface mesh
+  double surface_cell_size = 0.0;  ///< marching cubes cell [m]; 0: h / 2
+  int threads = 0;                 ///< solver threads, 0: all
+
+  /// Throws std::invalid_argument naming the parameter and the bad value.
+  void validate() const;
+};
+
+SphSimulatorParams readSphSimulatorParams(const ros::NodeHandle& private_nh);
+
+class SphSimulator {
+ public:
+  /// Reads the parameters and loads ~scene if given (throws std::invalid_argument / SphSceneError).
+  SphSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh);
+
+  /// Loads a scene; on failure returns false with the error in *message and keeps the current state.
+  bool load(const std::string& path, bool start, std::string* message);
+  bool running() const { return running_; }
+
+ private:
+  void timerCallback(const ros::WallTimerEvent&);
+  /// Advances by up to `steps` steps or `duration` simulated seconds (whichever ends first); pauses and
+  /// reports an instability.
+  void advance(double duration, uint64_t steps);
+  void publish();
+  bool commandCallback(relaxed_connectivity::SphCommand::Request& request,
+                       relaxed_connectivity::SphCommand::Response& response);
+  bool loadCallback(relaxed_connectivity::LoadSphScene::Request& request,
+                    relaxed_connectivity::LoadSphScene::Response& response);
+
+  ros::NodeHandle nh_, private_nh_;
+  SphSimulatorParams params_;
+  std::mutex mutex_;  // scene/solver against service calls
+  std::unique_ptr<SphScene> scene_;
+  std::unique_ptr<SphFluidSolver> solver_;
+  bool running_ = false;
+  std::string instability_;
+  double step_ms_ = 0.0;
+  ros::Publisher particles_pub_, surface_pub_, stats_pub_;
+  ros::ServiceServer command_srv_, load_srv_;
+  ros::WallTimer timer_;
+};
+
+}  // namespace rc

@@ -1,0 +1,211 @@
+// launch/sph_demo.launch (gui:=false, 2D dam break): sph_sim publishes the scene's particles with their
+// fields and a closed fluid surface, runs, pauses, steps exactly, resets to t = 0, rejects a bad scene file
+// while it keeps its scene, and loads another scene; the rviz config shows topics the node publishes.
+#include <gtest/gtest.h>
+#include <relaxed_connectivity/LoadSphScene.h>
+#include <relaxed_connectivity/SphCommand.h>
+#include <relaxed_connectivity/SphStats.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <visualization_msgs/Marker.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <fstream>
+#include <mutex>
+#include <set>
+#include <string>
+
+#include "sph/sph_scene_file.h"
+
+namespace {
+
+using relaxed_connectivity::LoadSphScene;
+using relaxed_connectivity::SphCommand;
+using relaxed_connectivity::SphStats;
+
+struct Inbox {
+  std::mutex mutex;
+  sensor_msgs::PointCloud2ConstPtr particles;
+  visualization_msgs::MarkerConstPtr surface;
+  std::vector<SphStats> stats;
+
+  SphStats lastStats() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return stats.empty() ? SphStats() : stats.back();
+  }
+};
+
+/// Spins until `done` or the timeout.
+template <class Done>
+bool waitFor(Done&& done, double seconds) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (ros::ok() && ros::WallTime::now() < end) {
+    ros::spinOnce();
+    if (done()) return true;
+    ros::WallDuration(0.01).sleep();
+  }
+  return false;
+}
+
+/// The first stats message (received from now on, or already the last one) that satisfies `accept`; an
+/// empty message if none arrives within 10 s.
+template <class Accept>
+SphStats waitForStats(Inbox& inbox, Accept&& accept) {
+  SphStats found;
+  waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(inbox.mutex);
+        for (const SphStats& stats : inbox.stats)
+          if (accept(stats)) {
+            found = stats;
+            return true;
+          }
+        inbox.stats.clear();
+        return false;
+      },
+      10.0);
+  return found;
+}
+
+TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
+  const std::string dir = std::string(RC_SOURCE_DIR) + "/config/sph/";
+  const rc::SphScene scene = rc::loadSphScene(dir + "dam_break_2d.yaml");
+  ros::NodeHandle nh;
+  Inbox inbox;
+  auto particles_sub = nh.subscribe<sensor_msgs::PointCloud2>("sph_sim/particles", 2,
+                                                              [&](const sensor_msgs::PointCloud2ConstPtr& m) {
+                                                                std::lock_guard<std::mutex> lock(inbox.mutex);
+                                                                inbox.particles = m;
+                                                              });
+  auto surface_sub = nh.subscribe<visualization_msgs::Marker>(
+      "sph_sim/surface", 2, [&](const visualization_msgs::MarkerConstPtr& m) {
+        std::lock_guard<std::mutex> lock(inbox.mutex);
+        inbox.surface = m;
+      });
+  auto stats_sub =
+      nh.subscribe<SphStats>("sph_sim/stats", 100, [&](const relaxed_connectivity::SphStatsConstPtr& m) {
+        std::lock_guard<std::mutex> lock(inbox.mutex);
+        inbox.stats.push_back(*m);
+      });
+
+  // Particles with the scene's count and fields, a surface, and a running simulation.
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(inbox.mutex);
+        return inbox.particles && inbox.surface && inbox.stats.size() > 3;
+      },
+      60.0));
+  {
+    std::lock_guard<std::mutex> lock(inbox.mutex);
+    EXPECT_EQ(inbox.particles->width * inbox.particles->height, scene.particles.size());
+    EXPECT_EQ(inbox.particles->header.frame_id, "world");
+    std::set<std::string> fields;
+    for (const auto& field : inbox.particles->fields) fields.insert(field.name);
+    for (const char* name : {"x", "y", "z", "velocity", "density", "pressure", "kind"})
+      EXPECT_EQ(fields.count(name), 1u) << name;
+    EXPECT_EQ(inbox.surface->type, visualization_msgs::Marker::TRIANGLE_LIST);
+    EXPECT_GT(inbox.surface->points.size(), 30u);
+    EXPECT_EQ(inbox.surface->points.size() % 3, 0u);
+  }
+  EXPECT_TRUE(inbox.lastStats().running);
+  EXPECT_GT(inbox.lastStats().time, 0.0);
+
+  ros::ServiceClient command = nh.serviceClient<SphCommand>("sph_sim/command");
+  ros::ServiceClient load = nh.serviceClient<LoadSphScene>("sph_sim/load_scene");
+  ASSERT_TRUE(command.waitForExistence(ros::Duration(10)));
+  ASSERT_TRUE(load.waitForExistence(ros::Duration(10)));
+
+  // Pause, then exactly 5 steps.
+  SphCommand pause;
+  pause.request.command = "pause";
+  ASSERT_TRUE(command.call(pause));
+  EXPECT_TRUE(pause.response.success) << pause.response.message;
+  const SphStats paused = waitForStats(inbox, [](const SphStats& m) { return !m.running; });
+  EXPECT_FALSE(paused.running);
+  EXPECT_EQ(paused.scene, "dam_break_2d");
+  SphCommand step;
+  step.request.command = "step";
+  step.request.steps = 5;
+  ASSERT_TRUE(command.call(step));
+  EXPECT_TRUE(step.response.success) << step.response.message;
+  const SphStats stepped = waitForStats(inbox, [&](const SphStats& m) { return m.step != paused.step; });
+  EXPECT_EQ(stepped.step, paused.step + 5);
+  EXPECT_GT(stepped.time, paused.time);
+  EXPECT_GT(stepped.dt, 0.0);
+  EXPECT_FALSE(stepped.dt_limit.empty());
+  EXPECT_TRUE(stepped.instability.empty()) << stepped.instability;
+
+  // Reset to t = 0; unknown commands are refused.
+  SphCommand reset;
+  reset.request.command = "reset";
+  ASSERT_TRUE(command.call(reset));
+  EXPECT_TRUE(reset.response.success);
+  const SphStats after_reset = waitForStats(inbox, [](const SphStats& m) { return m.step == 0; });
+  EXPECT_EQ(after_reset.step, 0u);
+  EXPECT_EQ(after_reset.time, 0.0);
+  SphCommand unknown;
+  unknown.request.command = "fly";
+  ASSERT_TRUE(command.call(unknown));
+  EXPECT_FALSE(unknown.response.success);
+  EXPECT_NE(unknown.response.message.find("fly"), std::string::npos);
+
+  // A bad scene file is reported with its line and the node keeps its scene.
+  const std::string bad = "/tmp/sph_demo_launch_bad.yaml";
+  {
+    std::ofstream out(bad);
+    out << "dimension: 2\nspacing: -1\n";
+  }
+  LoadSphScene load_bad;
+  load_bad.request.path = bad;
+  ASSERT_TRUE(load.call(load_bad));
+  EXPECT_FALSE(load_bad.response.success);
+  EXPECT_NE(load_bad.response.message.find("sph_demo_launch_bad.yaml:"), std::string::npos)
+      << load_bad.response.message;
+  EXPECT_EQ(load_bad.response.particles, scene.particles.size());
+  std::remove(bad.c_str());
+
+  // Another scene: the particle count follows.
+  const rc::SphScene tank = rc::loadSphScene(dir + "hydrostatic_tank_2d.yaml");
+  LoadSphScene load_tank;
+  load_tank.request.path = dir + "hydrostatic_tank_2d.yaml";
+  load_tank.request.start = false;
+  ASSERT_TRUE(load.call(load_tank));
+  EXPECT_TRUE(load_tank.response.success) << load_tank.response.message;
+  EXPECT_EQ(load_tank.response.particles, tank.particles.size());
+  const SphStats loaded = waitForStats(inbox, [](const SphStats& m) { return m.scene != "dam_break_2d"; });
+  EXPECT_EQ(loaded.particles, tank.particles.size());
+  EXPECT_FALSE(loaded.running);
+}
+
+// config/rviz/sph_demo.rviz shows topics that sph_sim publishes.
+TEST(SphDemoLaunch, RvizConfigShowsPublishedTopics) {
+  const YAML::Node rviz = YAML::LoadFile(std::string(RC_SOURCE_DIR) + "/config/rviz/sph_demo.rviz");
+  const YAML::Node manager = rviz["Visualization Manager"];
+  ASSERT_TRUE(manager.IsMap());
+  EXPECT_EQ(manager["Global Options"]["Fixed Frame"].as<std::string>(), "world");
+  ros::master::V_TopicInfo topics;
+  ASSERT_TRUE(waitFor([&] { return ros::master::getTopics(topics) && topics.size() > 2; }, 10.0));
+  int shown = 0;
+  for (const auto& display : manager["Displays"]) {
+    const std::string type = display["Class"].as<std::string>();
+    std::string topic;
+    if (type == "rviz/PointCloud2") topic = display["Topic"].as<std::string>();
+    if (type == "rviz/Marker") topic = display["Marker Topic"].as<std::string>();
+    if (topic.empty()) continue;
+    ++shown;
+    const bool published = std::any_of(topics.begin(), topics.end(),
+                                       [&](const ros::master::TopicInfo& t) { return t.name == topic; });
+    EXPECT_TRUE(published) << "rviz shows " << topic << ", which nobody publishes";
+  }
+  EXPECT_EQ(shown, 2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "sph_demo_launch_test");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}
