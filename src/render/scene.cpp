@@ -1,4 +1,5 @@
 #include "render/scene.h"
+#include "io/yaml_reader.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -19,58 +20,18 @@ constexpr double kDegree = M_PI / 180.0;
 /// Surfels within this many radii of a texture square's border belong to both colour patches.
 constexpr double kTextureOverlapRadii = 0.9;
 
-/// Error context: the source name for "<file>:<line>:<column>: <problem>".
-struct Source {
-  std::string name;
+[[noreturn]] void raiseSceneError(const std::string& message) {
+  throw std::runtime_error(message);
+}
 
-  [[noreturn]] void fail(const YAML::Node& node, const std::string& problem) const {
-    std::ostringstream s;
-    s << name;
-    if (node.IsDefined() && node.Mark().line >= 0)
-      s << ":" << node.Mark().line + 1 << ":" << node.Mark().column + 1;
-    s << ": " << problem;
-    throw std::runtime_error(s.str());
-  }
-
-  YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& where) const {
-    const YAML::Node value = map[key];
-    if (!value) fail(map, where + ": missing '" + key + "'");
-    return value;
-  }
-
-  void allowKeys(const YAML::Node& map, const std::set<std::string>& keys, const std::string& where) const {
-    if (!map.IsMap()) fail(map, where + ": expected a map");
-    for (const auto& kv : map) {
-      const std::string key = kv.first.as<std::string>();
-      if (!keys.count(key)) fail(kv.first, where + ": unknown key '" + key + "'");
-    }
-  }
-
-  double number(const YAML::Node& node, const std::string& what) const {
-    try {
-      const double v = node.as<double>();
-      if (!std::isfinite(v)) fail(node, what + ": not a finite number");
-      return v;
-    } catch (const YAML::Exception&) {
-      fail(node, what + ": expected a number");
-    }
-  }
-
-  double positive(const YAML::Node& node, const std::string& what) const {
-    const double v = number(node, what);
-    if (!(v > 0)) fail(node, what + " must be positive");
-    return v;
-  }
+/// Error context: the source name for "<file>:<line>:<column>: <problem>" and the scene's value types.
+struct Source : YamlReader {
+  explicit Source(std::string name) : YamlReader(std::move(name), &raiseSceneError) {}
 
   size_t count(const YAML::Node& node, const std::string& what) const {
     const double v = number(node, what);
     if (!(v >= 1) || v != std::floor(v) || v > 1e9) fail(node, what + " must be a positive integer");
     return size_t(v);
-  }
-
-  Vec3 vec3(const YAML::Node& node, const std::string& what) const {
-    if (!node.IsSequence() || node.size() != 3) fail(node, what + ": expected [x, y, z]");
-    return Vec3(number(node[0], what), number(node[1], what), number(node[2], what));
   }
 
   Vec3 direction(const YAML::Node& node, const std::string& what) const {
@@ -89,11 +50,6 @@ struct Source {
       c[k] = uint8_t(std::lround(v));
     }
     return c;
-  }
-
-  std::string string(const YAML::Node& node, const std::string& what) const {
-    if (!node.IsScalar()) fail(node, what + ": expected a string");
-    return node.as<std::string>();
   }
 
   Eigen::Matrix3d rotation(const YAML::Node& node, const std::string& what) const {

@@ -1,4 +1,5 @@
 #include "sph/sph_scene_file.h"
+#include "io/yaml_reader.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -20,87 +21,13 @@ namespace {
 /// More particles than this in one scene is taken as a typo in a spacing.
 constexpr double kMaxParticles = 2e8;
 
-/// Error context: "<file>:<line>:<column>: <problem>" (the style of src/render/scene.cpp).
-struct Source {
-  std::string name;
+[[noreturn]] void raiseSphSceneError(const std::string& message) {
+  throw SphSceneError(message);
+}
 
-  [[noreturn]] void fail(const YAML::Node& node, const std::string& problem) const {
-    std::ostringstream s;
-    s << name;
-    if (node.IsDefined() && node.Mark().line >= 0)
-      s << ":" << node.Mark().line + 1 << ":" << node.Mark().column + 1;
-    s << ": " << problem;
-    throw SphSceneError(s.str());
-  }
-
-  YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& where) const {
-    const YAML::Node value = map[key];
-    if (!value) fail(map, where + ": missing '" + key + "'");
-    return value;
-  }
-
-  void allowKeys(const YAML::Node& map, const std::set<std::string>& keys, const std::string& where) const {
-    if (!map.IsMap()) fail(map, where + ": expected a map");
-    for (const auto& kv : map) {
-      const std::string key = kv.first.as<std::string>();
-      if (!keys.count(key)) {
-        std::string known;
-        for (const std::string& k : keys) known += (known.empty() ? "" : ", ") + k;
-        fail(kv.first, where + ": unknown key '" + key + "' (known: " + known + ")");
-      }
-    }
-  }
-
-  double number(const YAML::Node& node, const std::string& what) const {
-    if (!node.IsScalar()) fail(node, what + ": expected a number");
-    try {
-      const double v = node.as<double>();
-      if (!std::isfinite(v)) fail(node, what + ": not a finite number");
-      return v;
-    } catch (const YAML::Exception&) {
-      fail(node, what + ": expected a number, got '" + node.Scalar() + "'");
-    }
-  }
-
-  double positive(const YAML::Node& node, const std::string& what) const {
-    const double v = number(node, what);
-    if (!(v > 0)) fail(node, what + " must be positive, got " + node.Scalar());
-    return v;
-  }
-
-  double nonNegative(const YAML::Node& node, const std::string& what) const {
-    const double v = number(node, what);
-    if (!(v >= 0)) fail(node, what + " must be >= 0, got " + node.Scalar());
-    return v;
-  }
-
-  double unitInterval(const YAML::Node& node, const std::string& what) const {
-    const double v = number(node, what);
-    if (!(v >= 0 && v <= 1)) fail(node, what + " must lie in [0, 1], got " + node.Scalar());
-    return v;
-  }
-
-  long integer(const YAML::Node& node, const std::string& what, long lo, long hi) const {
-    const double v = number(node, what);
-    if (v != std::floor(v) || v < lo || v > hi)
-      fail(node, what + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
-                     "], got " + node.Scalar());
-    return long(v);
-  }
-
-  bool boolean(const YAML::Node& node, const std::string& what) const {
-    if (!node.IsScalar()) fail(node, what + ": expected true or false");
-    try {
-      return node.as<bool>();
-    } catch (const YAML::Exception&) {
-      fail(node, what + ": expected true or false, got '" + node.Scalar() + "'");
-    }
-  }
-
-  std::string string(const YAML::Node& node, const std::string& what) const {
-    if (!node.IsScalar()) fail(node, what + ": expected a string");
-    return node.as<std::string>();
-  }
+/// Error context ("<file>:<line>:<column>: <problem>") and the scene's value types.
+struct Source : YamlReader {
+  explicit Source(std::string name) : YamlReader(std::move(name), &raiseSphSceneError) {}
 
   /// [x, y, z]; in 2D also [x, y] (z = 0). With `planar` (velocities, directions) z must be 0 in 2D.
   Vec3 vec(const YAML::Node& node, const std::string& what, int dimension, bool planar) const {

@@ -1,0 +1,42 @@
+// Reading checked values from YAML files with errors that name the file, the line, the column and the
+// problem ("scene.yaml:12:5: spacing must be positive, got -1"), shared by the scene loaders.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <set>
+#include <string>
+
+#include "core/surfel_cloud.h"
+
+namespace rc {
+
+class YamlReader {
+ public:
+  /// Throws its argument, "<source>:<line>:<column>: <problem>" (e.g. a loader's own exception type).
+  using Raise = void (*)(const std::string& message);
+
+  YamlReader(std::string source_name, Raise raise) : name_(std::move(source_name)), raise_(raise) {}
+  const std::string& sourceName() const { return name_; }
+
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& problem) const;
+  YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& where) const;
+  /// Fails for a non-map or for a key outside `keys` (the message lists the known keys).
+  void allowKeys(const YAML::Node& map, const std::set<std::string>& keys, const std::string& where) const;
+
+  double number(const YAML::Node& node, const std::string& what) const;
+  double positive(const YAML::Node& node, const std::string& what) const;
+  double nonNegative(const YAML::Node& node, const std::string& what) const;
+  double unitInterval(const YAML::Node& node, const std::string& what) const;
+  long integer(const YAML::Node& node, const std::string& what, long lo, long hi) const;
+  bool boolean(const YAML::Node& node, const std::string& what) const;
+  std::string string(const YAML::Node& node, const std::string& what) const;
+  /// [x, y, z].
+  Vec3 vec3(const YAML::Node& node, const std::string& what) const;
+
+ private:
+  std::string name_;
+  Raise raise_;
+};
+
+}  // namespace rc
