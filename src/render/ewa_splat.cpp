@@ -87,6 +87,72 @@ Eigen::Matrix2d screenToLocal(const Eigen::Matrix2d& local_to_screen, bool edge_
          local_to_screen.transpose();
 }
 
+/// Pixel box of a splat with centre (u, v) and half extents, clamped to the image; false if empty.
+bool pixelBox(double center_u, double center_v, double half_u, double half_v, const CameraFrame& camera,
+              SplatRaster* raster) {
+  const int32_t x0 = std::max(0, ceilToPixel(center_u - half_u, camera.width));
+  const int32_t x1 = std::min(int32_t(camera.width) - 1, floorToPixel(center_u + half_u, camera.width));
+  const int32_t y0 = std::max(0, ceilToPixel(center_v - half_v, camera.height));
+  const int32_t y1 = std::min(int32_t(camera.height) - 1, floorToPixel(center_v + half_v, camera.height));
+  if (x0 > x1 || y0 > y1) return false;
+  raster->x0 = uint16_t(x0);
+  raster->x1 = uint16_t(x1);
+  raster->y0 = uint16_t(y0);
+  raster->y1 = uint16_t(y1);
+  return true;
+}
+
+/// Per-surfel fuzzy depth tolerance (3.2.1). At one pixel, overlapping surfels of the same sheet differ in
+/// depth by about their radius times their normal difference (curvature, noise), stretched along the ray by
+/// 1 / cos(view angle): eps = s * k r / max(cos, c_min). The depth span of the whole disc (r sin) is NOT a
+/// measure of that: for a large oblique surfel it would reach sheets far behind it (a cube face of one surfel
+/// would blend with the faces behind). A relative term absorbs float rounding.
+float depthTolerance(const EwaParams& params, double radius, double cos_view, double center_z) {
+  return float(params.depth_tolerance_scale * kFacingDepthTolerance * radius /
+                   std::max(cos_view, kMinToleranceCosine) +
+               1e-5 * std::abs(center_z));
+}
+
+/// Depth of the surfel plane (centre c, unit normal n, camera frame) along the pixel rays of the raster's
+/// box: perspective z = (n.c) / (n.d(u, v)) with d = ((u - cx) / fx, (v - cy) / fy, 1), i.e. 1/z affine in
+/// the pixel offset; orthographic z affine. Widens [z_lo, z_hi] to the plane depths at the box corners (the
+/// EWA-widened footprint extends beyond the disc). False if the plane is seen edge-on inside the box (the
+/// denominator changes sign): then nothing is written.
+bool planeDepth(const Vec3& c, const Vec3& n, double center_u, double center_v, const CameraFrame& camera,
+                SplatRaster* raster, double* z_lo, double* z_hi) {
+  const double x0 = raster->x0, x1 = raster->x1, y0 = raster->y0, y1 = raster->y1;
+  if (camera.perspective) {
+    const double d1 = n.x() / camera.fx, d2 = n.y() / camera.fy;
+    const double d0 = d1 * (center_u - camera.cx) + d2 * (center_v - camera.cy) + n.z();
+    const double du_lo = x0 - center_u, du_hi = x1 - center_u;
+    const double dv_lo = y0 - center_v, dv_hi = y1 - center_v;
+    const double d_min = d0 + std::min(d1 * du_lo, d1 * du_hi) + std::min(d2 * dv_lo, d2 * dv_hi);
+    const double d_max = d0 + std::max(d1 * du_lo, d1 * du_hi) + std::max(d2 * dv_lo, d2 * dv_hi);
+    if (!(d_min * d_max > 0)) return false;
+    const double numerator = n.dot(c);
+    const double z_a = numerator / d_min, z_b = numerator / d_max;
+    *z_lo = std::min({double(float(*z_lo)), z_a, z_b});
+    *z_hi = std::max({double(float(*z_hi)), z_a, z_b});
+    const double inv_d0 = 1.0 / d0;
+    raster->depth_num[0] = float(numerator * inv_d0);
+    raster->depth_num[1] = raster->depth_num[2] = 0;
+    raster->depth_den[0] = float(d1 * inv_d0);
+    raster->depth_den[1] = float(d2 * inv_d0);
+    return true;
+  }
+  const double inv = -1.0 / (camera.ortho_scale * n.z());
+  const double du_extent = std::max(x1 - center_u, center_u - x0);
+  const double dv_extent = std::max(y1 - center_v, center_v - y0);
+  const double z_extent = std::abs(n.x() * inv) * du_extent + std::abs(n.y() * inv) * dv_extent;
+  *z_lo = std::min<double>(float(*z_lo), c.z() - z_extent);
+  *z_hi = std::max<double>(float(*z_hi), c.z() + z_extent);
+  raster->depth_num[0] = float(c.z());
+  raster->depth_num[1] = float(n.x() * inv);
+  raster->depth_num[2] = float(n.y() * inv);
+  raster->depth_den[0] = raster->depth_den[1] = 0;
+  return true;
+}
+
 SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& camera, const EwaParams& params,
                              SplatRaster* raster, Eigen::Matrix2d* screen_to_local_out, double* center_u_out,
                              double* center_v_out, bool* edge_on_out) {
@@ -145,16 +211,7 @@ SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& came
   // Conic scaled so that r2 = 1 is the cut-off ellipse.
   const double conic_scale = 1.0 / (det * cutoff2);
   const Eigen::Array2d half = cutoff_sigmas * covariance.diagonal().array().sqrt();
-  const double half_u = half(0), half_v = half(1);
-  const int32_t x0 = std::max(0, ceilToPixel(center_u - half_u, camera.width));
-  const int32_t x1 = std::min(int32_t(camera.width) - 1, floorToPixel(center_u + half_u, camera.width));
-  const int32_t y0 = std::max(0, ceilToPixel(center_v - half_v, camera.height));
-  const int32_t y1 = std::min(int32_t(camera.height) - 1, floorToPixel(center_v + half_v, camera.height));
-  if (x0 > x1 || y0 > y1) return SplatSetup::kCulled;
-  raster->x0 = uint16_t(x0);
-  raster->x1 = uint16_t(x1);
-  raster->y0 = uint16_t(y0);
-  raster->y1 = uint16_t(y1);
+  if (!pixelBox(center_u, center_v, half(0), half(1), camera, raster)) return SplatSetup::kCulled;
 
   raster->center_u = float(center_u);
   raster->center_v = float(center_v);
@@ -162,56 +219,11 @@ SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& came
   raster->conic_b = float(-covariance(0, 1) * conic_scale);
   raster->conic_c = float(covariance(0, 0) * conic_scale);
 
-  // Depth range of the cut-off ellipse, and the per-surfel fuzzy depth tolerance (3.2.1). At one pixel,
-  // overlapping surfels of the same sheet differ in depth by about their radius times their normal difference
-  // (curvature, noise), stretched along the ray by 1 / cos(view angle): eps = s * k r / max(cos, c_min). The
-  // depth span of the whole disc (r sin) is NOT a measure of that: for a large oblique surfel it would reach
-  // sheets far behind it (a cube face of one surfel would blend with the faces behind). A relative term
-  // absorbs float rounding.
+  // Depth range of the cut-off ellipse, the fuzzy depth tolerance and the plane depth along the rays.
   double z_lo = c.z() - z_half_extent, z_hi = c.z() + z_half_extent;
   const double cos_view = std::abs(n_dot_view) / std::sqrt(view_length2);
-  raster->depth_tolerance = float(params.depth_tolerance_scale * kFacingDepthTolerance * radius /
-                                      std::max(cos_view, kMinToleranceCosine) +
-                                  1e-5 * std::abs(c.z()));
-
-  // Depth of the surfel plane along the pixel ray: perspective z = (n.c) / (n.d(u, v)) with d = ((u - cx) /
-  // fx, (v - cy) / fy, 1), i.e. 1/z affine in the pixel offset; orthographic z affine.
-  bool affine_depth = edge_on;
-  if (!edge_on && camera.perspective) {
-    const double d1 = n.x() / camera.fx, d2 = n.y() / camera.fy;
-    const double d0 = d1 * (center_u - camera.cx) + d2 * (center_v - camera.cy) + n.z();
-    // The denominator must keep its sign over the bounding box, otherwise the plane is seen edge-on there.
-    const double du_lo = x0 - center_u, du_hi = x1 - center_u;
-    const double dv_lo = y0 - center_v, dv_hi = y1 - center_v;
-    const double d_min = d0 + std::min(d1 * du_lo, d1 * du_hi) + std::min(d2 * dv_lo, d2 * dv_hi);
-    const double d_max = d0 + std::max(d1 * du_lo, d1 * du_hi) + std::max(d2 * dv_lo, d2 * dv_hi);
-    if (d_min * d_max > 0) {
-      // The EWA-widened footprint extends beyond the disc: the plane depth range over the box is at its
-      // corners.
-      const double numerator = n.dot(c);
-      const double z_a = numerator / d_min, z_b = numerator / d_max;
-      z_lo = std::min({double(float(z_lo)), z_a, z_b});
-      z_hi = std::max({double(float(z_hi)), z_a, z_b});
-      const double inv_d0 = 1.0 / d0;
-      raster->depth_num[0] = float(numerator * inv_d0);
-      raster->depth_num[1] = raster->depth_num[2] = 0;
-      raster->depth_den[0] = float(d1 * inv_d0);
-      raster->depth_den[1] = float(d2 * inv_d0);
-    } else {
-      affine_depth = true;
-    }
-  } else if (!edge_on) {
-    const double inv = -1.0 / (camera.ortho_scale * n.z());
-    const double du_extent = std::max(x1 - center_u, center_u - x0);
-    const double dv_extent = std::max(y1 - center_v, center_v - y0);
-    const double z_extent = std::abs(n.x() * inv) * du_extent + std::abs(n.y() * inv) * dv_extent;
-    z_lo = std::min<double>(float(z_lo), c.z() - z_extent);
-    z_hi = std::max<double>(float(z_hi), c.z() + z_extent);
-    raster->depth_num[0] = float(c.z());
-    raster->depth_num[1] = float(n.x() * inv);
-    raster->depth_num[2] = float(n.y() * inv);
-    raster->depth_den[0] = raster->depth_den[1] = 0;
-  }
+  raster->depth_tolerance = depthTolerance(params, radius, cos_view, c.z());
+  const bool affine_depth = edge_on || !planeDepth(c, n, center_u, center_v, camera, raster, &z_lo, &z_hi);
   raster->z_lo = float(z_lo);
   raster->z_hi = float(z_hi);
 
@@ -332,68 +344,25 @@ bool setupCircularCommonCase(const Vec3& c, const Vec3& n, double radius, const 
     return true;
   }
   const double conic_scale = 1.0 / (det * cutoff_sigmas * cutoff_sigmas);
-  const double half_u = cutoff_sigmas * std::sqrt(c00), half_v = cutoff_sigmas * std::sqrt(c11);
-  const int32_t x0 = std::max(0, ceilToPixel(center_u - half_u, camera.width));
-  const int32_t x1 = std::min(int32_t(camera.width) - 1, floorToPixel(center_u + half_u, camera.width));
-  const int32_t y0 = std::max(0, ceilToPixel(center_v - half_v, camera.height));
-  const int32_t y1 = std::min(int32_t(camera.height) - 1, floorToPixel(center_v + half_v, camera.height));
-  if (x0 > x1 || y0 > y1) {
+  if (!pixelBox(center_u, center_v, cutoff_sigmas * std::sqrt(c00), cutoff_sigmas * std::sqrt(c11), camera,
+                raster)) {
     *result = SplatSetup::kCulled;
     return true;
   }
-
   // Depth: range of the cut-off disc, fuzzy tolerance (3.2.1) and the plane along the pixel rays.
   const double z_half_extent = params.cutoff_radius * radius * std::sqrt(std::max(0.0, 1.0 - n.z() * n.z()));
   double z_lo = c.z() - z_half_extent, z_hi = c.z() + z_half_extent;
-  const double cos_view = std::abs(n_dot_view) / std::sqrt(view_length2);
-  float depth_num[3], depth_den[2];
-  if (camera.perspective) {
-    const double d1 = n.x() / camera.fx, d2 = n.y() / camera.fy;
-    const double d0 = d1 * (center_u - camera.cx) + d2 * (center_v - camera.cy) + n.z();
-    const double du_lo = x0 - center_u, du_hi = x1 - center_u;
-    const double dv_lo = y0 - center_v, dv_hi = y1 - center_v;
-    const double d_min = d0 + std::min(d1 * du_lo, d1 * du_hi) + std::min(d2 * dv_lo, d2 * dv_hi);
-    const double d_max = d0 + std::max(d1 * du_lo, d1 * du_hi) + std::max(d2 * dv_lo, d2 * dv_hi);
-    if (!(d_min * d_max > 0)) return false;  // the plane is seen edge-on inside the box
-    const double numerator = n.dot(c);
-    const double z_a = numerator / d_min, z_b = numerator / d_max;
-    z_lo = std::min({double(float(z_lo)), z_a, z_b});
-    z_hi = std::max({double(float(z_hi)), z_a, z_b});
-    const double inv_d0 = 1.0 / d0;
-    depth_num[0] = float(numerator * inv_d0);
-    depth_num[1] = depth_num[2] = 0;
-    depth_den[0] = float(d1 * inv_d0);
-    depth_den[1] = float(d2 * inv_d0);
-  } else {
-    const double inv = -1.0 / (camera.ortho_scale * n.z());
-    const double du_extent = std::max(x1 - center_u, center_u - x0);
-    const double dv_extent = std::max(y1 - center_v, center_v - y0);
-    const double z_extent = std::abs(n.x() * inv) * du_extent + std::abs(n.y() * inv) * dv_extent;
-    z_lo = std::min<double>(float(z_lo), c.z() - z_extent);
-    z_hi = std::max<double>(float(z_hi), c.z() + z_extent);
-    depth_num[0] = float(c.z());
-    depth_num[1] = float(n.x() * inv);
-    depth_num[2] = float(n.y() * inv);
-    depth_den[0] = depth_den[1] = 0;
-  }
-  raster->x0 = uint16_t(x0);
-  raster->x1 = uint16_t(x1);
-  raster->y0 = uint16_t(y0);
-  raster->y1 = uint16_t(y1);
+  if (!planeDepth(c, n, center_u, center_v, camera, raster, &z_lo, &z_hi))
+    return false;  // edge-on in the box
   raster->center_u = float(center_u);
   raster->center_v = float(center_v);
   raster->conic_a = float(c11 * conic_scale);
   raster->conic_b = float(-c01 * conic_scale);
   raster->conic_c = float(c00 * conic_scale);
-  for (int k = 0; k < 3; ++k) raster->depth_num[k] = depth_num[k];
-  raster->depth_den[0] = depth_den[0];
-  raster->depth_den[1] = depth_den[1];
   raster->z_lo = float(z_lo);
   raster->z_hi = float(z_hi);
-  raster->depth_tolerance =
-      float(params.depth_tolerance_scale * kFacingDepthTolerance * (params.cutoff_radius * radius) /
-                std::max(cos_view, kMinToleranceCosine) +
-            1e-5 * std::abs(c.z()));
+  raster->depth_tolerance = depthTolerance(params, params.cutoff_radius * radius,
+                                           std::abs(n_dot_view) / std::sqrt(view_length2), c.z());
   raster->flags = 0;
   *result = SplatSetup::kDrawn;
   return true;
