@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/sorted_cell_grid.h"
 #include "core/surfel_cloud.h"
 
 namespace rc {
@@ -60,16 +61,10 @@ class NeighborLists {
 
   size_t num_points_ = 0;
   double radius_ = 0.0;
-  // Grid
-  double origin_[3] = {0, 0, 0};
-  double inv_cell_ = 1.0;
-  size_t dims_[3] = {1, 1, 1};
   double sq_radius_ = 0.0;
   // Work buffers (reused across builds)
-  std::vector<uint32_t> cell_of_point_;
-  std::vector<uint32_t> cell_start_;
-  std::vector<SortedPoint> sorted_;
-  std::vector<uint32_t> sorted_cell_;
+  SortedCellGrid grid_;
+  std::vector<SortedPoint> sorted_;  // positions in grid order, with their original index
   std::vector<uint32_t> row_count_;  // by sorted position
   std::vector<ThreadBuffer> threads_;
   std::vector<size_t> thread_first_;

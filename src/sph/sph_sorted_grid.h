@@ -1,42 +1,10 @@
-// Uniform grid with points counting-sorted by cell: the neighbour search of the SPH solver (thesis 8.1.1).
+// The SPH solver's neighbour search (thesis 8.1.1) is the core's sorted cell grid.
 #pragma once
 
-#include <cstdint>
-#include <vector>
-
-#include "core/surfel_cloud.h"
+#include "core/sorted_cell_grid.h"
 
 namespace rc {
 
-/// Points are counting-sorted by their cell (cell size >= the search radius, linear cell order with x
-/// fastest), so the 27 cells around a cell form at most 9 runs of contiguous sorted positions. The sort is
-/// serial and stable, so the order (and everything computed in it) does not depend on the thread count.
-/// Buffers are members and only grow.
-class SphSortedGrid {
- public:
-  /// A run [begin, end) of sorted positions.
-  struct Run {
-    uint32_t begin, end;
-  };
-
-  /// Sorts `points` into cells of at least `cell_size` (coarsened if the box would need more than about
-  /// 8 cells per point). Throws std::invalid_argument for a non-finite point (naming its index) or a
-  /// cell size that is not finite and > 0.
-  void build(const std::vector<Vec3>& points, double cell_size, int num_threads);
-
-  size_t size() const { return order_.size(); }
-  /// order()[s] = original index of the point at sorted position s.
-  const std::vector<uint32_t>& order() const { return order_; }
-  /// Cell of the point at sorted position s.
-  uint32_t cellOfSorted(size_t s) const { return sorted_cell_[s]; }
-  /// The runs of sorted positions in the (up to) 27 cells around `cell`; returns their number (<= 9).
-  int neighborRuns(uint32_t cell, Run runs[9]) const;
-
- private:
-  double origin_[3] = {0, 0, 0};
-  double inv_cell_ = 1.0;
-  size_t dims_[3] = {1, 1, 1};
-  std::vector<uint32_t> cell_of_point_, cell_start_, order_, sorted_cell_;
-};
+using SphSortedGrid = SortedCellGrid;
 
 }  // namespace rc

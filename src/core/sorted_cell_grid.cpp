@@ -1,4 +1,4 @@
-#include "sph/sph_sorted_grid.h"
+#include "core/sorted_cell_grid.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,13 +9,18 @@
 
 namespace rc {
 
-void SphSortedGrid::build(const std::vector<Vec3>& points, double cell_size, int num_threads) {
-  if (!(cell_size > 0.0) || !std::isfinite(cell_size))
-    throw std::invalid_argument("SphSortedGrid::build: cell size must be finite and > 0, got " +
+namespace {
+constexpr size_t kMaxCells = size_t(1) << 31;
+}  // namespace
+
+void SortedCellGrid::build(const std::vector<Vec3>& points, double cell_size, int num_threads,
+                           const std::string& caller) {
+  if (!(cell_size >= 0.0) || !std::isfinite(cell_size))
+    throw std::invalid_argument(caller + ": cell size must be finite and >= 0, got " +
                                 std::to_string(cell_size));
   const size_t n = points.size();
   if (n >= std::numeric_limits<uint32_t>::max())
-    throw std::length_error("SphSortedGrid::build: too many points (" + std::to_string(n) + ")");
+    throw std::length_error(caller + ": too many points (" + std::to_string(n) + ")");
   order_.resize(n);
   sorted_cell_.resize(n);
   if (n == 0) return;
@@ -24,7 +29,7 @@ void SphSortedGrid::build(const std::vector<Vec3>& points, double cell_size, int
   for (size_t i = 0; i < n; ++i) {
     const Vec3& p = points[i];
     if (!p.allFinite())
-      throw std::invalid_argument("SphSortedGrid::build: point " + std::to_string(i) + " is not finite");
+      throw std::invalid_argument(caller + ": point " + std::to_string(i) + " is not finite");
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
@@ -32,7 +37,8 @@ void SphSortedGrid::build(const std::vector<Vec3>& points, double cell_size, int
   const double max_abs = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
   // Slack so that rounding never puts a neighbour at distance <= cell_size two cells away.
   double cell = cell_size * (1.0 + 1e-12) + 16.0 * std::numeric_limits<double>::epsilon() * max_abs;
-  const double max_cells = double(std::max<size_t>(8 * n, 4096));
+  if (!(cell > 0.0)) cell = std::max(extent.maxCoeff(), 1.0);  // a zero radius at the origin
+  const double max_cells = double(std::min(kMaxCells, std::max<size_t>(8 * n, 4096)));
   for (;;) {
     double total = 1.0;
     for (int a = 0; a < 3; ++a) total *= std::floor(extent[a] / cell) + 1.0;
@@ -72,7 +78,7 @@ void SphSortedGrid::build(const std::vector<Vec3>& points, double cell_size, int
   cell_start_[0] = 0;
 }
 
-int SphSortedGrid::neighborRuns(uint32_t c, Run runs[9]) const {
+int SortedCellGrid::neighborRuns(uint32_t c, Run runs[9]) const {
   const size_t nx = dims_[0], ny = dims_[1], nz = dims_[2];
   const size_t cx = c % nx, cy = (c / nx) % ny, cz = c / (nx * ny);
   const size_t x0 = cx > 0 ? cx - 1 : 0, x1 = std::min(cx + 1, nx - 1);
