@@ -10,25 +10,12 @@
 #include "render/clip_inside_patch.h"
 #include "render/clip_program.h"
 #include "render/scene_renderer.h"
+#include "scene_test_support.h"
 
 namespace rc {
 namespace {
 
-const std::string kSceneDir =
-    std::string(__FILE__).substr(0, std::string(__FILE__).rfind("/test/")) + "/config/scenes/";
-
-Camera smallCamera(const Camera& c, uint32_t width, uint32_t height) {
-  Camera out = c;
-  const double s = double(width) / c.width;
-  out.width = width;
-  out.height = height;
-  out.fx *= s;
-  out.fy *= s;
-  out.ortho_scale *= s;
-  out.cx = 0.5 * (width - 1.0);
-  out.cy = 0.5 * (height - 1.0);
-  return out;
-}
+const std::string kSceneDir = sceneDir();
 
 struct Agreement {
   size_t surfels = 0, compiled = 0, pixels = 0, disagree = 0, row_mismatch = 0, beyond_horizon = 0;
@@ -39,7 +26,7 @@ struct Agreement {
 Agreement compareScene(const std::string& name, int camera_index) {
   const Scene scene = loadScene(kSceneDir + name + ".yaml");
   SceneRenderer renderer(scene);
-  const Camera camera = smallCamera(scene.cameras.at(camera_index).camera, 160, 120);
+  const Camera camera = resizedCamera(scene.cameras.at(camera_index).camera, 160, 120);
   RenderImages images;
   renderer.render(camera, 0, &images);  // finds the partners for this frame
   const CsgClipper& clipper = *renderer.clipper();

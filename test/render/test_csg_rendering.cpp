@@ -8,25 +8,16 @@
 #include <string>
 
 #include "render/scene_renderer.h"
+#include "scene_test_support.h"
 
 namespace rc {
 namespace {
 
-const std::string kSceneDir =
-    std::string(__FILE__).substr(0, std::string(__FILE__).rfind("/test/")) + "/config/scenes/";
+const std::string kSceneDir = sceneDir();
 constexpr uint32_t kWidth = 320, kHeight = 240;
 
 Camera smallCamera(const Camera& c) {
-  Camera out = c;
-  const double s = double(kWidth) / c.width;
-  out.width = kWidth;
-  out.height = kHeight;
-  out.fx *= s;
-  out.fy *= s;
-  out.ortho_scale *= s;
-  out.cx = 0.5 * (kWidth - 1.0);
-  out.cy = 0.5 * (kHeight - 1.0);
-  return out;
+  return resizedCamera(c, kWidth, kHeight);
 }
 
 /// Pixels within `radius` (Chebyshev) of an analytic edge: a patch-id change (silhouettes included) or a

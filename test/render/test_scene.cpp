@@ -7,12 +7,12 @@
 
 #include "render/patch_sampling.h"
 #include "render/scene.h"
+#include "scene_test_support.h"
 
 namespace rc {
 namespace {
 
-const std::string kSceneDir =
-    std::string(__FILE__).substr(0, std::string(__FILE__).rfind("/test/")) + "/config/scenes/";
+const std::string kSceneDir = sceneDir();
 
 int32_t attr(const SurfelCloud& c, const char* name, size_t i) {
   return int32_t(c.attributes.find(name)->get(i));
