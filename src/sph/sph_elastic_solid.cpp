@@ -75,6 +75,9 @@ void assignLatticePoints(const SphLattice& lattice, const Mat3& transform, const
     if (idx[order[p]] == idx[order[p - 1]]) out.assigned[order[p]] = 0;
 }
 
+// GCC 12 reports Eigen's JacobiSVD internals as maybe-uninitialized once inlined here (a false positive).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 void rotationSvd(const Mat3& a, int dimension, Mat3& u, Vec3& sigma, Mat3& v) {
   if (dimension == 2) {
     Eigen::JacobiSVD<Eigen::Matrix2d> svd(a.topLeftCorner<2, 2>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -100,6 +103,7 @@ void rotationSvd(const Mat3& a, int dimension, Mat3& u, Vec3& sigma, Mat3& v) {
     sigma(2) = -sigma(2);
   }
 }
+#pragma GCC diagnostic pop
 
 SphElasticSolid::SphElasticSolid(const SphElasticConfig& config, const SphKernels& kernels, uint8_t phase,
                                  const Mat3& lattice_orientation)
@@ -417,6 +421,17 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
     if (!matched_[s]) strain_[solid_[s]].setZero();
   }
   stats_ = st;
+}
+
+void SphElasticSolid::setLatticeTransform(size_t i, const Mat3& transform) {
+  if (i >= transform_.size())
+    throw std::out_of_range("SphElasticSolid::setLatticeTransform: particle " + std::to_string(i) +
+                            " has no lattice transform (" + std::to_string(transform_.size()) + " known)");
+  const double det =
+      lattice_.dimension() == 3 ? transform.determinant() : transform.topLeftCorner<2, 2>().determinant();
+  if (!transform.allFinite() || !(std::abs(det) > 0.0))
+    throw std::invalid_argument("SphElasticSolid::setLatticeTransform: transform must be finite and regular");
+  transform_[i] = transform;
 }
 
 double SphElasticSolid::stableTimeStep(const SphParticles& particles, double cfl) const {

@@ -123,6 +123,10 @@ class SphElasticSolid : public SphForceTerm {
   const std::vector<Eigen::Matrix3d>& strains() const { return strain_; }
   /// Per particle: number of neighbourhoods in which it lost its lattice point at the last evaluation.
   const std::vector<uint32_t>& unassignedCounts() const { return unassigned_count_; }
+  /// Sets the lattice transform A_i that particle i's next lattice assignment (8.21) starts from, e.g. that
+  /// of a neighbour when a fluid particle freezes into this solid (8.2.4). Throws std::out_of_range unless
+  /// i < latticeTransforms().size(), std::invalid_argument for a non-finite or singular transform.
+  void setLatticeTransform(size_t i, const Eigen::Matrix3d& transform);
 
  private:
   struct Contribution {

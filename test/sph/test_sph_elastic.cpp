@@ -315,7 +315,9 @@ TEST(SphElasticSolid, FreelyRotatingBodyHasZeroStrainAndKeepsMomentum) {
       // The elastic forces alone sum to zero force and torque.
       EXPECT_LT(b.solid->stats().net_force.norm(),
                 1e-9 * e.goal_stiffness * b.solver->particles().masses[0] * d);
-      if (model == SphElasticModel::kStrain) EXPECT_EQ(st.limit, SphStepLimit::kElastic);
+      if (model == SphElasticModel::kStrain) {
+        EXPECT_EQ(st.limit, SphStepLimit::kElastic);
+      }
     }
     EXPECT_LT(worst_p, 1e-9);
     EXPECT_LT(worst_l, 1e-9);
