@@ -1,0 +1,456 @@
+#include "fem/polyhedral_mesh.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace rc {
+namespace {
+
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument("PolyhedralMesh: " + what);
+}
+
+// Fan triangulation (global ids) from the apex that maximises the smallest fan triangle area.
+std::vector<PolyhedralMesh::Triangle> bestFan(const std::vector<Vec3>& nodes,
+                                              const PolyhedralMesh::Face& face) {
+  const int k = static_cast<int>(face.size());
+  Vec3 normal = Vec3::Zero();
+  for (int j = 1; j + 1 < k; ++j)
+    normal += (nodes[face[j]] - nodes[face[0]]).cross(nodes[face[j + 1]] - nodes[face[0]]);
+  int best_apex = 0;
+  double best_min_area = -INFINITY;
+  for (int apex = 0; apex < k; ++apex) {
+    double min_area = INFINITY;
+    for (int j = 1; j + 1 < k; ++j) {
+      const Vec3& a = nodes[face[apex]];
+      const Vec3& b = nodes[face[(apex + j) % k]];
+      const Vec3& c = nodes[face[(apex + j + 1) % k]];
+      min_area = std::min(min_area, normal.dot((b - a).cross(c - a)));
+    }
+    if (min_area > best_min_area) {
+      best_min_area = min_area;
+      best_apex = apex;
+    }
+  }
+  std::vector<PolyhedralMesh::Triangle> fan;
+  for (int j = 1; j + 1 < k; ++j)
+    fan.push_back({face[best_apex], face[(best_apex + j) % k], face[(best_apex + j + 1) % k]});
+  return fan;
+}
+
+// +1: b is the same cycle as a, -1: b is a reversed, 0: neither.
+int cyclicRelation(const PolyhedralMesh::Face& a, const PolyhedralMesh::Face& b) {
+  const int k = static_cast<int>(a.size());
+  if (static_cast<int>(b.size()) != k) return 0;
+  const int p = static_cast<int>(std::find(b.begin(), b.end(), a[0]) - b.begin());
+  if (p == k) return 0;
+  bool same = true, reversed = true;
+  for (int j = 0; j < k; ++j) {
+    same = same && b[(p + j) % k] == a[j];
+    reversed = reversed && b[((p - j) % k + k) % k] == a[j];
+  }
+  return same ? 1 : (reversed ? -1 : 0);
+}
+
+std::string faceName(int element, int face) {
+  return "element " + std::to_string(element) + " face " + std::to_string(face);
+}
+
+std::set<std::array<int, 3>> canonicalTriangleSet(const std::vector<PolyhedralMesh::Triangle>& triangles) {
+  std::set<std::array<int, 3>> set;
+  for (auto t : triangles) {
+    std::sort(t.begin(), t.end());
+    set.insert(t);
+  }
+  return set;
+}
+
+void checkGridArguments(const char* builder, const Vec3& lo, const Vec3& hi, int nx, int ny, int nz) {
+  if (nx < 1 || ny < 1 || nz < 1)
+    fail(std::string(builder) + ": cell counts must be >= 1, got " + std::to_string(nx) + " x " +
+         std::to_string(ny) + " x " + std::to_string(nz));
+  if (!lo.allFinite() || !hi.allFinite() || !((hi - lo).minCoeff() > 0.0))
+    fail(std::string(builder) + ": the box needs finite corners with hi > lo in every coordinate");
+}
+
+std::vector<Vec3> gridNodes(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz) {
+  std::vector<Vec3> nodes;
+  nodes.reserve(static_cast<size_t>(nx + 1) * (ny + 1) * (nz + 1));
+  for (int k = 0; k <= nz; ++k)
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i)
+        nodes.push_back(lo + (hi - lo).cwiseProduct(Vec3(double(i) / nx, double(j) / ny, double(k) / nz)));
+  return nodes;
+}
+
+// Corner c (bits x, y, z) of box (i, j, k).
+int gridCorner(int nx, int ny, int i, int j, int k, int c) {
+  return (i + (c & 1)) + (nx + 1) * ((j + ((c >> 1) & 1)) + (ny + 1) * (k + ((c >> 2) & 1)));
+}
+
+PolyhedralMesh::ElementFaces tetrahedronFaces(const std::vector<Vec3>& nodes, std::array<int, 4> t) {
+  const double det =
+      (nodes[t[1]] - nodes[t[0]]).cross(nodes[t[2]] - nodes[t[0]]).dot(nodes[t[3]] - nodes[t[0]]);
+  if (det < 0.0) std::swap(t[1], t[2]);
+  return {{t[0], t[2], t[1]}, {t[0], t[1], t[3]}, {t[1], t[2], t[3]}, {t[0], t[3], t[2]}};
+}
+
+std::vector<PolyhedralMesh::ElementFaces> hexahedralCells(int nx, int ny, int nz) {
+  std::vector<PolyhedralMesh::ElementFaces> cells;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        // VTK order 0-3 bottom counter-clockwise, 4-7 top, as corner bits.
+        const int bits[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+        int v[8];
+        for (int c = 0; c < 8; ++c) v[c] = gridCorner(nx, ny, i, j, k, bits[c]);
+        cells.push_back({{v[0], v[3], v[2], v[1]},
+                         {v[4], v[5], v[6], v[7]},
+                         {v[0], v[1], v[5], v[4]},
+                         {v[1], v[2], v[6], v[5]},
+                         {v[2], v[3], v[7], v[6]},
+                         {v[3], v[0], v[4], v[7]}});
+      }
+  return cells;
+}
+
+// Interiors of two coplanar triangles (2D corners) overlap by more than tol (separating axis test).
+bool trianglesOverlap(const std::array<Eigen::Vector2d, 3>& a, const std::array<Eigen::Vector2d, 3>& b,
+                      double tol) {
+  for (const auto* tri : {&a, &b})
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d edge = (*tri)[(k + 1) % 3] - (*tri)[k];
+      const Eigen::Vector2d axis = Eigen::Vector2d(-edge.y(), edge.x()).normalized();
+      double lo_a = INFINITY, hi_a = -INFINITY, lo_b = INFINITY, hi_b = -INFINITY;
+      for (int v = 0; v < 3; ++v) {
+        lo_a = std::min(lo_a, axis.dot(a[v]));
+        hi_a = std::max(hi_a, axis.dot(a[v]));
+        lo_b = std::min(lo_b, axis.dot(b[v]));
+        hi_b = std::max(hi_b, axis.dot(b[v]));
+      }
+      if (std::min(hi_a, hi_b) - std::max(lo_a, lo_b) <= tol) return false;
+    }
+  return true;
+}
+
+}  // namespace
+
+PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
+                               double relative_tolerance)
+    : nodes_(std::move(nodes)), element_faces_(std::move(elements)) {
+  const int n = numNodes();
+  if (element_faces_.empty()) fail("the mesh has no elements");
+  for (int i = 0; i < n; ++i)
+    if (!nodes_[i].allFinite()) fail("node " + std::to_string(i) + " is not finite");
+  std::vector<char> used(n, 0);
+  for (size_t e = 0; e < element_faces_.size(); ++e)
+    for (size_t f = 0; f < element_faces_[e].size(); ++f) {
+      if (element_faces_[e][f].size() < 3)
+        fail(faceName(int(e), int(f)) + " has " + std::to_string(element_faces_[e][f].size()) + " nodes");
+      for (int v : element_faces_[e][f]) {
+        if (v < 0 || v >= n)
+          fail(faceName(int(e), int(f)) + " references node " + std::to_string(v) + " (mesh has " +
+               std::to_string(n) + " nodes)");
+        used[v] = 1;
+      }
+    }
+  for (int i = 0; i < n; ++i)
+    if (!used[i]) fail("node " + std::to_string(i) + " is used by no element");
+
+  // Faces by node set: first user, its triangulation (global ids, in the first user's orientation), use
+  // count.
+  struct SharedFace {
+    int element, face, uses;
+    std::vector<Triangle> triangles;
+  };
+  std::map<std::vector<int>, SharedFace> face_map;
+  elements_.reserve(element_faces_.size());
+  std::vector<int> local(n, -1);
+  for (size_t e = 0; e < element_faces_.size(); ++e) {
+    const ElementFaces& faces = element_faces_[e];
+    std::vector<std::vector<Triangle>> triangulation(faces.size());
+    for (size_t f = 0; f < faces.size(); ++f) {
+      std::vector<int> key = faces[f];
+      std::sort(key.begin(), key.end());
+      auto it = face_map.find(key);
+      if (it == face_map.end()) {
+        triangulation[f] = bestFan(nodes_, faces[f]);
+        face_map.emplace(key, SharedFace{int(e), int(f), 1, triangulation[f]});
+        continue;
+      }
+      SharedFace& shared = it->second;
+      const std::string pair = faceName(int(e), int(f)) + " and " + faceName(shared.element, shared.face);
+      if (shared.uses >= 2) fail(faceName(int(e), int(f)) + " is used by more than two elements");
+      const int relation = cyclicRelation(element_faces_[shared.element][shared.face], faces[f]);
+      if (relation == 1) fail(pair + " have the same orientation (overlapping or inverted elements)");
+      if (relation == 0) fail(pair + " have the same nodes in a different cyclic order");
+      ++shared.uses;
+      for (Triangle t : shared.triangles) triangulation[f].push_back({t[0], t[2], t[1]});
+    }
+    // Local nodes in order of first use.
+    std::vector<int> ids;
+    for (const Face& face : faces)
+      for (int v : face)
+        if (local[v] < 0) {
+          local[v] = static_cast<int>(ids.size());
+          ids.push_back(v);
+        }
+    std::vector<Vec3> element_nodes;
+    for (int v : ids) element_nodes.push_back(nodes_[v]);
+    std::vector<ConvexPolyhedron::Face> local_faces;
+    std::vector<std::vector<ConvexPolyhedron::Triangle>> local_triangles;
+    for (size_t f = 0; f < faces.size(); ++f) {
+      ConvexPolyhedron::Face lf;
+      for (int v : faces[f]) lf.push_back(local[v]);
+      local_faces.push_back(lf);
+      std::vector<ConvexPolyhedron::Triangle> lt;
+      for (const Triangle& t : triangulation[f]) lt.push_back({local[t[0]], local[t[1]], local[t[2]]});
+      local_triangles.push_back(lt);
+    }
+    for (int v : ids) local[v] = -1;
+    try {
+      elements_.emplace_back(std::move(element_nodes), std::move(local_faces), std::move(local_triangles),
+                             relative_tolerance, ids);
+    } catch (const std::invalid_argument& error) {
+      fail("element " + std::to_string(e) + ": " + error.what());
+    }
+  }
+
+  // Shared faces: identical triangulation seen from both elements (in global ids).
+  auto elementFaceTriangles = [this](int e, int f) {
+    const ConvexPolyhedron& element = elements_[e];
+    std::vector<Triangle> triangles;
+    for (int t = 0; t < element.numTriangles(); ++t)
+      if (element.triangleFace()[t] == f) {
+        const auto& lt = element.triangles()[t];
+        const auto& ids = element.globalNodeIds();
+        triangles.push_back({ids[lt[0]], ids[lt[1]], ids[lt[2]]});
+      }
+    return triangles;
+  };
+  std::map<std::vector<int>, std::pair<int, int>> first_user;
+  is_boundary_node_.assign(n, 0);
+  std::map<std::pair<int, int>, int> boundary_edges;  // directed boundary polygon edges
+  for (size_t e = 0; e < element_faces_.size(); ++e)
+    for (size_t f = 0; f < element_faces_[e].size(); ++f) {
+      std::vector<int> key = element_faces_[e][f];
+      std::sort(key.begin(), key.end());
+      const SharedFace& shared = face_map.at(key);
+      if (shared.uses == 2) {
+        auto inserted = first_user.emplace(key, std::make_pair(int(e), int(f)));
+        if (!inserted.second) {
+          const auto& other = inserted.first->second;
+          if (canonicalTriangleSet(elementFaceTriangles(int(e), int(f))) !=
+              canonicalTriangleSet(elementFaceTriangles(other.first, other.second)))
+            fail(faceName(int(e), int(f)) + " and " + faceName(other.first, other.second) +
+                 " triangulate their shared face differently");
+          ++num_interior_faces_;
+        }
+        continue;
+      }
+      const Face& face = element_faces_[e][f];
+      for (size_t k = 0; k < face.size(); ++k) {
+        is_boundary_node_[face[k]] = 1;
+        const auto edge = std::make_pair(face[k], face[(k + 1) % face.size()]);
+        if (++boundary_edges[edge] > 1)
+          fail("the boundary is not a closed manifold: edge (" + std::to_string(edge.first) + ", " +
+               std::to_string(edge.second) + ") is used twice in the same direction (" +
+               faceName(int(e), int(f)) +
+               "): hanging node, non-conforming faces or elements touching at an edge");
+      }
+      for (const Triangle& t : elementFaceTriangles(int(e), int(f))) boundary_triangles_.push_back(t);
+    }
+  for (const auto& entry : boundary_edges)
+    if (!boundary_edges.count({entry.first.second, entry.first.first}))
+      fail("the boundary is not closed at edge (" + std::to_string(entry.first.first) + ", " +
+           std::to_string(entry.first.second) + "): hanging node or non-conforming faces");
+
+  // Non-conforming faces that still close the boundary (e.g. a square split along different diagonals by
+  // the two elements): coplanar, opposite boundary triangles with overlapping interiors.
+  {
+    double scale = 0.0;
+    for (const Vec3& p : nodes_) scale = std::max(scale, (p - nodes_[0]).norm());
+    const double tol = 1e-9 * scale;
+    struct PlaneTriangle {
+      double offset;
+      Vec3 normal;  // canonical sign
+      int sign, index;
+    };
+    std::vector<PlaneTriangle> planes;
+    for (size_t t = 0; t < boundary_triangles_.size(); ++t) {
+      const auto& tri = boundary_triangles_[t];
+      Vec3 normal = (nodes_[tri[1]] - nodes_[tri[0]]).cross(nodes_[tri[2]] - nodes_[tri[0]]);
+      if (!(normal.norm() > tol * scale)) continue;  // zero-area triangles cover nothing
+      normal.normalize();
+      int axis;
+      normal.cwiseAbs().maxCoeff(&axis);
+      const int sign = normal[axis] > 0.0 ? 1 : -1;
+      normal *= sign;
+      planes.push_back({normal.dot(nodes_[tri[0]]), normal, sign, static_cast<int>(t)});
+    }
+    std::sort(planes.begin(), planes.end(),
+              [](const PlaneTriangle& a, const PlaneTriangle& b) { return a.offset < b.offset; });
+    for (size_t i = 0; i < planes.size(); ++i)
+      for (size_t j = i + 1; j < planes.size() && planes[j].offset - planes[i].offset <= tol; ++j) {
+        if (planes[i].sign == planes[j].sign || planes[i].normal.dot(planes[j].normal) < 1.0 - 1e-9) continue;
+        const Vec3 e1 = planes[i].normal.unitOrthogonal(), e2 = planes[i].normal.cross(e1);
+        std::array<Eigen::Vector2d, 3> a, b;
+        for (int k = 0; k < 3; ++k) {
+          const Vec3& p = nodes_[boundary_triangles_[planes[i].index][k]];
+          const Vec3& q = nodes_[boundary_triangles_[planes[j].index][k]];
+          a[k] = Eigen::Vector2d(e1.dot(p), e2.dot(p));
+          b[k] = Eigen::Vector2d(e1.dot(q), e2.dot(q));
+        }
+        if (trianglesOverlap(a, b, tol)) {
+          const auto& ta = boundary_triangles_[planes[i].index];
+          fail("non-conforming faces: boundary triangles (" + std::to_string(ta[0]) + ", " +
+               std::to_string(ta[1]) + ", " + std::to_string(ta[2]) +
+               ") and another overlap with opposite orientation (faces of neighbouring elements do not "
+               "match)");
+        }
+      }
+  }
+
+  // Overlap check: element volumes add up to the volume enclosed by the boundary.
+  double element_volume = 0.0, enclosed = 0.0;
+  for (const ConvexPolyhedron& element : elements_) element_volume += element.volume();
+  const Vec3 origin = nodes_[boundary_triangles_.front()[0]];
+  for (const Triangle& t : boundary_triangles_)
+    enclosed += (nodes_[t[0]] - origin).dot((nodes_[t[1]] - origin).cross(nodes_[t[2]] - origin)) / 6.0;
+  if (std::abs(enclosed - element_volume) > 1e-9 * element_volume)
+    fail("element volumes sum to " + std::to_string(element_volume) + " but the boundary encloses " +
+         std::to_string(enclosed) + " (overlapping elements)");
+  volume_ = element_volume;
+}
+
+PolyhedralMesh PolyhedralMesh::hexahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz) {
+  checkGridArguments("hexahedralGrid", lo, hi, nx, ny, nz);
+  return PolyhedralMesh(gridNodes(lo, hi, nx, ny, nz), hexahedralCells(nx, ny, nz));
+}
+
+PolyhedralMesh PolyhedralMesh::tetrahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz,
+                                               TetrahedronSplit split) {
+  checkGridArguments("tetrahedralGrid", lo, hi, nx, ny, nz);
+  std::vector<Vec3> nodes = gridNodes(lo, hi, nx, ny, nz);
+  std::vector<ElementFaces> elements;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        auto corner = [&](int c) { return gridCorner(nx, ny, i, j, k, c); };
+        if (split == TetrahedronSplit::kSix) {
+          // Kuhn: paths 000 -> 111 along the axes in every order (translation-invariant face diagonals).
+          const int orders[6][3] = {{1, 2, 4}, {1, 4, 2}, {2, 1, 4}, {2, 4, 1}, {4, 1, 2}, {4, 2, 1}};
+          for (const auto& order : orders)
+            elements.push_back(tetrahedronFaces(
+                nodes, {corner(0), corner(order[0]), corner(order[0] | order[1]), corner(7)}));
+        } else {
+          // Four corner tetrahedra and a central one; odd cells mirrored in x so face diagonals match.
+          const int flip = (i + j + k) % 2 ? 1 : 0;
+          auto c = [&](int bits) { return corner(bits ^ flip); };
+          elements.push_back(tetrahedronFaces(nodes, {c(0), c(1), c(2), c(4)}));
+          elements.push_back(tetrahedronFaces(nodes, {c(3), c(2), c(1), c(7)}));
+          elements.push_back(tetrahedronFaces(nodes, {c(5), c(1), c(4), c(7)}));
+          elements.push_back(tetrahedronFaces(nodes, {c(6), c(2), c(4), c(7)}));
+          elements.push_back(tetrahedronFaces(nodes, {c(1), c(2), c(4), c(7)}));
+        }
+      }
+  return PolyhedralMesh(std::move(nodes), std::move(elements));
+}
+
+PolyhedralMesh PolyhedralMesh::randomPlaneCut(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz,
+                                              int num_planes, unsigned seed, double min_relative_gap) {
+  checkGridArguments("randomPlaneCut", lo, hi, nx, ny, nz);
+  if (num_planes < 0) fail("randomPlaneCut: num_planes must be >= 0, got " + std::to_string(num_planes));
+  if (!(min_relative_gap > 0.0 && min_relative_gap < 0.2))
+    fail("randomPlaneCut: min_relative_gap must be in (0, 0.2), got " + std::to_string(min_relative_gap));
+  std::vector<Vec3> nodes = gridNodes(lo, hi, nx, ny, nz);
+  std::vector<ElementFaces> cells = hexahedralCells(nx, ny, nz);
+  const double gap = min_relative_gap * (hi - lo).norm();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> normal_dist;
+  for (int plane = 0; plane < num_planes; ++plane) {
+    // Draw a plane through the box that keeps a gap to every node.
+    Vec3 normal, point;
+    std::vector<double> distance(nodes.size());
+    for (int attempt = 0;; ++attempt) {
+      if (attempt == 10000)
+        fail("randomPlaneCut: no plane keeps a gap of " + std::to_string(gap) + " to all nodes after " +
+             std::to_string(plane) + " planes (lower num_planes or min_relative_gap)");
+      normal = Vec3(normal_dist(rng), normal_dist(rng), normal_dist(rng));
+      if (normal.norm() < 1e-6) continue;
+      normal.normalize();
+      point = lo + (hi - lo).cwiseProduct(
+                       Vec3(0.1 + 0.8 * unit(rng), 0.1 + 0.8 * unit(rng), 0.1 + 0.8 * unit(rng)));
+      bool ok = true;
+      for (size_t i = 0; i < nodes.size() && ok; ++i) {
+        distance[i] = normal.dot(nodes[i] - point);
+        ok = std::abs(distance[i]) >= gap;
+      }
+      if (ok) break;
+    }
+    std::map<std::pair<int, int>, int> edge_node;
+    auto cutNode = [&](int a, int b) {
+      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+      auto it = edge_node.find(key);
+      if (it != edge_node.end()) return it->second;
+      const double t = distance[key.first] / (distance[key.first] - distance[key.second]);
+      nodes.push_back((1.0 - t) * nodes[key.first] + t * nodes[key.second]);
+      distance.push_back(0.0);
+      edge_node.emplace(key, static_cast<int>(nodes.size()) - 1);
+      return static_cast<int>(nodes.size()) - 1;
+    };
+    const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
+    std::vector<ElementFaces> next;
+    for (const ElementFaces& cell : cells) {
+      bool has_positive = false, has_negative = false;
+      for (const Face& face : cell)
+        for (int v : face) (distance[v] > 0.0 ? has_positive : has_negative) = true;
+      if (!(has_positive && has_negative)) {
+        next.push_back(cell);
+        continue;
+      }
+      ElementFaces positive, negative;
+      std::vector<int> cut;
+      for (const Face& face : cell) {
+        Face pos, neg;
+        for (size_t k = 0; k < face.size(); ++k) {
+          const int a = face[k], b = face[(k + 1) % face.size()];
+          (distance[a] > 0.0 ? pos : neg).push_back(a);
+          if ((distance[a] > 0.0) != (distance[b] > 0.0)) {
+            const int m = cutNode(a, b);
+            pos.push_back(m);
+            neg.push_back(m);
+            if (std::find(cut.begin(), cut.end(), m) == cut.end()) cut.push_back(m);
+          }
+        }
+        if (pos.size() >= 3) positive.push_back(pos);
+        if (neg.size() >= 3) negative.push_back(neg);
+      }
+      // Cut polygon ordered counter-clockwise around the normal: outward for the negative part.
+      Vec3 center = Vec3::Zero();
+      for (int m : cut) center += nodes[m];
+      center /= static_cast<double>(cut.size());
+      std::sort(cut.begin(), cut.end(), [&](int a, int b) {
+        const Vec3 da = nodes[a] - center, db = nodes[b] - center;
+        return std::atan2(e2.dot(da), e1.dot(da)) < std::atan2(e2.dot(db), e1.dot(db));
+      });
+      negative.push_back(cut);
+      positive.push_back(Face(cut.rbegin(), cut.rend()));
+      next.push_back(positive);
+      next.push_back(negative);
+    }
+    cells = std::move(next);
+  }
+  return PolyhedralMesh(std::move(nodes), std::move(cells));
+}
+
+}  // namespace rc

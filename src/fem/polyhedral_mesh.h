@@ -1,0 +1,69 @@
+// A conforming volume mesh of convex polyhedral elements (thesis 9.1): global nodes, elements referencing
+// them, and faces shared by neighbouring elements with one common triangulation (the mean value coordinates
+// depend on it, so identical triangulations keep the shape functions C0 across elements).
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "core/surfel_cloud.h"
+#include "fem/convex_polyhedron.h"
+
+namespace rc {
+
+/// Elements are given as closed polygon surfaces over global node ids (faces counter-clockwise seen from
+/// outside). The constructor builds one ConvexPolyhedron per element (local nodes in order of first use,
+/// globalNodeIds() = mesh node ids) and checks the mesh, throwing std::invalid_argument naming the element,
+/// face or node: node index out of range or unused, invalid element (the ConvexPolyhedron message), a face
+/// used by more than two elements or twice with the same orientation, two faces with the same nodes in a
+/// different cyclic order, a boundary surface that is not closed (hanging nodes, non-conforming faces), and
+/// element volumes that do not add up to the volume enclosed by the boundary (overlapping elements).
+class PolyhedralMesh {
+ public:
+  using Face = std::vector<int>;                // global node ids, counter-clockwise seen from outside
+  using ElementFaces = std::vector<Face>;       // closed surface of one element
+  using Triangle = std::array<int, 3>;          // global node ids
+  enum class TetrahedronSplit { kFive, kSix };  // 5 tets (alternating by cell parity) or 6 (Kuhn)
+
+  PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
+                 double relative_tolerance = ConvexPolyhedron::kDefaultRelativeTolerance);
+
+  /// nx x ny x nz boxes of the axis-aligned box [lo, hi] as hexahedra.
+  static PolyhedralMesh hexahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz);
+  /// The same grid with each box split into 5 or 6 tetrahedra (conforming face diagonals).
+  static PolyhedralMesh tetrahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz,
+                                        TetrahedronSplit split = TetrahedronSplit::kSix);
+  /// Irregular convex cells: the hexahedral grid cut by num_planes random planes (each plane splits every
+  /// cell it crosses, so the mesh stays conforming; new nodes on cut edges are shared). Planes passing closer
+  /// than min_relative_gap * |hi - lo| to an existing node are redrawn, which keeps cells away from slivers.
+  static PolyhedralMesh randomPlaneCut(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz, int num_planes,
+                                       unsigned seed, double min_relative_gap = 0.02);
+
+  int numNodes() const { return static_cast<int>(nodes_.size()); }
+  int numElements() const { return static_cast<int>(elements_.size()); }
+  const std::vector<Vec3>& nodes() const { return nodes_; }
+  const Vec3& node(int i) const { return nodes_[i]; }
+  /// Element e; element(e).globalNodeIds()[local] is the mesh node of a local node.
+  const ConvexPolyhedron& element(int e) const { return elements_[e]; }
+  const std::vector<ConvexPolyhedron>& elements() const { return elements_; }
+  /// The input surface of element e (global ids).
+  const ElementFaces& elementFaces(int e) const { return element_faces_[e]; }
+
+  int numInteriorFaces() const { return num_interior_faces_; }
+  /// Boundary faces (used by one element) triangulated as in their element, outward, global ids.
+  const std::vector<Triangle>& boundaryTriangles() const { return boundary_triangles_; }
+  /// is_boundary_node[i]: node i lies on a boundary face.
+  const std::vector<char>& isBoundaryNode() const { return is_boundary_node_; }
+  double volume() const { return volume_; }
+
+ private:
+  std::vector<Vec3> nodes_;
+  std::vector<ElementFaces> element_faces_;
+  std::vector<ConvexPolyhedron> elements_;
+  std::vector<Triangle> boundary_triangles_;
+  std::vector<char> is_boundary_node_;
+  int num_interior_faces_ = 0;
+  double volume_ = 0.0;
+};
+
+}  // namespace rc
