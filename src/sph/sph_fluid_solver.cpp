@@ -518,11 +518,18 @@ bool SphFluidSolver::measureState() {
   const SphParticles& p = particles_;
   double kinetic = 0.0, compression = 0.0, max_speed = 0.0, max_err = 0.0, fluid_mass = 0.0,
          boundary_v2 = 0.0;
+  const bool summation_walls = config_.boundary_pressure == SphBoundaryPressure::kSummation;
+  const double rho0 = config_.rest_density;
   bool finite = true;
   for (size_t i = 0; i < p.size(); ++i) {  // serial: sums in a fixed order
     if (p.kinds[i] == SphParticleKind::kMovingBoundary)
       boundary_v2 = std::max(boundary_v2, p.velocities[i].squaredNorm());
-    if (p.kinds[i] != SphParticleKind::kFluid) continue;
+    if (p.kinds[i] != SphParticleKind::kFluid) {
+      // Summation walls: p_w = max(p(rho_w), 0) is the derivative of this energy (see SphBoundaryPressure).
+      if (summation_walls && p.densities[i] > rho0)
+        compression += p.masses[i] * compressionEnergyOf(p.densities[i]);
+      continue;
+    }
     const double v2 = p.velocities[i].squaredNorm();
     if (!std::isfinite(v2) || !p.positions[i].allFinite()) finite = false;
     kinetic += 0.5 * p.masses[i] * v2;

@@ -15,32 +15,43 @@
 
 namespace rc {
 
-/// Kernel whose gradient drives the pressure force (8.17): spiky (appendix C, no clumping at low resolution)
-/// or poly6 (the density kernel: the pressure force is then the exact gradient of the compression energy).
+/// Kernel whose gradient drives the pressure force (8.17).
+///  kPoly6 (default): the density kernel (8.4), so the pressure force is the exact negative gradient of the
+///         compression energy sum_i m_i e(rho_i) (e' = p / rho^2, with (8.16) included): kinetic + potential
+///         + compression energy is conserved up to the time integration and lost only to viscosity, XSPH and
+///         plane hits (test/sph/test_sph_energy.cpp).
+///  kSpiky: the thesis' choice (appendix C; no clumping at low resolution). With the poly6 density it is not
+///         the gradient of any energy and pumps energy into the fluid wherever pressures are non-zero: 2D dam
+///         break (mu = 1, XSPH 0.1, zeta = 0.01) +28% in 0.25 s; inviscid 2D sloshing in a closed
+///         particle-walled box +454% in 0.5 s (poly6: -0.2%).
 enum class SphPressureKernel { kSpiky, kPoly6 };
 
 /// Pressure of boundary particles, which enter the pair force (8.17) like fluid particles.
-///  kSummation:    the thesis' treatment: density by summation (8.4), pressure by (8.15), clamped to >= 0.
-///                 Walls read too little pressure near the floor (their own support is cut off): in the
-///                 hydrostatic tank the rows just above y = h read 7% low (3% with kExtrapolated), the
-///                 interior bands 1.2% (0.7%).
+///  kSummation (default): density by summation (8.4), pressure by (8.15), clamped to >= 0 (walls never pull).
+///                 The wall pressure is then the derivative of the walls' compression energy
+///                 sum_w m_w e(rho_w) (e = 0 below rho_0), which SphStepStats::compression_energy includes,
+///                 so walls neither add nor remove energy. Walls read too little pressure near the floor
+///                 (their own support is cut off): in the hydrostatic tank the rows just above y = h read 7%
+///                 low (3% with kExtrapolated), the interior bands 1.2% (0.7%).
 ///  kExtrapolated: Adami, Hu & Adams 2012 (J. Comput. Phys. 231, eq. 27): the Shepard average of the
 ///                 neighbouring fluid pressures plus the hydrostatic head between fluid and wall,
 ///                 p_w = (sum_f p_f W_wf + g . sum_f rho_f (x_w - x_f) W_wf) / sum_f W_wf, clamped to >= 0
 ///                 (walls never pull); the wall density follows from inverting (8.15). Wall accelerations are
-///                 taken as zero (moving boundaries move at constant velocity). Validated by the hydrostatic
-///                 tank test (p = rho g (H - y) within 5%).
+///                 taken as zero (moving boundaries move at constant velocity). More accurate at rest, but
+///                 the wall pressure is no energy's derivative and the walls do work on the fluid: inviscid
+///                 2D sloshing in a closed box (poly6) gains +21% in 0.5 s and +935% in 3 s (kSummation:
+///                 -0.2%, +0.04%); with mu = 1 Pa s the viscous loss hides it.
 enum class SphBoundaryPressure { kSummation, kExtrapolated };
 
 struct SphFluidConfig {
-  int dimension = 3;                      ///< 2 (x-y plane, z = 0) or 3
-  double smoothing_length = 0.1;          ///< h, kernel support radius
-  double rest_density = 1000.0;           ///< rho_0 (8.15)
-  double stiffness = 2.0e5;               ///< K (8.15), pressure units
-  double gamma = 1.0;                     ///< Gamma (8.15), >= 1
-  double negative_pressure_scale = 0.01;  ///< zeta (8.16), in [0, 1]
-  SphPressureKernel pressure_kernel = SphPressureKernel::kSpiky;
-  SphBoundaryPressure boundary_pressure = SphBoundaryPressure::kExtrapolated;
+  int dimension = 3;                                                        ///< 2 (x-y plane, z = 0) or 3
+  double smoothing_length = 0.1;                                            ///< h, kernel support radius
+  double rest_density = 1000.0;                                             ///< rho_0 (8.15)
+  double stiffness = 2.0e5;                                                 ///< K (8.15), pressure units
+  double gamma = 1.0;                                                       ///< Gamma (8.15), >= 1
+  double negative_pressure_scale = 0.01;                                    ///< zeta (8.16), in [0, 1]
+  SphPressureKernel pressure_kernel = SphPressureKernel::kPoly6;            ///< poly6: conservative
+  SphBoundaryPressure boundary_pressure = SphBoundaryPressure::kSummation;  ///< summation: conservative
   double viscosity = 0.0;                ///< mu (8.18), shear viscosity, >= 0
   double xsph = 0.1;                     ///< xi (8.19), in [0, 1]
   Vec3 gravity = Vec3(0.0, -9.81, 0.0);  ///< z must be 0 in 2D
@@ -76,15 +87,18 @@ struct SphStepStats {
   double dt = 0.0;
   SphStepLimit limit = SphStepLimit::kMaxDt;  ///< the criterion that chose dt (kFixed for fixed_dt)
   // The limits at the start of the step (all already scaled by cfl; infinity where not applicable).
-  double dt_speed = 0.0;                ///< cfl h / max speed
-  double dt_sound = 0.0;                ///< cfl h / c, c the sound speed at the largest fluid density
-  double dt_viscosity = 0.0;            ///< cfl h^2 rho_0 / (mu (15 | 40/3)), 3D | 2D: 2 / max eigenvalue
-  double dt_force = 0.0;                ///< cfl sqrt(h / max |a|)
-  double dt_elastic = 0.0;              ///< min over the force terms (elastic wave speed, 8.2)
-  double max_speed = 0.0;               ///< fluid particles, after the step
-  double max_density_error = 0.0;       ///< max |rho - rho_0| / rho_0 over fluid particles
-  double kinetic_energy = 0.0;          ///< fluid particles
-  double compression_energy = 0.0;      ///< sum m e(rho) of the equation of state (fluid particles)
+  double dt_speed = 0.0;           ///< cfl h / max speed
+  double dt_sound = 0.0;           ///< cfl h / c, c the sound speed at the largest fluid density
+  double dt_viscosity = 0.0;       ///< cfl h^2 rho_0 / (mu (15 | 40/3)), 3D | 2D: 2 / max eigenvalue
+  double dt_force = 0.0;           ///< cfl sqrt(h / max |a|)
+  double dt_elastic = 0.0;         ///< min over the force terms (elastic wave speed, 8.2)
+  double max_speed = 0.0;          ///< fluid particles, after the step
+  double max_density_error = 0.0;  ///< max |rho - rho_0| / rho_0 over fluid particles
+  double kinetic_energy = 0.0;     ///< fluid particles
+  /// sum m e(rho) of the equation of state over the fluid particles, plus over the boundary particles with
+  /// SphBoundaryPressure::kSummation (their e(rho) = 0 below rho_0, matching the clamped wall pressure).
+  /// Kinetic + compression - sum_fluid m g . x is the energy the conservative defaults do not increase.
+  double compression_energy = 0.0;
   double term_energy = 0.0;             ///< potential energy of the force terms (elastic, 8.2)
   double neighbors_per_particle = 0.0;  ///< mean, all particles, self excluded
   double seconds = 0.0;                 ///< wall time of the step
@@ -102,10 +116,10 @@ class SphInstabilityError : public std::runtime_error {
   uint64_t step_;
 };
 
-/// Explicit SPH solver. Pressure forces use the spiky gradient, density and XSPH the poly6 kernel, viscosity
-/// the viscosity Laplacian (see SphKernels). Boundary particles get densities and (non-negative) pressures
-/// and push fluid particles with the same symmetric pair force, but are not integrated. All particle sums run
-/// in a serial, stable cell order, so results are bitwise identical for any thread count.
+/// Explicit SPH solver. Pressure forces use the poly6 (or spiky) gradient, density and XSPH the poly6 kernel,
+/// viscosity the viscosity Laplacian (see SphKernels). Boundary particles get densities and (non-negative)
+/// pressures and push fluid particles with the same symmetric pair force, but are not integrated. All
+/// particle sums run in a serial, stable cell order, so results are bitwise identical for any thread count.
 ///
 /// Integration (velocity Verlet, kick-drift-kick): v' = v + dt/2 a(x); x += dt (v' + xsph); a' = a(x, v'');
 /// v = v' + dt/2 a', where viscosity and XSPH use the predicted velocity v'' = v' + dt/2 a.

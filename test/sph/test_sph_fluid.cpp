@@ -50,15 +50,15 @@ SphParticles tankParticles(const Tank2D& tank, const SphFluidConfig& c) {
 // +-20% (at depth H/4) off in alternation: under compression the rows of the square lattice pair up (the
 // poly6 gradient vanishes at r = 0), and the symmetric force (8.17) does not see an odd-even pressure
 // pattern, so band pairs average it out (bands of lattice height y, cut at depth H/4, split a pair: 18% off).
-// Worst band: 0.7% with extrapolated wall pressure (the default), 1.2% with summation walls
-// (SphBoundaryPressure::kSummation). The poly6 pressure gradient is used: on a square lattice with h = 2.5
-// dx, sum_j V_j r_ji (x) grad W_ij is 1.003 I for poly6 but 0.93 I for spiky, so spiky pressures settle ~7%
-// high.
+// Worst band: 1.2% with summation walls (the default, energy-conserving), 0.7% with extrapolated wall
+// pressure (SphBoundaryPressure::kExtrapolated). The poly6 pressure gradient is used: on a square lattice
+// with h = 2.5 dx, sum_j V_j r_ji (x) grad W_ij is 1.003 I for poly6 but 0.93 I for spiky, so spiky pressures
+// settle ~7% high.
 TEST(SphFluidSolver, HydrostaticTankSettlesToRhoGDepth) {
   Tank2D tank;
   tank.ratio = 2.5;
   const SphFluidConfig config = tankConfig(tank);
-  ASSERT_EQ(config.boundary_pressure, SphBoundaryPressure::kExtrapolated);  // the default
+  ASSERT_EQ(config.boundary_pressure, SphBoundaryPressure::kSummation);  // the default
   SphFluidSolver solver(config, tankParticles(tank, config));
   solver.advance(0.5);
   const double h = config.smoothing_length, g = 9.81, rho0 = config.rest_density;

@@ -74,10 +74,9 @@ TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
 SphFluidConfig handDamBreakConfig() {
   SphFluidConfig c;
   c.stiffness = 392400.0;
-  c.viscosity = 1.0;
+  c.viscosity = 0.5;
   c.xsph = 0.1;
   c.negative_pressure_scale = 0.01;
-  c.pressure_kernel = SphPressureKernel::kSpiky;
   return c;
 }
 
@@ -146,7 +145,9 @@ TEST(SphSceneFile, DamBreakFileRunsBitwiseLikeTheHandBuiltScene) {
   // The fluid falls and spreads: the floor and walls stop the fall, so they pushed up on it.
   EXPECT_GT(stats.boundary_impulse.y(), 0.0);
   EXPECT_GT(stats.momentum_end.x(), 0.0);
-  EXPECT_LT(std::abs(stats.energy_change), 0.2);  // viscosity dissipates; no source of energy
+  // Viscosity and XSPH dissipate (about -20% by t = 0.2 s); nothing adds energy (test_sph_energy.cpp).
+  EXPECT_LT(stats.energy_change, 0.0);
+  EXPECT_GT(stats.energy_change, -0.5);
   const std::string json = sphRunStatsJson(stats);
   EXPECT_NE(json.find("\"steps\":" + std::to_string(stats.steps)), std::string::npos) << json;
   EXPECT_NE(json.find("\"instability\":\"none\""), std::string::npos) << json;
