@@ -59,21 +59,10 @@ struct AccuracyRow {
   rc::SphSurgeRun run;
 };
 
-// Dam break of the validation test (L = 0.1 m, column 2L high, tank 5L), n particles across the column.
+// The validated dam break (sph_dam_break_surge.h) with n particles across the column.
 AccuracyRow damBreakAccuracy(int n, double cfl, double ratio) {
-  SphDamBreak2D scene;
-  scene.column_width = 0.1;
-  scene.column_height = 0.2;
-  scene.tank_width = 0.5;
-  scene.tank_height = 0.25;
-  scene.dx = scene.column_width / n;
-  scene.smoothing_ratio = ratio;
-  SphFluidConfig c;
-  const double speed_of_sound = 10.0 * std::sqrt(2.0 * 9.81 * scene.column_height);
-  c.stiffness = speed_of_sound * speed_of_sound * c.rest_density;
-  c.viscosity = 1.0;
-  c.xsph = 0.1;
-  c.negative_pressure_scale = 0.01;
+  const SphDamBreak2D scene = martinMoyceDamBreak(n, ratio);
+  SphFluidConfig c = martinMoyceDamBreakConfig(scene);
   c.cfl = cfl;
   c.num_threads = 1;
   return {n, cfl, ratio, runDamBreakSurge(scene, c, martinMoyceSurge(), 3.0)};

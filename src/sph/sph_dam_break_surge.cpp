@@ -21,6 +21,28 @@ const std::vector<SphSurgeSample>& koshizukaOkaSurge() {
   return data;
 }
 
+SphDamBreak2D martinMoyceDamBreak(int particles_across, double smoothing_ratio) {
+  if (particles_across < 1) throw std::invalid_argument("martinMoyceDamBreak: particles_across must be >= 1");
+  SphDamBreak2D scene;
+  scene.column_width = 0.1;
+  scene.column_height = 0.2;
+  scene.tank_width = 0.5;
+  scene.tank_height = 0.25;
+  scene.dx = scene.column_width / particles_across;
+  scene.smoothing_ratio = smoothing_ratio;
+  return scene;
+}
+
+SphFluidConfig martinMoyceDamBreakConfig(const SphDamBreak2D& scene) {
+  SphFluidConfig c;
+  // K = rho_0 c^2 with c = 10 sqrt(2 g H), rounded to 1 Pa as config/sph/dam_break_2d.yaml writes it
+  c.stiffness = std::round(100.0 * 2.0 * 9.81 * scene.column_height * c.rest_density);
+  c.viscosity = 0.5;
+  c.xsph = 0.1;
+  c.negative_pressure_scale = 0.01;
+  return c;
+}
+
 double interpolateSurge(const std::vector<SphSurgeSample>& reference, double t_star) {
   if (reference.empty()) throw std::invalid_argument("interpolateSurge: the reference is empty");
   if (t_star <= reference.front().t_star) return reference.front().x_over_l;

@@ -33,6 +33,16 @@ const std::vector<SphSurgeSample>& koshizukaOkaSurge();
 /// std::invalid_argument for an empty reference.
 double interpolateSurge(const std::vector<SphSurgeSample>& reference, double t_star);
 
+/// The validated 2D dam break (test_sph_validation, test_sph_energy, bench_sph_fluid, config/sph/
+/// dam_break_2d.yaml): L = 0.1 m, column 2L high, tank 5L wide and 2.5L high, `particles_across` particles
+/// across the column (20: 800 fluid particles), h = `smoothing_ratio` dx.
+SphDamBreak2D martinMoyceDamBreak(int particles_across = 20, double smoothing_ratio = 3.0);
+
+/// Its solver settings: the energy-conserving defaults (poly6 pressure gradient, summation walls), speed of
+/// sound c = 10 sqrt(2 g 2L) (K = rho_0 c^2), mu = 0.5 Pa s, XSPH 0.1, zeta = 0.01. Surge front within 8.7%
+/// of Martin & Moyce and 5.1% of Koshizuka & Oka (t* <= 3) at 20 particles across.
+SphFluidConfig martinMoyceDamBreakConfig(const SphDamBreak2D& scene);
+
 struct SphSurgeRun {
   std::vector<SphSurgeSample> front;  ///< simulated front at the t* of the reference samples
   double max_abs_error = 0.0;         ///< max |x/L - ref| over the samples

@@ -162,16 +162,8 @@ TEST(SphEnergy, FreeBlobConservesEnergy) {
 // rises (before the fix: +23% in 0.25 s with the spiky gradient and extrapolated walls), and the surge front
 // still follows Martin & Moyce within 10% and Koshizuka & Oka within 15% up to t* = 3.
 TEST(SphEnergy, DamBreakLosesEnergyAndKeepsItsSurgeFront) {
-  SphDamBreak2D scene;
-  scene.column_width = 0.1;
-  scene.column_height = 0.2;
-  scene.tank_width = 0.5;
-  scene.tank_height = 0.25;
-  scene.dx = 0.005;
-  scene.smoothing_ratio = 3.0;
-  SphFluidConfig c = withDissipation(0.5, 0.1);
-  const double speed_of_sound = 10.0 * std::sqrt(2.0 * 9.81 * scene.column_height);
-  c.stiffness = speed_of_sound * speed_of_sound * c.rest_density;
+  const SphDamBreak2D scene = martinMoyceDamBreak(20, 3.0);
+  SphFluidConfig c = martinMoyceDamBreakConfig(scene);
   c.num_threads = 1;
   SphParticles particles = makeDamBreak2D(scene, c);
   SphFluidSolver solver(c, std::move(particles));

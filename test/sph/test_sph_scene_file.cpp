@@ -1,4 +1,5 @@
 // SPH scene files (config/sph), the scene runner of rc_sph and the particle outputs (PLY, VTK .vtp).
+#include "sph/sph_dam_break_surge.h"
 #include "sph/sph_scene_file.h"
 
 #include <gtest/gtest.h>
@@ -71,24 +72,12 @@ TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
 }
 
 /// The dam break of test_sph_validation.cpp, built by hand.
-SphFluidConfig handDamBreakConfig() {
-  SphFluidConfig c;
-  c.stiffness = 392400.0;
-  c.viscosity = 0.5;
-  c.xsph = 0.1;
-  c.negative_pressure_scale = 0.01;
-  return c;
+SphDamBreak2D handDamBreak() {
+  return martinMoyceDamBreak(20, 3.0);
 }
 
-SphDamBreak2D handDamBreak() {
-  SphDamBreak2D scene;
-  scene.column_width = 0.1;
-  scene.column_height = 0.2;
-  scene.tank_width = 0.5;
-  scene.tank_height = 0.25;
-  scene.dx = 0.005;
-  scene.smoothing_ratio = 3.0;
-  return scene;
+SphFluidConfig handDamBreakConfig() {
+  return martinMoyceDamBreakConfig(handDamBreak());
 }
 
 bool sameBits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {

@@ -18,24 +18,11 @@ namespace {
 /// & Oka). The thesis' spiky gradient with extrapolated walls and mu = 1 (the former setup) reads 0.068 and
 /// 0.111 but gains 28% energy in 0.25 s; with mu = 1 the poly6 defaults read 0.106 and 0.062.
 SphDamBreak2D coarseDamBreak() {
-  SphDamBreak2D scene;
-  scene.column_width = 0.1;
-  scene.column_height = 0.2;
-  scene.tank_width = 0.5;
-  scene.tank_height = 0.25;
-  scene.dx = 0.005;
-  scene.smoothing_ratio = 3.0;
-  return scene;
+  return martinMoyceDamBreak(20, 3.0);
 }
 
 SphFluidConfig damBreakConfig(const SphDamBreak2D& scene) {
-  SphFluidConfig c;
-  const double speed_of_sound = 10.0 * std::sqrt(2.0 * 9.81 * scene.column_height);
-  c.stiffness = speed_of_sound * speed_of_sound * c.rest_density;
-  c.viscosity = 0.5;
-  c.xsph = 0.1;
-  c.negative_pressure_scale = 0.01;
-  return c;
+  return martinMoyceDamBreakConfig(scene);
 }
 
 void printRun(const char* name, const SphSurgeRun& run, const std::vector<SphSurgeSample>& reference) {
