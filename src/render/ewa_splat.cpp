@@ -290,13 +290,14 @@ namespace {
 /// must decide (edge-on surfels, plane depth not defined over the whole box).
 bool setupCircularCommonCase(const Vec3& c, const Vec3& n, double radius, const CameraFrame& camera,
                              const EwaParams& params, SplatRaster* raster, SplatSetup* result) {
-  if (!(c.z() >= camera.near_clip && c.z() <= camera.far_clip)) {
+  const double n_dot_view = camera.perspective ? n.dot(c) : n.z();
+  if (!(c.z() >= camera.near_clip && c.z() <= camera.far_clip) || (params.backface_culling && n_dot_view > 0)) {
     *result = SplatSetup::kCulled;
     return true;
   }
   // Screen footprint r^2 J (I - n n^T) J^T of the affine approximation of the projection at the centre.
   const double r2 = radius * radius;
-  double n_dot_view, view_length2, f00, f01, f11, center_u, center_v;
+  double view_length2, f00, f01, f11, center_u, center_v;
   if (camera.perspective) {
     const double inv_z = 1.0 / c.z();
     const double j00 = camera.fx * inv_z, j02 = -camera.fx * c.x() * inv_z * inv_z;
@@ -307,7 +308,6 @@ bool setupCircularCommonCase(const Vec3& c, const Vec3& n, double radius, const 
     f11 = r2 * (j11 * j11 + j12 * j12 - jn1 * jn1);
     center_u = camera.cx + camera.fx * c.x() * inv_z;
     center_v = camera.cy + camera.fy * c.y() * inv_z;
-    n_dot_view = n.dot(c);
     view_length2 = c.squaredNorm();
   } else {
     const double k = camera.ortho_scale, jn0 = k * n.x(), jn1 = k * n.y();
@@ -316,12 +316,7 @@ bool setupCircularCommonCase(const Vec3& c, const Vec3& n, double radius, const 
     f11 = r2 * (k * k - jn1 * jn1);
     center_u = camera.cx + camera.ortho_scale * c.x();
     center_v = camera.cy + camera.ortho_scale * c.y();
-    n_dot_view = n.z();
     view_length2 = 1.0;
-  }
-  if (params.backface_culling && n_dot_view > 0) {
-    *result = SplatSetup::kCulled;
-    return true;
   }
   const double scale2 = f00 + f11, det2 = f00 * f11 - f01 * f01;
   if (n_dot_view * n_dot_view < kEdgeOnCosine * kEdgeOnCosine * view_length2 ||
