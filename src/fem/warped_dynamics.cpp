@@ -1,0 +1,395 @@
+#include "fem/warped_dynamics.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/OrderingMethods>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "fem/horn_registration.h"
+
+namespace rc {
+namespace {
+
+// Below this many elements the per-step loops run serially (thread start-up dominates).
+constexpr int kParallelElements = 512;
+// Solve / release rounds of the contact set per step.
+constexpr int kMaxContactRounds = 4;
+
+void checkVector(const Eigen::VectorXd& v, Eigen::Index size, const char* name) {
+  if (v.size() != size)
+    throw std::invalid_argument(std::string("WarpedDynamics: ") + name + " has " + std::to_string(v.size()) +
+                                " entries for " + std::to_string(size) + " dofs");
+  if (!v.allFinite()) throw std::invalid_argument(std::string("WarpedDynamics: ") + name + " is not finite");
+}
+
+int valueIndex(const Eigen::SparseMatrix<double>& m, int row, int col) {
+  const int* begin = m.innerIndexPtr() + m.outerIndexPtr()[col];
+  const int* end = m.innerIndexPtr() + m.outerIndexPtr()[col + 1];
+  const int* it = std::lower_bound(begin, end, row);
+  if (it == end || *it != row) throw std::logic_error("WarpedDynamics: stiffness pattern lacks an entry");
+  return static_cast<int>(it - m.innerIndexPtr());
+}
+
+}  // namespace
+
+WarpedDynamics::WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOptions& options)
+    : model_(std::move(model)), options_(options) {
+  if (!(options_.time_step > 0.0) || !std::isfinite(options_.time_step))
+    throw std::invalid_argument("WarpedDynamics: time_step must be positive and finite, got " +
+                                std::to_string(options_.time_step));
+  if (!(options_.mass_damping >= 0.0) || !(options_.stiffness_damping >= 0.0))
+    throw std::invalid_argument("WarpedDynamics: Rayleigh damping coefficients must be non-negative");
+  if (!options_.gravity.allFinite()) throw std::invalid_argument("WarpedDynamics: gravity is not finite");
+  if (options_.ground.enabled) {
+    if (!(options_.ground.normal.norm() > 0.0) || !options_.ground.normal.allFinite())
+      throw std::invalid_argument("WarpedDynamics: ground normal must be non-zero and finite");
+    options_.ground.normal.normalize();
+    if (!(options_.ground.friction >= 0.0))
+      throw std::invalid_argument("WarpedDynamics: ground friction must be non-negative");
+  }
+  if (!(options_.cg_tolerance > 0.0) || options_.cg_max_iterations <= 0)
+    throw std::invalid_argument("WarpedDynamics: cg_tolerance and cg_max_iterations must be positive");
+
+  const PolyhedralMesh& mesh = model_.mesh();
+  const int dofs = numDofs(), num_elements = mesh.numElements();
+  rest_.resize(dofs);
+  masses3_.resize(dofs);
+  gravity_forces_.resize(dofs);
+  for (int i = 0; i < mesh.numNodes(); ++i) {
+    rest_.segment<3>(3 * i) = mesh.node(i);
+    masses3_.segment<3>(3 * i).setConstant(model_.lumpedMasses()[i]);
+    gravity_forces_.segment<3>(3 * i) = model_.lumpedMasses()[i] * options_.gravity;
+  }
+  positions_ = rest_;
+  velocities_ = Eigen::VectorXd::Zero(dofs);
+  user_forces_ = Eigen::VectorXd::Zero(dofs);
+  elastic_forces_ = Eigen::VectorXd::Zero(dofs);
+  previous_dv_ = Eigen::VectorXd::Zero(dofs);
+
+  warped_stiffness_ = model_.stiffness();
+  warped_stiffness_.makeCompressed();
+  rotations_.assign(num_elements, Eigen::Matrix3d::Identity());
+  rotation_weights_.resize(num_elements);
+  rotated_stiffness_.resize(num_elements);
+  element_forces_.resize(num_elements);
+  scatter_.resize(num_elements);
+  for (int e = 0; e < num_elements; ++e) {
+    const auto& ids = mesh.element(e).globalNodeIds();
+    const int n = static_cast<int>(ids.size());
+    Eigen::VectorXd& w = rotation_weights_[e];
+    w.resize(n);
+    for (int a = 0; a < n; ++a)
+      w[a] = options_.rotation_weights == WarpedDynamicsOptions::RotationWeights::kLumpedMasses
+                 ? model_.lumpedMasses()[ids[a]]
+                 : model_.quadrature(e).node_volume_fractions[a];
+    std::vector<int>& scatter = scatter_[e];
+    scatter.resize(9 * n * n);
+    for (int col = 0; col < 3 * n; ++col)
+      for (int row = 0; row < 3 * n; ++row)
+        scatter[col * 3 * n + row] =
+            valueIndex(warped_stiffness_, 3 * ids[row / 3] + row % 3, 3 * ids[col / 3] + col % 3);
+  }
+  diagonal_index_.resize(dofs);
+  for (int d = 0; d < dofs; ++d) diagonal_index_[d] = valueIndex(warped_stiffness_, d, d);
+  system_matrix_ = warped_stiffness_;
+}
+
+void WarpedDynamics::setPositions(const Eigen::VectorXd& positions) {
+  checkVector(positions, numDofs(), "positions");
+  positions_ = positions;
+}
+
+void WarpedDynamics::setVelocities(const Eigen::VectorXd& velocities) {
+  checkVector(velocities, numDofs(), "velocities");
+  velocities_ = velocities;
+}
+
+void WarpedDynamics::setExternalForces(const Eigen::VectorXd& forces) {
+  checkVector(forces, numDofs(), "external forces");
+  user_forces_ = forces;
+}
+
+void WarpedDynamics::gatherElement(int e, const Eigen::VectorXd& global, Eigen::VectorXd& local) const {
+  const auto& ids = model_.mesh().element(e).globalNodeIds();
+  local.resize(3 * ids.size());
+  for (size_t a = 0; a < ids.size(); ++a) local.segment<3>(3 * a) = global.segment<3>(3 * ids[a]);
+}
+
+WarpedDynamics::ElementFrame WarpedDynamics::elementFrame(int e, const Eigen::VectorXd& positions,
+                                                          const Eigen::Matrix3d& previous) const {
+  Eigen::VectorXd rest_local, current_local;
+  gatherElement(e, rest_, rest_local);
+  gatherElement(e, positions, current_local);
+  const HornRegistration reg = hornRegistration(rest_local, current_local, rotation_weights_[e]);
+  ElementFrame frame{reg.rotation, reg.rest_centroid, reg.current_centroid, false};
+  if (!options_.stiffness_warping) {
+    frame.rotation.setIdentity();
+  } else if (!(reg.eigenvalue_gap > options_.min_eigenvalue_gap)) {
+    frame.rotation = previous;
+    frame.degenerate = true;
+  }
+  return frame;
+}
+
+Eigen::VectorXd WarpedDynamics::elementDisplacement(int e, const ElementFrame& frame) const {
+  // u_e = R^T (x_e - c) - (X_e - C)
+  const auto& ids = model_.mesh().element(e).globalNodeIds();
+  Eigen::VectorXd u(3 * ids.size());
+  for (size_t a = 0; a < ids.size(); ++a)
+    u.segment<3>(3 * a) =
+        frame.rotation.transpose() * (positions_.segment<3>(3 * ids[a]) - frame.current_centroid) -
+        (rest_.segment<3>(3 * ids[a]) - frame.rest_centroid);
+  return u;
+}
+
+void WarpedDynamics::updateWarping() {
+  const int num_elements = model_.mesh().numElements();
+  int degenerate = 0;
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : degenerate) if (num_elements >= kParallelElements)
+  for (int e = 0; e < num_elements; ++e) {
+    const ElementFrame frame = elementFrame(e, positions_, rotations_[e]);
+    rotations_[e] = frame.rotation;
+    degenerate += frame.degenerate ? 1 : 0;
+    const Eigen::MatrixXd& k = model_.elementStiffness(e);
+    const Eigen::Matrix3d& r = frame.rotation;
+    const int n = static_cast<int>(k.rows() / 3);
+    // f_e = -R K_e u_e
+    const Eigen::VectorXd ku = k * elementDisplacement(e, frame);
+    Eigen::VectorXd& f = element_forces_[e];
+    f.resize(3 * n);
+    for (int a = 0; a < n; ++a) f.segment<3>(3 * a) = -(r * ku.segment<3>(3 * a));
+    // R K_e R^T block-wise
+    Eigen::MatrixXd& rk = rotated_stiffness_[e];
+    rk.resize(3 * n, 3 * n);
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < n; ++a)
+        rk.block<3, 3>(3 * a, 3 * b).noalias() = r * k.block<3, 3>(3 * a, 3 * b) * r.transpose();
+  }
+  degenerate_rotations_ = degenerate;
+  elastic_forces_.setZero();
+  Eigen::Map<Eigen::VectorXd> values(warped_stiffness_.valuePtr(), warped_stiffness_.nonZeros());
+  values.setZero();
+  for (int e = 0; e < num_elements; ++e) {
+    const auto& ids = model_.mesh().element(e).globalNodeIds();
+    for (size_t a = 0; a < ids.size(); ++a)
+      elastic_forces_.segment<3>(3 * ids[a]) += element_forces_[e].segment<3>(3 * a);
+    const double* rk = rotated_stiffness_[e].data();
+    const std::vector<int>& scatter = scatter_[e];
+    for (size_t k = 0; k < scatter.size(); ++k) values[scatter[k]] += rk[k];
+  }
+}
+
+Eigen::VectorXd WarpedDynamics::solveSystem(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
+                                            const Eigen::VectorXd& guess, StepStatistics& stats) {
+  Eigen::VectorXd x;
+  if (options_.solver == WarpedDynamicsOptions::Solver::kSimplicialLDLT) {
+    if (!ldlt_analyzed_) {
+      ldlt_.analyzePattern(a);
+      ldlt_analyzed_ = true;
+    }
+    ldlt_.factorize(a);
+    if (ldlt_.info() != Eigen::Success)
+      throw std::runtime_error("WarpedDynamics::step: LDLT factorisation of M + dt C + dt^2 K failed");
+    x = ldlt_.solve(b);
+    stats.solver_iterations += 1;
+  } else if (options_.preconditioner == WarpedDynamicsOptions::Preconditioner::kJacobi) {
+    jacobi_cg_.setTolerance(options_.cg_tolerance);
+    jacobi_cg_.setMaxIterations(options_.cg_max_iterations);
+    jacobi_cg_.compute(a);
+    x = jacobi_cg_.solveWithGuess(b, guess);
+    stats.solver_iterations += static_cast<int>(jacobi_cg_.iterations());
+    stats.solver_error = jacobi_cg_.error();
+    stats.converged = stats.converged && jacobi_cg_.info() == Eigen::Success;
+  } else {
+    ichol_cg_.setTolerance(options_.cg_tolerance);
+    ichol_cg_.setMaxIterations(options_.cg_max_iterations);
+    ichol_cg_.compute(a);
+    if (ichol_cg_.info() != Eigen::Success)
+      throw std::runtime_error("WarpedDynamics::step: incomplete Cholesky preconditioner failed");
+    x = ichol_cg_.solveWithGuess(b, guess);
+    stats.solver_iterations += static_cast<int>(ichol_cg_.iterations());
+    stats.solver_error = ichol_cg_.error();
+    stats.converged = stats.converged && ichol_cg_.info() == Eigen::Success;
+  }
+  if (!x.allFinite()) throw std::runtime_error("WarpedDynamics::step: the velocity update is not finite");
+  return x;
+}
+
+void WarpedDynamics::buildConstrainedMatrix(const std::vector<char>& active) {
+  // A' = S A S + (I - S), S_i = I - n n^T on contact nodes, I elsewhere; blocks of A are full 3 x 3.
+  constrained_matrix_ = system_matrix_;
+  const Vec3& n = options_.ground.normal;
+  const Eigen::Matrix3d s = Eigen::Matrix3d::Identity() - n * n.transpose();
+  const int* outer = constrained_matrix_.outerIndexPtr();
+  const int* inner = constrained_matrix_.innerIndexPtr();
+  double* values = constrained_matrix_.valuePtr();
+  for (int j = 0; j < numNodes(); ++j) {
+    const int count = outer[3 * j + 1] - outer[3 * j];
+    for (int k = 0; k < count; k += 3) {
+      const int i = inner[outer[3 * j] + k] / 3;
+      if (!active[i] && !active[j]) continue;
+      Eigen::Matrix3d block;
+      for (int q = 0; q < 3; ++q)
+        for (int p = 0; p < 3; ++p) block(p, q) = values[outer[3 * j + q] + k + p];
+      if (active[i]) block = s * block;
+      if (active[j]) block = block * s;
+      if (i == j && active[i]) block += n * n.transpose();
+      for (int q = 0; q < 3; ++q)
+        for (int p = 0; p < 3; ++p) values[outer[3 * j + q] + k + p] = block(p, q);
+    }
+  }
+}
+
+StepStatistics WarpedDynamics::step() {
+  StepStatistics stats;
+  updateWarping();
+  stats.degenerate_rotations = degenerate_rotations_;
+  const double dt = options_.time_step, alpha = options_.mass_damping, beta = options_.stiffness_damping;
+
+  // A = (1 + dt alpha) M + (dt^2 + dt beta) K_w
+  const int nnz = static_cast<int>(warped_stiffness_.nonZeros());
+  const double stiffness_scale = dt * dt + dt * beta;
+  for (int k = 0; k < nnz; ++k)
+    system_matrix_.valuePtr()[k] = stiffness_scale * warped_stiffness_.valuePtr()[k];
+  for (int d = 0; d < numDofs(); ++d)
+    system_matrix_.valuePtr()[diagonal_index_[d]] += (1.0 + dt * alpha) * masses3_[d];
+
+  // b = dt (f_ext + f_int - alpha M v - (beta + dt) K_w v)
+  const Eigen::VectorXd kv = warped_stiffness_ * velocities_;
+  const Eigen::VectorXd rhs = dt * (gravity_forces_ + user_forces_ + elastic_forces_ -
+                                    alpha * masses3_.cwiseProduct(velocities_) - (beta + dt) * kv);
+  const Eigen::VectorXd guess = options_.cg_warm_start ? previous_dv_ : Eigen::VectorXd::Zero(numDofs());
+
+  // Contact set: nodes on or below the ground get v+ . n = 0 inside the solve; nodes whose reaction
+  // n . (A dv - b) would pull are released and the step is solved again.
+  const GroundPlane& g = options_.ground;
+  std::vector<char> active(numNodes(), 0);
+  int num_active = 0;
+  if (g.enabled)
+    for (int i = 0; i < numNodes(); ++i)
+      if (g.normal.dot(positions_.segment<3>(3 * i)) <= g.offset) {
+        active[i] = 1;
+        ++num_active;
+      }
+  Eigen::VectorXd dv, reaction;
+  for (int round = 0;; ++round) {
+    ++stats.contact_rounds;
+    if (num_active == 0) {
+      dv = solveSystem(system_matrix_, rhs, guess, stats);
+      break;
+    }
+    Eigen::VectorXd z = Eigen::VectorXd::Zero(numDofs());  // prescribed part: dv . n = -v . n
+    for (int i = 0; i < numNodes(); ++i)
+      if (active[i]) z.segment<3>(3 * i) = -g.normal.dot(velocities_.segment<3>(3 * i)) * g.normal;
+    Eigen::VectorXd b = rhs - system_matrix_ * z, y0 = guess;
+    for (int i = 0; i < numNodes(); ++i)
+      if (active[i]) {
+        b.segment<3>(3 * i) -= g.normal.dot(b.segment<3>(3 * i)) * g.normal;
+        y0.segment<3>(3 * i) -= g.normal.dot(y0.segment<3>(3 * i)) * g.normal;
+      }
+    buildConstrainedMatrix(active);
+    dv = solveSystem(constrained_matrix_, b, y0, stats) + z;
+    reaction = system_matrix_ * dv - rhs;       // ground impulse on each node (M dv = dt f + J)
+    if (round + 1 >= kMaxContactRounds) break;  // keep the last solve's contact set
+    int released = 0;
+    for (int i = 0; i < numNodes(); ++i)
+      if (active[i] && g.normal.dot(reaction.segment<3>(3 * i)) < 0.0) {
+        active[i] = 0;
+        --num_active;
+        ++released;
+      }
+    if (released == 0) break;
+  }
+  previous_dv_ = dv;
+  velocities_ += dv;
+  for (int i = 0; i < numNodes(); ++i) {
+    if (!active[i]) continue;
+    ++stats.contact_nodes;
+    // Coulomb friction: the tangential velocity shrinks by mu J_n / m_i.
+    auto v = velocities_.segment<3>(3 * i);
+    const Vec3 vt = v - g.normal.dot(v) * g.normal;
+    const double speed = vt.norm(),
+                 limit = g.friction * g.normal.dot(reaction.segment<3>(3 * i)) / masses3_[3 * i];
+    if (speed > 0.0) v -= std::min(1.0, limit / speed) * vt;
+  }
+  positions_ += dt * velocities_;
+  applyGroundContact(stats);
+  return stats;
+}
+
+void WarpedDynamics::applyGroundContact(StepStatistics& stats) {
+  // Nodes that crossed the plane during the step: project back, remove the inward normal velocity.
+  if (!options_.ground.enabled) return;
+  const GroundPlane& g = options_.ground;
+  for (int i = 0; i < numNodes(); ++i) {
+    auto x = positions_.segment<3>(3 * i);
+    const double depth = g.offset - g.normal.dot(x);
+    if (depth <= 0.0) continue;
+    ++stats.projected_nodes;
+    x += depth * g.normal;
+    auto v = velocities_.segment<3>(3 * i);
+    const double vn = g.normal.dot(v);
+    if (vn >= 0.0) continue;
+    v -= vn * g.normal;  // inelastic: remove the inward normal velocity
+    const double vt = v.norm();
+    if (vt > 0.0) v *= std::max(0.0, 1.0 - g.friction * (-vn) / vt);  // Coulomb friction impulse
+  }
+}
+
+double WarpedDynamics::kineticEnergy() const {
+  return 0.5 * velocities_.dot(masses3_.cwiseProduct(velocities_));
+}
+
+double WarpedDynamics::elasticEnergy() const {
+  const int num_elements = model_.mesh().numElements();
+  double energy = 0.0;
+#pragma omp parallel for schedule(dynamic, 16) reduction(+ : energy) if (num_elements >= kParallelElements)
+  for (int e = 0; e < num_elements; ++e) {
+    const Eigen::VectorXd u = elementDisplacement(e, elementFrame(e, positions_, rotations_[e]));
+    energy += 0.5 * u.dot(model_.elementStiffness(e) * u);
+  }
+  return energy;
+}
+
+double WarpedDynamics::gravityPotentialEnergy() const {
+  return -gravity_forces_.dot(positions_);
+}
+
+Vec3 WarpedDynamics::linearMomentum() const {
+  Vec3 p = Vec3::Zero();
+  for (int i = 0; i < numNodes(); ++i) p += masses3_[3 * i] * velocities_.segment<3>(3 * i);
+  return p;
+}
+
+Vec3 WarpedDynamics::angularMomentum(const Vec3& origin) const {
+  Vec3 l = Vec3::Zero();
+  for (int i = 0; i < numNodes(); ++i)
+    l += masses3_[3 * i] * (positions_.segment<3>(3 * i) - origin).cross(velocities_.segment<3>(3 * i));
+  return l;
+}
+
+Vec3 WarpedDynamics::centerOfMass() const {
+  Vec3 c = Vec3::Zero();
+  double mass = 0.0;
+  for (int i = 0; i < numNodes(); ++i) {
+    c += masses3_[3 * i] * positions_.segment<3>(3 * i);
+    mass += masses3_[3 * i];
+  }
+  return c / mass;
+}
+
+double WarpedDynamics::currentVolume() const {
+  double volume = 0.0;
+  for (const auto& t : model_.mesh().boundaryTriangles()) {
+    const Vec3 a = positions_.segment<3>(3 * t[0]), b = positions_.segment<3>(3 * t[1]),
+               c = positions_.segment<3>(3 * t[2]);
+    volume += a.dot(b.cross(c)) / 6.0;
+  }
+  return volume;
+}
+
+}  // namespace rc

@@ -1,0 +1,146 @@
+// Dynamics of a linear elastic polyhedral mesh with stiffness warping (thesis 9.1.4): lumped masses (9.21),
+// per-element rotations R_e by Horn's registration, corotational forces and linearised implicit Euler on
+// M U'' + D U' + K U = F (9.20), optional Rayleigh damping and ground contact by projection.
+//
+// With rest positions X, current positions x, element centroids C_e, c_e (registration weights) and
+// u_e = R_e^T (x_e - c_e) - (X_e - C_e):
+//   f_int(x) = -sum_e R_e K_e u_e,            K_w = sum_e R_e K_e R_e^T,          C = alpha M + beta K_w,
+//   (M + dt C + dt^2 K_w) dv = dt (f_ext + f_int(x) - C v - dt K_w v),   v+ = v + dv,   x+ = x + dt v+
+// (backward Euler with f_int(x+) ~ f_int(x) - K_w (x+ - x), rotations frozen over the step).
+// R_e maps rest to current offsets, so the thesis K'_e = R^T K_e R (R current to rest) is R_e K_e R_e^T here.
+// Ground contact (velocity clamp): nodes on or below the plane at the start of the step are constrained to
+// v+ . n = 0 inside the solve by the filter S_i = I - n n^T, i.e. (S A S + I - S) y = S (b - A z),
+// dv = y + z with z_i = -(n . v_i) n; nodes whose reaction J_i = n . (A dv - b)_i is negative (pulling) are
+// released and the step re-solved (at most 4 solves); Coulomb friction reduces the tangential speed by mu J_i
+// / m_i. Nodes that cross the plane during the step are projected back and lose their inward normal velocity.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <vector>
+
+#include "fem/linear_elasticity.h"
+
+namespace rc {
+
+struct GroundPlane {
+  bool enabled = false;
+  Vec3 normal = Vec3::UnitZ();  // normalised by WarpedDynamics
+  double offset = 0.0;          // plane: normal . x = offset; admissible side normal . x >= offset
+  double friction = 0.5;        // Coulomb coefficient for the velocity clamp
+};
+
+struct WarpedDynamicsOptions {
+  enum class Solver { kConjugateGradient, kSimplicialLDLT };
+  enum class Preconditioner { kJacobi, kIncompleteCholesky };
+  enum class RotationWeights { kLumpedMasses, kNodeVolumeFractions };
+
+  double time_step = 0.01;
+  bool stiffness_warping = true;   // false: R_e = I (plain linear elasticity)
+  double mass_damping = 0.0;       // Rayleigh alpha (F.3 uses no damping)
+  double stiffness_damping = 0.0;  // Rayleigh beta
+  Vec3 gravity = Vec3::Zero();
+  GroundPlane ground;
+  RotationWeights rotation_weights = RotationWeights::kLumpedMasses;
+  Solver solver = Solver::kConjugateGradient;
+  Preconditioner preconditioner = Preconditioner::kJacobi;
+  double cg_tolerance = 1e-8;  // relative residual |A dv - b| / |b|
+  int cg_max_iterations = 2000;
+  bool cg_warm_start = true;  // start from the previous step's dv
+  /// Keep the previous R_e when Horn's top eigenvalue gap is below this (collinear/collapsed element).
+  double min_eigenvalue_gap = 1e-12;
+};
+
+struct StepStatistics {
+  int solver_iterations = 0;  // CG iterations summed over the solves of the step (1 per direct solve)
+  double solver_error = 0.0;  // CG relative residual estimate (0 for the direct solver)
+  bool converged = true;
+  int contact_nodes = 0;         // nodes held on the ground inside the solve (v+ . n = 0)
+  int projected_nodes = 0;       // nodes that crossed the ground during the step and were projected back
+  int contact_rounds = 0;        // linear solves (contact set releases + 1)
+  int degenerate_rotations = 0;  // elements that kept their previous rotation
+};
+
+class WarpedDynamics {
+ public:
+  /// Starts at rest (x = X, v = 0). Throws std::invalid_argument for a non-positive or non-finite time step,
+  /// negative damping, a zero ground normal or non-positive CG settings.
+  WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOptions& options = WarpedDynamicsOptions());
+
+  const LinearElasticModel& model() const { return model_; }
+  const WarpedDynamicsOptions& options() const { return options_; }
+  int numNodes() const { return model_.mesh().numNodes(); }
+  int numDofs() const { return model_.numDofs(); }
+
+  /// 3 N vectors, node i at 3 i. Setters throw std::invalid_argument for a wrong size or non-finite values.
+  const Eigen::VectorXd& restPositions() const { return rest_; }
+  const Eigen::VectorXd& positions() const { return positions_; }
+  const Eigen::VectorXd& velocities() const { return velocities_; }
+  void setPositions(const Eigen::VectorXd& positions);
+  void setVelocities(const Eigen::VectorXd& velocities);
+  /// Nodal forces applied in addition to gravity (m_i g).
+  void setExternalForces(const Eigen::VectorXd& forces);
+
+  /// One linearised backward Euler step (header equations) followed by ground contact.
+  StepStatistics step();
+
+  /// Recomputes R_e, f_int and K_w from the current positions (step() does this first).
+  void updateWarping();
+  const std::vector<Eigen::Matrix3d>& rotations() const { return rotations_; }
+  const Eigen::VectorXd& elasticForces() const { return elastic_forces_; }
+  const Eigen::SparseMatrix<double>& warpedStiffness() const { return warped_stiffness_; }
+
+  /// Energies and momenta of the current state; the elastic energy 1/2 sum_e u_e^T K_e u_e uses rotations
+  /// registered to the current positions. Gravity potential -sum_i m_i g . x_i.
+  double kineticEnergy() const;
+  double elasticEnergy() const;
+  double gravityPotentialEnergy() const;
+  double totalEnergy() const { return kineticEnergy() + elasticEnergy() + gravityPotentialEnergy(); }
+  Vec3 linearMomentum() const;
+  Vec3 angularMomentum(const Vec3& origin = Vec3::Zero()) const;
+  Vec3 centerOfMass() const;
+  /// Volume enclosed by the deformed boundary triangles.
+  double currentVolume() const;
+
+ private:
+  struct ElementFrame {
+    Eigen::Matrix3d rotation;
+    Vec3 rest_centroid, current_centroid;
+    bool degenerate;
+  };
+  ElementFrame elementFrame(int e, const Eigen::VectorXd& positions, const Eigen::Matrix3d& previous) const;
+  void gatherElement(int e, const Eigen::VectorXd& global, Eigen::VectorXd& local) const;
+  Eigen::VectorXd elementDisplacement(int e, const ElementFrame& frame) const;  // u_e
+  void applyGroundContact(StepStatistics& stats);
+  Eigen::VectorXd solveSystem(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
+                              const Eigen::VectorXd& guess, StepStatistics& stats);
+  void buildConstrainedMatrix(const std::vector<char>& active);
+
+  LinearElasticModel model_;
+  WarpedDynamicsOptions options_;
+  Eigen::VectorXd rest_, positions_, velocities_, user_forces_, gravity_forces_, masses3_;
+  std::vector<Eigen::VectorXd> rotation_weights_;  // per element, per local node
+  std::vector<Eigen::Matrix3d> rotations_;
+  int degenerate_rotations_ = 0;
+  Eigen::VectorXd elastic_forces_;
+  std::vector<Eigen::MatrixXd> rotated_stiffness_;  // R_e K_e R_e^T (block-wise), scratch
+  std::vector<Eigen::VectorXd> element_forces_;     // scratch
+  std::vector<std::vector<int>> scatter_;           // column-major element entry -> value index in K_w
+  std::vector<int> diagonal_index_;                 // dof -> value index of the diagonal entry
+  Eigen::SparseMatrix<double> warped_stiffness_, system_matrix_, constrained_matrix_;
+  Eigen::VectorXd previous_dv_;
+  // Lower: the symmetric product is serial; Eigen's OpenMP SpMV (Lower | Upper) spin-waits badly on small
+  // systems when cores are shared.
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::DiagonalPreconditioner<double>>
+      jacobi_cg_;
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower,
+                           Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>
+      ichol_cg_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  bool ldlt_analyzed_ = false;
+};
+
+}  // namespace rc
