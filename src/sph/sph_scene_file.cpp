@@ -11,7 +11,10 @@
 #include <set>
 #include <sstream>
 
+#include <Eigen/Geometry>
+
 #include "sph/sph_kernels.h"
+#include "sph/sph_lattice.h"
 #include "sph/sph_scene.h"
 
 namespace rc {
@@ -60,8 +63,8 @@ class SceneReader {
 
   void read(const YAML::Node& root) {
     src_.allowKeys(root,
-                   {"name", "dimension", "spacing", "enable", "solver", "fluid", "boundary", "moving",
-                    "frames", "output"},
+                   {"name", "dimension", "spacing", "enable", "solver", "fluid", "solids", "boundary",
+                    "moving", "frames", "output"},
                    "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
     dimension_ = int(src_.integer(src_.require(root, "dimension", "scene"), "dimension", 2, 3));
@@ -69,9 +72,18 @@ class SceneReader {
     if (root["spacing"]) spacing_ = src_.positive(root["spacing"], "spacing");
     readEnable(root["enable"]);
     readSolver(src_.require(root, "solver", "scene"));
-    const YAML::Node fluid = src_.require(root, "fluid", "scene");
-    if (!fluid.IsSequence() || fluid.size() == 0) src_.fail(fluid, "fluid: expected a list of boxes");
-    for (size_t i = 0; i < fluid.size(); ++i) readFluid(fluid[i], "fluid[" + std::to_string(i) + "]");
+    const YAML::Node fluid = root["fluid"], solids = root["solids"];
+    if (solids && !enabled("elasticity"))
+      src_.fail(solids, "solids: needs 'elasticity' in the scene's 'enable' list");
+    if (!fluid && !solids) src_.fail(root, "scene: missing 'fluid' (or 'solids' with enable: [elasticity])");
+    if (fluid) {
+      if (!fluid.IsSequence() || fluid.size() == 0) src_.fail(fluid, "fluid: expected a list of boxes");
+      for (size_t i = 0; i < fluid.size(); ++i) readFluid(fluid[i], "fluid[" + std::to_string(i) + "]");
+    }
+    if (solids) {
+      if (!solids.IsSequence() || solids.size() == 0) src_.fail(solids, "solids: expected a list of solids");
+      for (size_t i = 0; i < solids.size(); ++i) readSolid(solids[i], "solids[" + std::to_string(i) + "]");
+    }
     if (root["boundary"]) readBoundary(root["boundary"]);
     if (root["moving"]) {
       const YAML::Node moving = root["moving"];
@@ -80,6 +92,7 @@ class SceneReader {
     }
     readFrames(src_.require(root, "frames", "scene"));
     if (root["output"]) readOutput(root["output"]);
+    if (enabled("surface")) finishSurface();
   }
 
  private:
@@ -93,10 +106,134 @@ class SceneReader {
       const std::string what = src_.string(node[i], "enable[" + std::to_string(i) + "]");
       if (std::find(known.begin(), known.end(), what) == known.end())
         src_.fail(node[i], "enable: unknown physics '" + what + "' (known: " + names + ")");
-      src_.fail(node[i], "enable: '" + what +
-                             "' is not implemented yet (only the fluid of thesis 8.1 is; remove it from "
-                             "'enable')");
+      if (what != "elasticity" && what != "surface")
+        src_.fail(node[i], "enable: '" + what +
+                               "' is not implemented yet (the fluid of thesis 8.1, elasticity and surface "
+                               "are; remove it from 'enable')");
+      if (enabled(what)) src_.fail(node[i], "enable: '" + what + "' is listed twice");
+      scene_.enabled_physics.push_back(what);
+      enable_nodes_[what] = node[i];
     }
+  }
+
+  bool enabled(const std::string& physics) const {
+    return std::find(scene_.enabled_physics.begin(), scene_.enabled_physics.end(), physics) !=
+           scene_.enabled_physics.end();
+  }
+
+  /// Reads an optional number key of `node` into `value` unless it is absent; `check` validates it.
+  template <typename Check>
+  void optionalNumber(const YAML::Node& node, const char* key, const std::string& where, double* value,
+                      Check check) const {
+    if (node[key]) *value = (src_.*check)(node[key], where + "." + key);
+  }
+
+  /// An elastic object (thesis 8.2): a box or a sphere (2D: disc) sampled on the closest-packing lattice
+  /// (8.20) around its centre, rotated by `rotation`, with its own phase id.
+  void readSolid(const YAML::Node& node, const std::string& where) {
+    const std::string shape = node["shape"] ? src_.string(node["shape"], where + ".shape") : "box";
+    std::set<std::string> keys = {"shape",          "spacing",
+                                  "model",          "youngs_modulus",
+                                  "poisson_ratio",  "hourglass_control",
+                                  "goal_stiffness", "deformation_allowance",
+                                  "velocity",       "phase",
+                                  "rotation"};
+    if (shape == "box") {
+      keys.insert({"lo", "hi"});
+    } else if (shape == "sphere") {
+      keys.insert({"center", "radius"});
+    } else {
+      src_.fail(node["shape"], where + ".shape: unknown shape '" + shape + "' (box, sphere)");
+    }
+    src_.allowKeys(node, keys, where);
+    SphSceneSolid solid;
+    SphElasticConfig& e = solid.elastic;
+    e.lattice_spacing = blockSpacing(node, where);
+    if (!(e.lattice_spacing < scene_.config.smoothing_length))
+      src_.fail(node, where + ": the lattice spacing must be below the smoothing length (no neighbours)");
+    const std::string model = node["model"] ? src_.string(node["model"], where + ".model") : "goal_position";
+    const char* strain_keys[] = {"youngs_modulus", "poisson_ratio", "hourglass_control"};
+    const char* goal_keys[] = {"goal_stiffness", "deformation_allowance"};
+    if (model == "strain") {
+      e.model = SphElasticModel::kStrain;
+      for (const char* k : goal_keys)
+        if (node[k]) src_.fail(node[k], where + "." + k + ": applies to model goal_position, not strain");
+      optionalNumber(node, "youngs_modulus", where, &e.youngs_modulus, &Source::positive);
+      optionalNumber(node, "poisson_ratio", where, &e.poisson_ratio, &Source::number);
+      optionalNumber(node, "hourglass_control", where, &e.hourglass_control, &Source::nonNegative);
+    } else if (model == "goal_position") {
+      e.model = SphElasticModel::kGoalPosition;
+      for (const char* k : strain_keys)
+        if (node[k]) src_.fail(node[k], where + "." + k + ": applies to model strain, not goal_position");
+      optionalNumber(node, "goal_stiffness", where, &e.goal_stiffness, &Source::positive);
+      optionalNumber(node, "deformation_allowance", where, &e.deformation_allowance, &Source::unitInterval);
+    } else {
+      src_.fail(node["model"], where + ".model: unknown model '" + model + "' (strain, goal_position)");
+    }
+    try {
+      e.validate();
+    } catch (const std::invalid_argument& ex) {
+      src_.fail(node, where + ": " + ex.what());
+    }
+    // Phase id: given (unique, 1..255) or the next unused one.
+    if (node["phase"]) {
+      solid.phase = uint8_t(src_.integer(node["phase"], where + ".phase", 1, 255));
+      if (phases_.count(solid.phase))
+        src_.fail(node["phase"],
+                  where + ".phase: " + std::to_string(solid.phase) + " is already used by another solid");
+    } else {
+      int next = 1;
+      while (next <= 255 && phases_.count(uint8_t(next))) ++next;
+      if (next > 255) src_.fail(node, where + ": more than 255 solids");
+      solid.phase = uint8_t(next);
+    }
+    phases_.insert(solid.phase);
+    if (const YAML::Node r = node["rotation"]) {
+      src_.allowKeys(r, {"axis", "angle"}, where + ".rotation");
+      Vec3 axis = Vec3::UnitZ();
+      if (r["axis"]) axis = src_.vec(r["axis"], where + ".rotation.axis", dimension_, false);
+      if (!(axis.norm() > 0)) src_.fail(r["axis"], where + ".rotation.axis must be non-zero");
+      axis.normalize();
+      if (dimension_ == 2 && (axis.x() != 0 || axis.y() != 0))
+        src_.fail(r["axis"], where + ".rotation.axis: must be [0, 0, 1] in 2D");
+      const double degrees =
+          src_.number(src_.require(r, "angle", where + ".rotation"), where + ".rotation.angle");
+      solid.orientation = Eigen::AngleAxisd(degrees * M_PI / 180.0, axis).toRotationMatrix();
+    }
+    const Vec3 velocity =
+        node["velocity"] ? src_.vec(node["velocity"], where + ".velocity", dimension_, true) : Vec3::Zero();
+    // Sample in the body frame around the centre (a lattice point, so never empty), then rotate and move.
+    const double d = e.lattice_spacing;
+    Vec3 center, half;
+    if (shape == "box") {
+      const Box box = readBox(src_, node, where, dimension_);
+      center = 0.5 * (box.lo + box.hi);
+      half = 0.5 * (box.hi - box.lo);
+    } else {
+      center = src_.vec(src_.require(node, "center", where), where + ".center", dimension_, false);
+      half = Vec3::Constant(src_.positive(src_.require(node, "radius", where), where + ".radius"));
+    }
+    if (dimension_ == 2) center.z() = half.z() = 0.0;
+    reserveLattice(node, where, center - half, center + half, d, 0);
+    SphParticles& particles = scene_.particles;
+    solid.first = particles.size();
+    try {
+      const SphLattice lattice(dimension_, d);
+      const SphKernels kernels(dimension_, scene_.config.smoothing_length);
+      const std::vector<Vec3> local = shape == "box"
+                                          ? sampleLatticeBox(lattice, -half, half, SphLatticeFrame())
+                                          : sampleLatticeSphere(lattice, Vec3::Zero(), half.x());
+      std::vector<Vec3> positions;
+      positions.reserve(local.size());
+      for (const Vec3& p : local) positions.push_back(center + solid.orientation * p);
+      const SphElasticSolid check(e, kernels, solid.phase, solid.orientation);
+      check.addParticles(particles, positions, lattice.particleMass(kernels, scene_.config.rest_density),
+                         velocity);
+    } catch (const std::invalid_argument& ex) {
+      src_.fail(node, where + ": " + ex.what());
+    }
+    solid.count = particles.size() - solid.first;
+    scene_.solids.push_back(solid);
   }
 
   void readSolver(const YAML::Node& node) {
@@ -313,7 +450,12 @@ class SceneReader {
   }
 
   void readOutput(const YAML::Node& node) {
-    src_.allowKeys(node, {"particles"}, "output");
+    src_.allowKeys(node, {"particles", "surface"}, "output");
+    if (const YAML::Node surface = node["surface"]) {
+      if (!enabled("surface"))
+        src_.fail(surface, "output.surface: needs 'surface' in the scene's 'enable' list");
+      readSurface(surface);
+    }
     const YAML::Node p = node["particles"];
     if (!p) return;
     src_.allowKeys(p, {"every", "formats"}, "output.particles");
@@ -332,8 +474,62 @@ class SceneReader {
     }
   }
 
+  /// output.surface: {every, formats: [obj, ply], cell_size, iso_value, particles: fluid | all}.
+  void readSurface(const YAML::Node& node) {
+    src_.allowKeys(node, {"every", "formats", "cell_size", "iso_value", "particles"}, "output.surface");
+    SphSurfaceOutput& out = scene_.surface;
+    if (node["every"]) {
+      out.every = int(src_.integer(node["every"], "output.surface.every", 1, 100000000));
+      surface_every_given_ = true;
+    }
+    if (const YAML::Node formats = node["formats"]) {
+      if (!formats.IsSequence() || formats.size() == 0)
+        src_.fail(formats, "output.surface.formats: expected a list (obj, ply)");
+      out.obj = out.ply = false;
+      for (size_t i = 0; i < formats.size(); ++i) {
+        const std::string f = src_.string(formats[i], "output.surface.formats");
+        if (f == "obj")
+          out.obj = true;
+        else if (f == "ply")
+          out.ply = true;
+        else
+          src_.fail(formats[i], "output.surface.formats: unknown format '" + f + "' (obj, ply)");
+      }
+    }
+    if (node["cell_size"])
+      out.config.cell_size = src_.positive(node["cell_size"], "output.surface.cell_size");
+    if (node["iso_value"])
+      out.config.iso_value = src_.positive(node["iso_value"], "output.surface.iso_value");
+    if (const YAML::Node p = node["particles"]) {
+      const std::string s = src_.string(p, "output.surface.particles");
+      if (s == "fluid")
+        out.config.particles = SphSurfaceParticles::kFluid;
+      else if (s == "all")
+        out.config.particles = SphSurfaceParticles::kFluidAndBoundary;
+      else
+        src_.fail(p, "output.surface.particles: unknown choice '" + s + "' (fluid, all)");
+    }
+  }
+
+  /// `enable: [surface]`: the surface follows the solver's h, rest density and threads; every frame of the
+  /// particle output unless output.surface.every is given.
+  void finishSurface() {
+    if (dimension_ != 3)
+      src_.fail(enable_nodes_.at("surface"), "enable: 'surface' needs a 3D scene (marching cubes)");
+    SphSurfaceOutput& out = scene_.surface;
+    out.enabled = true;
+    if (!surface_every_given_ && scene_.output.every > 0) out.every = scene_.output.every;
+    out.config.smoothing_length = scene_.config.smoothing_length;
+    out.config.rest_density = scene_.config.rest_density;
+    out.config.num_threads = scene_.config.num_threads;
+    out.config.validate();
+  }
+
   const Source& src_;
   SphScene& scene_;
+  std::map<std::string, YAML::Node> enable_nodes_;
+  std::set<uint8_t> phases_;
+  bool surface_every_given_ = false;
   int dimension_ = 3;
   double spacing_ = 0.0;
   double planned_ = 0.0;

@@ -7,8 +7,10 @@
 #include <string>
 #include <vector>
 
+#include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_particles.h"
+#include "sph/sph_surface.h"
 
 namespace rc {
 
@@ -26,6 +28,26 @@ struct SphParticleOutput {
   bool enabled() const { return every > 0 && (ply || vtp); }
 };
 
+/// Surface meshes written while a scene runs (`enable: [surface]`, key output.surface; thesis 8.2.7):
+/// marching cubes on the colour field of the integrated particles (fluid and solids), frame 0 and every
+/// `every`-th frame, as <name>_surface_NNNN.obj / .ply.
+struct SphSurfaceOutput {
+  bool enabled = false;
+  int every = 1;
+  bool obj = true, ply = false;
+  SphSurfaceConfig config;  ///< smoothing_length, rest_density and threads are the solver's
+};
+
+/// One elastic object of the scene (`enable: [elasticity]`, key solids; thesis 8.2): its particles are
+/// the `count` particles from `first` (kind kFluid, phases == phase), sampled on the closest-packing
+/// lattice of elastic.lattice_spacing in the orientation `orientation`.
+struct SphSceneSolid {
+  SphElasticConfig elastic;
+  uint8_t phase = 1;
+  Eigen::Matrix3d orientation = Eigen::Matrix3d::Identity();
+  size_t first = 0, count = 0;
+};
+
 /// A loaded scene, ready for the solver: config is validated, particles are filled, planes collected.
 struct SphScene {
   std::string name;  ///< `name:` or the file name without extension
@@ -37,10 +59,13 @@ struct SphScene {
   int frame_count = 1;
   double frame_time = 0.0;  ///< simulated seconds per frame
   SphParticleOutput output;
+  SphSurfaceOutput surface;
+  std::vector<SphSceneSolid> solids;
 };
 
-/// Optional physics a scene may list under `enable:`; none of them is implemented yet, so every entry is
-/// rejected with "not implemented yet" (an unknown name is rejected as unknown).
+/// Optional physics a scene may list under `enable:`. elasticity (key solids) and surface (key
+/// output.surface) are supported; the others are rejected with "not implemented yet", an unknown name as
+/// unknown. The keys of a physics not enabled are rejected.
 const std::vector<std::string>& sphOptionalPhysics();
 
 /// Reads a scene file. Throws SphSceneError naming the file, line and problem (syntax, unknown key, wrong

@@ -9,7 +9,11 @@
 #include <filesystem>
 #include <limits>
 
+#include "io/obj_io.h"
+#include "io/ply_io.h"
+#include "sph/sph_elastic_solid.h"
 #include "sph/sph_output.h"
+#include "sph/sph_surface.h"
 
 namespace rc {
 
@@ -44,10 +48,12 @@ class FrameWriter {
   FrameWriter(const SphScene& scene, const std::string& out_dir, SphRunStats* stats)
       : scene_(scene), dir_(out_dir), stats_(*stats) {
     active_ = !out_dir.empty() && scene.output.enabled();
-    if (active_) std::filesystem::create_directories(dir_);
+    surface_ = !out_dir.empty() && scene.surface.enabled && (scene.surface.obj || scene.surface.ply);
+    if (active_ || surface_) std::filesystem::create_directories(dir_);
   }
 
   void maybeWrite(int frame, const SphFluidSolver& solver) {
+    maybeWriteSurface(frame, solver);
     if (!active_ || frame % scene_.output.every != 0) return;
     const auto t0 = std::chrono::steady_clock::now();
     char stem[64];
@@ -71,10 +77,33 @@ class FrameWriter {
   }
 
  private:
+  /// Marching cubes surface of the frame (8.2.7): <name>_surface_NNNN.obj / .ply.
+  void maybeWriteSurface(int frame, const SphFluidSolver& solver) {
+    if (!surface_ || frame % scene_.surface.every != 0) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    char stem[64];
+    std::snprintf(stem, sizeof(stem), "_surface_%04d", frame);
+    const std::string base = scene_.name + stem;
+    SphSurfaceConfig config = scene_.surface.config;
+    config.num_threads = solver.config().num_threads;
+    const TriangleMesh mesh = extractSphSurface(solver.particles(), config);
+    if (scene_.surface.obj) {
+      const std::string path = (dir_ / (base + ".obj")).string();
+      writeObjMesh(path, mesh);
+      stats_.files.push_back(path);
+    }
+    if (scene_.surface.ply) {
+      const std::string path = (dir_ / (base + ".ply")).string();
+      writePlyMesh(path, mesh);
+      stats_.files.push_back(path);
+    }
+    stats_.output_seconds += secondsSince(t0);
+  }
+
   const SphScene& scene_;
   std::filesystem::path dir_;
   SphRunStats& stats_;
-  bool active_ = false;
+  bool active_ = false, surface_ = false;
   std::vector<SphPvdEntry> pvd_;
 };
 
@@ -129,6 +158,10 @@ void appendVector(std::string& out, const char* key, const Vec3& v) {
 SphFluidSolver makeSphSolver(const SphScene& scene) {
   SphFluidSolver solver(scene.config, scene.particles);
   for (const SphPlane& plane : scene.planes) solver.addPlane(plane);
+  const SphKernels kernels(scene.config.dimension, scene.config.smoothing_length);
+  for (const SphSceneSolid& solid : scene.solids)
+    solver.addForceTerm(
+        std::make_shared<SphElasticSolid>(solid.elastic, kernels, solid.phase, solid.orientation));
   return solver;
 }
 
@@ -136,7 +169,14 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
   SphRunStats stats;
   stats.scene = scene.name;
   stats.particles = solver.particles().size();
-  stats.fluid_particles = solver.particles().count(SphParticleKind::kFluid);
+  std::vector<const SphElasticSolid*> solids;
+  for (const auto& term : solver.forceTerms())
+    if (const auto* solid = dynamic_cast<const SphElasticSolid*>(term.get())) solids.push_back(solid);
+  stats.solids = solids.size();
+  for (size_t i = 0; i < solver.particles().size(); ++i) {
+    if (solver.particles().kinds[i] != SphParticleKind::kFluid) continue;
+    ++(solver.particles().phases[i] == 0 ? stats.fluid_particles : stats.solid_particles);
+  }
   stats.frame_count = scene.frame_count;
   stats.threads = solver.config().num_threads > 0 ? solver.config().num_threads : omp_get_max_threads();
   stats.min_dt = std::numeric_limits<double>::infinity();
@@ -151,10 +191,13 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
   bool have_energy = false;
   double energy_first = 0.0;
   auto energyNow = [&](const SphStepStats& st) {
-    return st.kinetic_energy + st.compression_energy + measureFluid(solver.particles(), gravity).potential;
+    return st.kinetic_energy + st.compression_energy + st.term_energy +
+           measureFluid(solver.particles(), gravity).potential;
   };
   auto record = [&](const SphStepStats& st) {
     stats.max_density_error = std::max(stats.max_density_error, st.max_density_error);
+    for (const SphElasticSolid* solid : solids)
+      stats.max_strain = std::max(stats.max_strain, solid->stats().max_strain);
     if (!have_energy) {
       energy_first = energyNow(st);
       have_energy = true;
@@ -235,10 +278,12 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
   stats.momentum_end = end.momentum;
   stats.boundary_impulse = end.momentum - start.momentum - start.mass * gravity * stats.simulated_time;
   stats.energy_first = stats.energy_end = stats.energy_change = std::numeric_limits<double>::quiet_NaN();
+  stats.elastic_energy = std::numeric_limits<double>::quiet_NaN();
   if (have_energy) {
     const SphStepStats& last = solver.lastStats();
     stats.energy_first = energy_first;
-    stats.energy_end = last.kinetic_energy + last.compression_energy + end.potential;
+    stats.energy_end = last.kinetic_energy + last.compression_energy + last.term_energy + end.potential;
+    stats.elastic_energy = last.term_energy;
     stats.energy_change =
         (stats.energy_end - stats.energy_first) / std::max(std::abs(stats.energy_first), 1e-300);
   }
@@ -270,6 +315,12 @@ std::string sphRunStatsJson(const SphRunStats& s) {
   appendNumber(out, "energy_end", s.energy_end);
   appendNumber(out, "energy_change", s.energy_change);
   appendNumber(out, "max_density_error", s.max_density_error);
+  if (s.solids > 0) {
+    appendNumber(out, "solids", double(s.solids));
+    appendNumber(out, "solid_particles", double(s.solid_particles));
+    appendNumber(out, "elastic_energy", s.elastic_energy);
+    appendNumber(out, "max_strain", s.max_strain);
+  }
   appendNumber(out, "files", double(s.files.size()));
   appendString(out, "instability", s.instability.empty() ? "none" : s.instability);
   if (!s.instability.empty()) appendNumber(out, "instability_step", double(s.instability_step));

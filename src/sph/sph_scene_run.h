@@ -1,6 +1,6 @@
 // Runs a loaded SPH scene frame by frame (the code path of the rc_sph tool): steps the solver, writes the
-// particle outputs the scene asks for, reports progress per frame, and collects run statistics (step sizes,
-// timings, conservation measures, instability).
+// particle and surface outputs the scene asks for, reports progress per frame, and collects run statistics
+// (step sizes, timings, conservation measures, instability).
 #pragma once
 
 #include <functional>
@@ -25,14 +25,15 @@ struct SphFrameReport {
 };
 
 struct SphRunOptions {
-  std::string out_dir;  ///< particle files go here (created); empty: none are written
+  std::string out_dir;  ///< particle and surface files go here (created); empty: none are written
   std::function<void(const SphFrameReport&)> on_frame;
 };
 
 struct SphRunStats {
   std::string scene;
-  size_t particles = 0, fluid_particles = 0;
-  int frames = 0;  ///< completed frames
+  size_t particles = 0, fluid_particles = 0;  ///< fluid: integrated particles of phase 0
+  size_t solids = 0, solid_particles = 0;     ///< elastic objects (enable: [elasticity]) and their particles
+  int frames = 0;                             ///< completed frames
   int frame_count = 0;
   uint64_t steps = 0;
   int threads = 0;
@@ -49,17 +50,21 @@ struct SphRunStats {
   /// error).
   double mass_drift = 0.0;
   Vec3 momentum_start = Vec3::Zero(), momentum_end = Vec3::Zero(), boundary_impulse = Vec3::Zero();
-  /// Fluid energy E = kinetic + compression (equation of state) - sum m g . x, after step 1 and at the end;
-  /// energy_change = (end - first) / |first| (viscosity, XSPH and plane hits dissipate, moving boundaries
-  /// add work). NaN (null in JSON) when no step completed.
+  /// Measures over the integrated particles (fluid and solids).
+  /// Energy E = kinetic + compression (equation of state) + elastic - sum m g . x, after step 1 and at the
+  /// end; energy_change = (end - first) / |first| (viscosity, XSPH and plane hits dissipate, moving
+  /// boundaries add work). NaN (null in JSON) when no step completed.
   double energy_first = 0.0, energy_end = 0.0, energy_change = 0.0;
   double max_density_error = 0.0;  ///< max over all steps of max |rho - rho_0| / rho_0 (fluid)
-  std::string instability;         ///< empty: stable; else the solver's message (step and likely cause)
+  /// Solids only: elastic energy of the force terms at the end (NaN when no step completed) and the max
+  /// over all steps and solids of SphElasticStats::max_strain.
+  double elastic_energy = 0.0, max_strain = 0.0;
+  std::string instability;  ///< empty: stable; else the solver's message (step and likely cause)
   uint64_t instability_step = 0;
-  std::vector<std::string> files;  ///< written particle files (and the .pvd)
+  std::vector<std::string> files;  ///< written particle files (and the .pvd) and surface meshes
 };
 
-/// A solver for the scene (its config, particles and planes).
+/// A solver for the scene (its config, particles and planes) with an SphElasticSolid force term per solid.
 SphFluidSolver makeSphSolver(const SphScene& scene);
 
 /// Runs scene.frame_count frames of scene.frame_time on `solver` (made by makeSphSolver, possibly with
@@ -68,7 +73,8 @@ SphFluidSolver makeSphSolver(const SphScene& scene);
 /// SphRunStats::instability, nothing is thrown); I/O errors throw.
 SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options = {});
 
-/// The statistics as one line of JSON (no newline); non-finite numbers become null.
+/// The statistics as one line of JSON (no newline); non-finite numbers become null. Scenes with solids
+/// add solids, solid_particles, elastic_energy and max_strain.
 std::string sphRunStatsJson(const SphRunStats& stats);
 
 }  // namespace rc

@@ -1,8 +1,8 @@
 // rc_sph: runs an SPH scene file (thesis chapter 8; config/sph/*.yaml).
 //   rc_sph SCENE.yaml [--frames N] [--out DIR] [--threads T] [--quiet]
-// Writes the particle files the scene asks for (output.particles) to DIR, prints a progress line per frame
-// on stderr and one JSON line of run statistics on stdout.
-// Exit codes: 0 ok, 1 other error (I/O, arguments), 2 bad scene file, 3 the simulation became unstable.
+// Writes the particle and surface files the scene asks for (output.particles, output.surface) to DIR, prints
+// a progress line per frame on stderr and one JSON line of run statistics on stdout. Exit codes: 0 ok, 1
+// other error (I/O, arguments), 2 bad scene file, 3 the simulation became unstable.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -12,14 +12,15 @@
 #include "sph/sph_scene_run.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"rc_sph: weakly compressible SPH fluid scenes (thesis 8.1)"};
+  CLI::App app{"rc_sph: weakly compressible SPH scenes: fluids (thesis 8.1), elastic solids (8.2)"};
   std::string scene_path, out_dir = ".";
   int frames = 0, threads = -1;
   bool quiet = false;
   app.add_option("scene", scene_path, "scene file (config/sph/*.yaml)")->required();
   app.add_option("--frames", frames, "frames to simulate (default: the scene's frames.count)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--out", out_dir, "folder for the particle files the scene asks for")->capture_default_str();
+  app.add_option("--out", out_dir, "folder for the particle and surface files the scene asks for")
+      ->capture_default_str();
   app.add_option("--threads", threads, "OpenMP threads (0 = all; default: the scene's solver.threads)")
       ->check(CLI::NonNegativeNumber);
   app.add_flag("--quiet", quiet, "no progress line");

@@ -4,14 +4,20 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "io/cloud_io.h"
+#include "io/obj_io.h"
+#include "sph/sph_lattice.h"
 #include "sph/sph_output.h"
 #include "sph/sph_scene.h"
 #include "sph/sph_scene_run.h"
@@ -32,15 +38,25 @@ fs::path tempDir(const std::string& name) {
 }
 
 struct ExpectedCounts {
-  size_t fluid, walls, moving, planes;
+  size_t fluid, walls, moving, planes, solids, solid_particles;
 };
+
+size_t solidParticleCount(const SphParticles& p) {
+  size_t n = 0;
+  for (size_t i = 0; i < p.size(); ++i) n += p.kinds[i] == SphParticleKind::kFluid && p.phases[i] != 0;
+  return n;
+}
 
 // Every shipped scene must be listed here (and so loaded by this test).
 TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
   const std::map<std::string, ExpectedCounts> expected = {
-      {"dam_break_2d", {20 * 40, 106 * 53 - 100 * 50, 0, 0}},
-      {"hydrostatic_tank_2d", {20 * 20, 26 * 27 - 20 * 24, 0, 0}},
-      {"dam_break_3d", {20 * 30 * 30, 64 * 52 * 34 - 60 * 50 * 30, 0, 5}},
+      {"dam_break_2d", {20 * 40, 106 * 53 - 100 * 50, 0, 0, 0, 0}},
+      {"hydrostatic_tank_2d", {20 * 20, 26 * 27 - 20 * 24, 0, 0, 0, 0}},
+      {"dam_break_3d", {20 * 30 * 30, 64 * 52 * 34 - 60 * 50 * 30, 0, 5, 0, 0}},
+      // 11 hexagonal rows of 10 or 11 particles.
+      {"elastic_cube_2d", {0, 0, 0, 3, 1, 115}},
+      // Nine dice of 249 fcc points each (thesis: 246).
+      {"dice_3d", {0, 0, 0, 5, 9, 9 * 249}},
   };
   size_t loaded = 0;
   for (const auto& entry : fs::directory_iterator(kSceneDir)) {
@@ -50,13 +66,21 @@ TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
     ASSERT_NE(it, expected.end()) << entry.path() << " is not covered by this test";
     const SphScene scene = loadSphScene(entry.path().string());
     EXPECT_EQ(scene.name, stem);
-    EXPECT_EQ(scene.particles.count(SphParticleKind::kFluid), it->second.fluid) << stem;
+    const size_t solid_particles = solidParticleCount(scene.particles);
+    EXPECT_EQ(scene.particles.count(SphParticleKind::kFluid) - solid_particles, it->second.fluid) << stem;
+    EXPECT_EQ(solid_particles, it->second.solid_particles) << stem;
+    EXPECT_EQ(scene.solids.size(), it->second.solids) << stem;
     EXPECT_EQ(scene.particles.count(SphParticleKind::kStaticBoundary), it->second.walls) << stem;
     EXPECT_EQ(scene.particles.count(SphParticleKind::kMovingBoundary), it->second.moving) << stem;
     EXPECT_EQ(scene.planes.size(), it->second.planes) << stem;
-    EXPECT_TRUE(scene.enabled_physics.empty());
+    // Only what a scene uses is switched on.
+    EXPECT_EQ(std::count(scene.enabled_physics.begin(), scene.enabled_physics.end(), "elasticity"),
+              it->second.solids > 0 ? 1 : 0)
+        << stem;
+    EXPECT_EQ(scene.surface.enabled,
+              std::count(scene.enabled_physics.begin(), scene.enabled_physics.end(), "surface") == 1);
     EXPECT_NO_THROW(scene.config.validate());
-    EXPECT_NO_THROW(makeSphSolver(scene));
+    EXPECT_EQ(makeSphSolver(scene).forceTerms().size(), it->second.solids) << stem;
     ++loaded;
   }
   EXPECT_EQ(loaded, expected.size());
@@ -180,7 +204,8 @@ TEST(SphSceneFile, BadInputsNameFileLineAndProblem) {
   expectErrorAt("dimension: 2\nspacing: 0.02\nsolver: {smoothing_ratio: 2.5, stiffness: stiff}\n", 3,
                 "stiffness: expected a number, got 'stiff'");
   expectErrorAt(head + "enable: [temperature]\n", 7, "'temperature' is not implemented yet");
-  expectErrorAt(head + "enable:\n  - elasticity\n", 8, "'elasticity' is not implemented yet");
+  expectErrorAt(head + "enable:\n  - phase_transition\n", 8, "'phase_transition' is not implemented yet");
+  expectErrorAt(head + "enable: [elasticity, elasticity]\n", 7, "listed twice");
   expectErrorAt(head + "enable: [magnetism]\n", 7, "unknown physics 'magnetism'");
   // Values the solver rejects point at their own line.
   expectErrorAt("dimension: 2\nspacing: 0.02\nsolver:\n  smoothing_ratio: 2.5\n  xsph: 1.5\n", 5, "xsph");
@@ -398,6 +423,229 @@ TEST(SphSceneFile, OutputsParseBack) {
   EXPECT_NE(text.str().find("timestep=\"0\" part=\"0\" file=\"dam_break_2d_0000.vtp\""), std::string::npos);
   EXPECT_NE(text.str().find("timestep=\"0.02\" part=\"0\" file=\"dam_break_2d_0002.vtp\""), std::string::npos)
       << text.str();
+}
+
+TEST(SphSceneFile, PhysicsKeysNeedTheirEnableEntry) {
+  const std::string head = kGoodHead;
+  expectErrorAt(head + "solids:\n  - {lo: [0, 0.3], hi: [0.1, 0.4]}\n", 8, "solids: needs 'elasticity'");
+  expectErrorAt(head + "output:\n  surface: {every: 1}\n", 8, "output.surface: needs 'surface'");
+  expectErrorAt(head + "enable: [surface]\n", 7, "'surface' needs a 3D scene");
+  const std::string elastic = head + "enable: [elasticity]\nsolids:\n";  // solids from line 9
+  expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], model: strain, goal_stiffness: 1e4}\n", 9,
+                "goal_stiffness: applies to model goal_position");
+  expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], youngs_modulus: 1e4}\n", 9,
+                "youngs_modulus: applies to model strain");
+  expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], model: rubber}\n", 9, "unknown model 'rubber'");
+  expectErrorAt(elastic + "  - {shape: cone, lo: [0, 0.3], hi: [0.1, 0.4]}\n", 9, "unknown shape 'cone'");
+  expectErrorAt(elastic + "  - {shape: sphere, lo: [0, 0.3], hi: [0.1, 0.4]}\n", 9, "unknown key 'lo'");
+  expectErrorAt(
+      elastic +
+          "  - {lo: [0, 0.3], hi: [0.1, 0.4], phase: 2}\n  - {lo: [0, 0.5], hi: [0.1, 0.6], phase: 2}\n",
+      10, "phase: 2 is already used");
+  expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], phase: 0}\n", 9,
+                "phase must be an integer in [1, 255]");
+  expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], model: strain, poisson_ratio: 0.7}\n", 9,
+                "poisson_ratio");
+  expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], rotation: {axis: [1, 0], angle: 10}}\n", 9,
+                "must be [0, 0, 1] in 2D");
+  expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], spacing: 0.05}\n", 9,
+                "lattice spacing must be below the smoothing length");
+  expectErrorAt("dimension: 2\nspacing: 0.02\nsolver: {smoothing_ratio: 2}\nframes: {count: 1, time: 0.01}\n",
+                1, "missing 'fluid'");
+}
+
+TEST(SphSceneFile, SolidsAreSampledOnTheLatticeWithTheirOwnPhase) {
+  const SphScene scene = parseSphScene(
+      "dimension: 2\n"
+      "spacing: 0.02\n"
+      "enable: [elasticity]\n"
+      "solver: {smoothing_ratio: 2, rest_density: 1, stiffness: 20}\n"
+      "solids:\n"
+      "  - {shape: sphere, center: [0, 0.5], radius: 0.1, velocity: [1, 0], phase: 7,\n"
+      "     rotation: {angle: 90}}\n"
+      "  - {lo: [0.3, 0], hi: [0.5, 0.2], spacing: 0.025, model: strain, youngs_modulus: 2e5,\n"
+      "     poisson_ratio: 0.25}\n"
+      "frames: {count: 1, time: 0.01}\n",
+      "solids.yaml");
+  ASSERT_EQ(scene.solids.size(), 2u);
+  const SphSceneSolid& disc = scene.solids[0];
+  const SphSceneSolid& block = scene.solids[1];
+  EXPECT_EQ(disc.phase, 7);
+  EXPECT_EQ(block.phase, 1);  // the first unused id
+  EXPECT_EQ(disc.elastic.model, SphElasticModel::kGoalPosition);
+  EXPECT_EQ(disc.elastic.goal_stiffness, SphElasticConfig().goal_stiffness);
+  EXPECT_EQ(block.elastic.model, SphElasticModel::kStrain);
+  EXPECT_EQ(block.elastic.youngs_modulus, 2e5);
+  EXPECT_EQ(block.elastic.poisson_ratio, 0.25);
+  EXPECT_EQ(block.elastic.lattice_spacing, 0.025);
+  EXPECT_NEAR((disc.orientation - Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()).toRotationMatrix()).norm(), 0.0,
+              1e-15);
+  // The disc: the hexagonal lattice points of radius 0.1 around its centre, rotated by 90 degrees.
+  const SphLattice lattice(2, 0.02);
+  const std::vector<Vec3> local = sampleLatticeSphere(lattice, Vec3::Zero(), 0.1);
+  ASSERT_EQ(disc.count, local.size());
+  EXPECT_EQ(disc.first, 0u);
+  EXPECT_EQ(block.first, disc.count);
+  const SphParticles& p = scene.particles;
+  ASSERT_EQ(p.size(), disc.count + block.count);
+  const SphKernels kernels(2, 0.04);
+  for (size_t i = 0; i < disc.count; ++i) {
+    EXPECT_NEAR((p.positions[i] - Vec3(0, 0.5, 0) - disc.orientation * local[i]).norm(), 0.0, 1e-15);
+    EXPECT_EQ(p.phases[i], 7);
+    EXPECT_EQ(p.kinds[i], SphParticleKind::kFluid);
+    EXPECT_EQ(p.velocities[i], Vec3(1, 0, 0));
+    EXPECT_DOUBLE_EQ(p.masses[i], lattice.particleMass(kernels, 1.0));
+  }
+  const std::vector<Vec3> block_local =
+      sampleLatticeBox(SphLattice(2, 0.025), Vec3(-0.1, -0.1, 0), Vec3(0.1, 0.1, 0), SphLatticeFrame());
+  EXPECT_EQ(block.count, block_local.size());
+  for (size_t i = block.first; i < p.size(); ++i) {
+    EXPECT_EQ(p.phases[i], 1);
+    EXPECT_GE(p.positions[i].x(), 0.3 - 1e-12);
+    EXPECT_LE(p.positions[i].x(), 0.5 + 1e-12);
+  }
+  EXPECT_EQ(makeSphSolver(scene).forceTerms().size(), 2u);
+}
+
+Vec3 centerOfMass(const SphParticles& p, Vec3* velocity) {
+  double m = 0.0;
+  Vec3 x = Vec3::Zero(), v = Vec3::Zero();
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (p.kinds[i] != SphParticleKind::kFluid) continue;
+    m += p.masses[i];
+    x += p.masses[i] * p.positions[i];
+    v += p.masses[i] * p.velocities[i];
+  }
+  *velocity = v / m;
+  return x / m;
+}
+
+TEST(SphSceneFile, ElasticCubeBouncesAndKeepsItsShape) {
+  // Fig. 8.7 (a): the cube falls 3 cm, hits the floor at about t = 0.08 s and bounces.
+  const SphScene scene = loadSphScene(kSceneDir + "elastic_cube_2d.yaml");
+  ASSERT_EQ(scene.solids.size(), 1u);
+  EXPECT_EQ(scene.solids[0].elastic.model, SphElasticModel::kGoalPosition);
+  EXPECT_EQ(scene.solids[0].elastic.goal_stiffness, 8.0e5);
+  EXPECT_EQ(scene.solids[0].elastic.lattice_spacing, 0.02);
+  const std::vector<Vec3> rest = scene.particles.positions;
+  Vec3 v0;
+  const Vec3 c0 = centerOfMass(scene.particles, &v0);
+  SphFluidSolver solver = makeSphSolver(scene);
+  std::vector<double> height, rise_speed;
+  double worst_shape = 0.0;  // max change of a particle's distance to the centre of mass, in spacings
+  SphRunOptions options;
+  options.on_frame = [&](const SphFrameReport&) {
+    Vec3 v;
+    const Vec3 c = centerOfMass(solver.particles(), &v);
+    height.push_back(c.y());
+    rise_speed.push_back(v.y());
+    for (size_t i = 0; i < rest.size(); ++i)
+      worst_shape = std::max(
+          worst_shape, std::abs((solver.particles().positions[i] - c).norm() - (rest[i] - c0).norm()) / 0.02);
+  };
+  const SphRunStats stats = runSphScene(scene, solver, options);
+  std::printf(
+      "elastic cube: %llu steps, mean dt %.3g, max strain %.3g, shape change %.3g dx, elastic energy %.3g, "
+      "energy change %.3g\n",
+      (unsigned long long)stats.steps, stats.mean_dt, stats.max_strain, worst_shape, stats.elastic_energy,
+      stats.energy_change);
+  for (size_t f = 0; f < height.size(); ++f)
+    std::printf("  frame %zu: y %.4f  vy %.3f\n", f + 1, height[f], rise_speed[f]);
+  EXPECT_TRUE(stats.instability.empty()) << stats.instability;
+  ASSERT_EQ(stats.frames, 20);
+  EXPECT_EQ(stats.solids, 1u);
+  EXPECT_EQ(stats.solid_particles, 115u);
+  EXPECT_EQ(stats.fluid_particles, 0u);
+  EXPECT_GT(stats.steps, 200u);
+  EXPECT_LT(stats.steps, 1000u);
+  // The first bounce: the frame at which the centre of mass rises again.
+  const size_t turn =
+      std::find_if(rise_speed.begin(), rise_speed.end(), [](double v) { return v > 0; }) - rise_speed.begin();
+  ASSERT_GT(turn, 0u);
+  ASSERT_LT(turn, rise_speed.size());
+  const double lowest = *std::min_element(height.begin(), height.begin() + turn + 1);
+  const double top = *std::max_element(height.begin() + turn, height.end());
+  const double fastest_up = *std::max_element(rise_speed.begin() + turn, rise_speed.end());
+  EXPECT_LT(lowest, c0.y() - 0.04);   // it fell 3 cm onto the floor and was squashed
+  EXPECT_GT(fastest_up, 0.3);         // it bounced ...
+  EXPECT_GT(top, lowest + 0.015);     // ... up from the floor
+  EXPECT_LT(top, c0.y() - 0.01);      // but not back to where it started
+  EXPECT_GT(stats.max_strain, 0.05);  // the impact deforms it ...
+  EXPECT_LT(stats.max_strain, 0.3);   // ... elastically: no particle leaves its neighbourhood
+  EXPECT_LT(worst_shape, 1.0);
+  EXPECT_LT(stats.energy_change, 0.0);  // plane hits and XSPH dissipate; nothing adds energy
+  EXPECT_TRUE(std::isfinite(stats.elastic_energy));
+  EXPECT_GE(stats.elastic_energy, 0.0);
+  const std::string json = sphRunStatsJson(stats);
+  EXPECT_NE(json.find("\"elastic_energy\":"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"solids\":1,"), std::string::npos) << json;
+}
+
+TEST(SphSceneFile, DiceAreNineSeparateStiffSolidsAndWriteSurfaces) {
+  SphScene scene = loadSphScene(kSceneDir + "dice_3d.yaml");
+  ASSERT_EQ(scene.solids.size(), 9u);
+  std::set<int> phases;
+  const SphParticles& p = scene.particles;
+  for (const SphSceneSolid& die : scene.solids) {
+    EXPECT_EQ(die.count, 249u);
+    EXPECT_EQ(die.elastic.model, SphElasticModel::kGoalPosition);
+    EXPECT_EQ(die.elastic.goal_stiffness, 2.4e7);  // appendix F.2
+    EXPECT_NEAR((die.orientation.transpose() * die.orientation - Eigen::Matrix3d::Identity()).norm(), 0.0,
+                1e-14);
+    phases.insert(die.phase);
+    for (size_t i = die.first; i < die.first + die.count; ++i) ASSERT_EQ(p.phases[i], die.phase);
+  }
+  EXPECT_EQ(phases.size(), 9u);
+  // No two dice overlap at the start: particles of different dice are more than a spacing apart, and all lie
+  // above the floor.
+  double closest = 1e9;
+  for (size_t i = 0; i < p.size(); ++i) {
+    EXPECT_GT(p.positions[i].y(), 0.0);
+    for (size_t j = i + 1; j < p.size(); ++j)
+      if (p.phases[i] != p.phases[j]) closest = std::min(closest, (p.positions[i] - p.positions[j]).norm());
+  }
+  EXPECT_GT(closest, 0.07);
+  EXPECT_TRUE(scene.surface.enabled);
+  EXPECT_EQ(scene.surface.every, 2);
+  EXPECT_TRUE(scene.surface.obj && !scene.surface.ply);
+  EXPECT_EQ(scene.surface.config.cell_size, 0.035);
+  EXPECT_EQ(scene.surface.config.smoothing_length, 0.14);
+  // Two short frames at the elastic step limit: stable, the dice hardly deform; the surface is written for
+  // frame 0 only (every 2).
+  scene.frame_count = 2;
+  scene.frame_time = 0.001;
+  const fs::path dir = tempDir("dice");
+  SphFluidSolver solver = makeSphSolver(scene);
+  SphRunOptions options;
+  options.out_dir = dir.string();
+  const SphRunStats stats = runSphScene(scene, solver, options);
+  EXPECT_TRUE(stats.instability.empty()) << stats.instability;
+  EXPECT_EQ(stats.solids, 9u);
+  EXPECT_EQ(stats.solid_particles, 9u * 249u);
+  EXPECT_NEAR(stats.min_dt, 0.4 * std::sqrt(2.0 / 2.4e7), 1e-12);
+  EXPECT_GE(stats.steps, 18u);
+  EXPECT_LT(stats.max_strain, 0.01);
+  EXPECT_TRUE(fs::exists(dir / "dice_3d_surface_0000.obj"));
+  EXPECT_FALSE(fs::exists(dir / "dice_3d_surface_0001.obj"));
+  EXPECT_TRUE(fs::exists(dir / "dice_3d_surface_0002.obj"));
+  EXPECT_TRUE(fs::exists(dir / "dice_3d_0001.vtp"));
+  EXPECT_EQ(stats.files.size(), 3u + 1u + 2u);  // 3 vtp, the pvd, 2 surfaces
+  // The surface is closed (every edge in two triangles) and encloses the dice.
+  const TriangleMesh mesh = readObjMesh((dir / "dice_3d_surface_0002.obj").string());
+  ASSERT_GT(mesh.triangles.size(), 1000u);
+  std::map<std::pair<uint32_t, uint32_t>, int> edges;
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = t[k], b = t[(k + 1) % 3];
+      ++edges[{std::min(a, b), std::max(a, b)}];
+    }
+  size_t open = 0;
+  for (const auto& e : edges) open += e.second != 2;
+  EXPECT_EQ(open, 0u);
+  double lowest = 1e9;
+  for (const Vec3& x : mesh.vertices.positions) lowest = std::min(lowest, x.y());
+  EXPECT_LT(lowest, 0.11);
+  EXPECT_GT(lowest, -0.07);
 }
 
 }  // namespace
