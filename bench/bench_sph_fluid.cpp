@@ -1,18 +1,22 @@
 // SPH fluid solver speed (thesis 8.1): time per particle per step for a 3D dam-break-like fluid block in a
 // box of planes, 1 and 2 threads, median of several steps. Prints a markdown table. `--quick`: 10k only;
 // `--1m`: also 1M particles. Then the speed/accuracy curve of the 2D dam break (surge front against Martin &
-// Moyce 1952) for several CFL numbers and h/dx, as a markdown table; `--csv FILE` also writes it as CSV.
+// Moyce 1952) for several CFL numbers and h/dx, as a markdown table; `--csv FILE` also writes it as CSV. The
+// elastic dice of Fig. 8.8 (config/sph/dice_3d.yaml) give the cost of elastic solids.
 #include <omp.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "sph/sph_dam_break_surge.h"
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_scene.h"
+#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_run.h"
 
 namespace {
 
@@ -42,6 +46,24 @@ Result run(size_t target, int threads, int steps) {
   for (const SphPlane& plane : boxPlanes(Vec3::Zero(), Vec3(4 * n * dx, 4 * n * dx, n * dx), 3))
     solver.addPlane(plane);
   solver.step();  // warm-up (allocations)
+  std::vector<double> t;
+  double nb = 0;
+  for (int s = 0; s < steps; ++s) {
+    const SphStepStats& st = solver.step();
+    t.push_back(st.seconds);
+    nb = st.neighbors_per_particle;
+  }
+  std::sort(t.begin(), t.end());
+  return {solver.particles().size(), threads, 1e6 * t[t.size() / 2] / double(solver.particles().size()), nb};
+}
+
+/// Time per particle per step of a shipped scene file (config/sph), after a warm-up step.
+Result runScene(const char* name, int threads, int steps) {
+  const std::string here = __FILE__;
+  SphScene scene = loadSphScene(here.substr(0, here.rfind("/bench/")) + "/config/sph/" + name);
+  scene.config.num_threads = threads;
+  SphFluidSolver solver = makeSphSolver(scene);
+  solver.step();
   std::vector<double> t;
   double nb = 0;
   for (int s = 0; s < steps; ++s) {
@@ -138,6 +160,19 @@ int main(int argc, char** argv) {
                   r.us_per_particle, r.us_per_particle * r.threads);
       std::fflush(stdout);
     }
+  // Elastic solids (8.2): the nine stiff dice of Fig. 8.8 (goal-position forces, K_e = 2.4e7), every particle
+  // solid; the thesis' Table 8.1 gives 17-18.7 s per frame for its scenes.
+  std::printf("\nElastic solids: config/sph/dice_3d.yaml (Fig. 8.8), median of 9 steps\n\n");
+  std::printf(
+      "| particles | threads | neighbours/particle | us / particle / step | us / particle / step x threads "
+      "|\n");
+  std::printf("|---:|---:|---:|---:|---:|\n");
+  for (int threads : {1, 2}) {
+    const Result r = runScene("dice_3d.yaml", threads, 9);
+    std::printf("| %zu | %d | %.1f | %.3f | %.3f |\n", r.particles, r.threads, r.neighbors, r.us_per_particle,
+                r.us_per_particle * r.threads);
+    std::fflush(stdout);
+  }
   accuracyCurve(quick, csv_path);
   return 0;
 }
