@@ -15,6 +15,7 @@
 #include "fem/element_stiffness.h"
 #include "fem/linear_elasticity.h"
 #include "fem/polyhedral_mesh.h"
+#include "patch_test_support.h"
 
 namespace rc {
 namespace {
@@ -34,50 +35,6 @@ std::vector<NamedMesh> patchMeshes() {
   meshes.push_back({"hex", PolyhedralMesh::hexahedralGrid(kLo, kHi, 4, 3, 3)});
   meshes.push_back({"random", PolyhedralMesh::randomPlaneCut(kLo, kHi, 1, 1, 1, 10, 5)});
   return meshes;
-}
-
-// MacNeal-Harder patch field u = 1e-3 (2x + y + z) / 2 and cyclic: u = A x with constant strain.
-Eigen::Matrix3d patchGradient() {
-  Eigen::Matrix3d a;
-  a << 2, 1, 1, 1, 2, 1, 1, 1, 2;
-  return 0.5e-3 * a;
-}
-
-Eigen::VectorXd nodalField(const PolyhedralMesh& mesh, const Eigen::Matrix3d& a, const Vec3& b) {
-  Eigen::VectorXd u(3 * mesh.numNodes());
-  for (int i = 0; i < mesh.numNodes(); ++i) u.segment<3>(3 * i) = a * mesh.node(i) + b;
-  return u;
-}
-
-struct PatchResult {
-  double max_displacement_error;  // relative to max |u|
-  double max_stress_error;        // relative to max |sigma|
-};
-
-PatchResult runPatchTest(const PolyhedralMesh& mesh, const ElementQuadratureOptions& options) {
-  const LinearElasticModel model(mesh, 1000.0, 0.3, 1.0, options);
-  const Eigen::Matrix3d a = patchGradient();
-  const Eigen::VectorXd exact = nodalField(mesh, a, Vec3(0.1e-3, -0.2e-3, 0.05e-3));
-  std::vector<DisplacementConstraint> constraints;
-  for (int i = 0; i < mesh.numNodes(); ++i)
-    if (mesh.isBoundaryNode()[i]) constraints.push_back({i, exact.segment<3>(3 * i)});
-  const Eigen::VectorXd u = model.solveStatic(Eigen::VectorXd::Zero(model.numDofs()), constraints);
-  PatchResult result;
-  result.max_displacement_error = (u - exact).cwiseAbs().maxCoeff() / exact.cwiseAbs().maxCoeff();
-  const Eigen::Matrix3d strain = 0.5 * (a + a.transpose());
-  Vector6d voigt;
-  voigt << strain(0, 0), strain(1, 1), strain(2, 2), 2 * strain(0, 1), 2 * strain(1, 2), 2 * strain(2, 0);
-  const Vector6d sigma = model.elasticity() * voigt;
-  result.max_stress_error = 0.0;
-  for (int e = 0; e < mesh.numElements(); ++e)
-    for (const Vector6d& s : model.elementStresses(e, u))
-      result.max_stress_error = std::max(result.max_stress_error, (s - sigma).cwiseAbs().maxCoeff());
-  result.max_stress_error /= sigma.cwiseAbs().maxCoeff();
-  return result;
-}
-
-int countInteriorNodes(const PolyhedralMesh& mesh) {
-  return static_cast<int>(std::count(mesh.isBoundaryNode().begin(), mesh.isBoundaryNode().end(), 0));
 }
 
 // ---------------------------------------------------------------------------------------------------------
