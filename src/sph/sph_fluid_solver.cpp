@@ -426,7 +426,8 @@ const SphStepStats& SphFluidSolver::step() {
   return advanceOneStep(0.0);
 }
 
-const SphStepStats& SphFluidSolver::advance(double duration) {
+const SphStepStats& SphFluidSolver::advance(double duration,
+                                            const std::function<void(const SphStepStats&)>& after_step) {
   if (!(duration >= 0.0) || !std::isfinite(duration))
     throw std::invalid_argument("SphFluidSolver::advance: duration must be finite and >= 0, got " +
                                 num(duration));
@@ -437,8 +438,10 @@ const SphStepStats& SphFluidSolver::advance(double duration) {
     if (remaining <= stats_.dt) {
       time_ = end;
       stats_.time = end;
+      if (after_step) after_step(stats_);
       break;
     }
+    if (after_step) after_step(stats_);
   }
   return stats_;
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -145,8 +146,11 @@ class SphFluidSolver {
 
   /// One time step. Throws SphInstabilityError if it is unstable and config().throw_on_instability.
   const SphStepStats& step();
-  /// Steps until `duration` more time has passed (the last step is shortened to end on it).
-  const SphStepStats& advance(double duration);
+  /// Steps until `duration` more time has passed (the last step is shortened to end on it). `after_step`,
+  /// if set, is called after every step (after the last one's time is set to the end), e.g. for
+  /// SphThermalModel::step with lastStats().dt.
+  const SphStepStats& advance(double duration,
+                              const std::function<void(const SphStepStats&)>& after_step = {});
 
   double time() const { return time_; }
   uint64_t stepCount() const { return step_count_; }

@@ -47,11 +47,13 @@ void put(std::vector<uint8_t>& out, T value) {
   std::memcpy(out.data() + at, &value, sizeof(T));
 }
 
-std::vector<VtpArray> vtpArrays(const SphParticles& p) {
+/// Points, connectivity, offsets, then the PointData arrays.
+std::vector<VtpArray> vtpArrays(const SphParticles& p, const std::vector<double>* temperatures) {
   const size_t n = p.size();
   VtpArray points{"Points", "Float64", 3, {}}, velocity{"velocity", "Float32", 3, {}};
   VtpArray density{"density", "Float32", 1, {}}, pressure{"pressure", "Float32", 1, {}};
   VtpArray kind{"kind", "UInt8", 1, {}};
+  VtpArray temperature{"temperature", "Float32", 1, {}}, phase{"phase", "UInt8", 1, {}};
   VtpArray connectivity{"connectivity", "Int64", 1, {}}, offsets{"offsets", "Int64", 1, {}};
   for (size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) {
@@ -61,10 +63,19 @@ std::vector<VtpArray> vtpArrays(const SphParticles& p) {
     put<float>(density.bytes, float(p.densities[i]));
     put<float>(pressure.bytes, float(p.pressures[i]));
     put<uint8_t>(kind.bytes, uint8_t(p.kinds[i]));
+    if (temperatures) {
+      put<float>(temperature.bytes, float(i < temperatures->size() ? (*temperatures)[i] : 0.0));
+      put<uint8_t>(phase.bytes, p.phases[i]);
+    }
     put<int64_t>(connectivity.bytes, int64_t(i));
     put<int64_t>(offsets.bytes, int64_t(i + 1));
   }
-  return {points, velocity, density, pressure, kind, connectivity, offsets};
+  std::vector<VtpArray> arrays = {points, connectivity, offsets, velocity, density, pressure, kind};
+  if (temperatures) {
+    arrays.push_back(temperature);
+    arrays.push_back(phase);
+  }
+  return arrays;
 }
 
 /// The values of an array as ascii text (floats with round-trip precision).
@@ -98,7 +109,7 @@ std::string asciiValues(const VtpArray& a) {
 
 }  // namespace
 
-SurfelCloud sphParticlesToCloud(const SphParticles& p) {
+SurfelCloud sphParticlesToCloud(const SphParticles& p, const std::vector<double>* temperatures) {
   const size_t n = p.size();
   SurfelCloud cloud;
   cloud.positions = p.positions;
@@ -112,17 +123,27 @@ SurfelCloud sphParticlesToCloud(const SphParticles& p) {
     pressure.set(i, p.pressures[i]);
     kind.set(i, double(uint8_t(p.kinds[i])));
   }
+  if (temperatures) {
+    Attribute& temperature = cloud.attributes.add("temperature", ScalarType::kFloat32, 1, n);
+    Attribute& phase = cloud.attributes.add("phase", ScalarType::kUInt8, 1, n);
+    for (size_t i = 0; i < n; ++i) {
+      temperature.set(i, i < temperatures->size() ? (*temperatures)[i] : 0.0);
+      phase.set(i, double(p.phases[i]));
+    }
+  }
   return cloud;
 }
 
-void writeSphPly(const std::string& path, const SphParticles& particles) {
+void writeSphPly(const std::string& path, const SphParticles& particles,
+                 const std::vector<double>* temperatures) {
   WriteOptions options;
   options.encoding = Encoding::kBinary;
-  writePlyCloud(path, sphParticlesToCloud(particles), options);
+  writePlyCloud(path, sphParticlesToCloud(particles, temperatures), options);
 }
 
-void writeSphVtp(const std::string& path, const SphParticles& particles, VtpEncoding encoding) {
-  const std::vector<VtpArray> arrays = vtpArrays(particles);
+void writeSphVtp(const std::string& path, const SphParticles& particles, VtpEncoding encoding,
+                 const std::vector<double>* temperatures) {
+  const std::vector<VtpArray> arrays = vtpArrays(particles, temperatures);
   const bool appended = encoding == VtpEncoding::kAppendedRaw;
   const size_t n = particles.size();
   std::ostringstream xml;
@@ -144,12 +165,16 @@ void writeSphVtp(const std::string& path, const SphParticles& particles, VtpEnco
       << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfVerts=\"" << n
       << "\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n"
       << "      <PointData Scalars=\"density\" Vectors=\"velocity\">\n";
-  for (size_t k = 1; k <= 4; ++k) array(arrays[k]);
+  // Written (and appended) in the order point data, points, connectivity, offsets.
+  std::vector<size_t> order;
+  for (size_t k = 3; k < arrays.size(); ++k) order.push_back(k);
+  order.insert(order.end(), {0, 1, 2});
+  for (size_t k = 3; k < arrays.size(); ++k) array(arrays[k]);
   xml << "      </PointData>\n      <Points>\n";
   array(arrays[0]);
   xml << "      </Points>\n      <Verts>\n";
-  array(arrays[5]);
-  array(arrays[6]);
+  array(arrays[1]);
+  array(arrays[2]);
   xml << "      </Verts>\n    </Piece>\n  </PolyData>\n";
   std::ofstream out(path, std::ios::binary);
   if (!out) throw IoError(path, "cannot open for writing");
@@ -157,7 +182,7 @@ void writeSphVtp(const std::string& path, const SphParticles& particles, VtpEnco
   out.write(text.data(), std::streamsize(text.size()));
   if (appended) {
     out << "  <AppendedData encoding=\"raw\">\n   _";
-    for (const size_t k : {1, 2, 3, 4, 0, 5, 6}) {  // the order of the offsets above
+    for (const size_t k : order) {  // the order of the offsets above
       const uint64_t bytes = arrays[k].bytes.size();
       out.write(reinterpret_cast<const char*>(&bytes), sizeof(bytes));
       out.write(reinterpret_cast<const char*>(arrays[k].bytes.data()), std::streamsize(bytes));

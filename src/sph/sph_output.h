@@ -1,5 +1,6 @@
 // Particle files of an SPH run: PLY (binary, via the io module) and VTK XML PolyData (.vtp, for ParaView),
-// with the fields velocity, density, pressure and kind; a ParaView collection (.pvd) lists the frames.
+// with the fields velocity, density, pressure and kind (plus temperature and phase when temperatures are
+// given); a ParaView collection (.pvd) lists the frames.
 #pragma once
 
 #include <string>
@@ -11,19 +12,25 @@
 namespace rc {
 
 /// Positions plus attribute columns velocity (float32 x 3), density, pressure (float32) and kind (uint8,
-/// SphParticleKind).
-SurfelCloud sphParticlesToCloud(const SphParticles& particles);
+/// SphParticleKind); with `temperatures` (one per particle, e.g. SphThermalModel::temperatures()) also
+/// temperature (float32) and phase (uint8).
+SurfelCloud sphParticlesToCloud(const SphParticles& particles,
+                                const std::vector<double>* temperatures = nullptr);
 
-/// Binary little-endian PLY: x y z (float32), velocity_0..2, density, pressure, kind. Throws IoError.
-void writeSphPly(const std::string& path, const SphParticles& particles);
+/// Binary little-endian PLY: x y z (float32), velocity_0..2, density, pressure, kind (temperature, phase).
+/// Throws IoError.
+void writeSphPly(const std::string& path, const SphParticles& particles,
+                 const std::vector<double>* temperatures = nullptr);
 
 enum class VtpEncoding { kAscii, kAppendedRaw };
 
 /// VTK XML PolyData: Points (Float64 x 3), one vertex cell per particle (Verts), PointData velocity (Float32
-/// x 3), density, pressure (Float32), kind (UInt8). kAppendedRaw stores the arrays as raw little-endian bytes
+/// x 3), density, pressure (Float32), kind (UInt8), with `temperatures` also temperature (Float32) and phase
+/// (UInt8). kAppendedRaw stores the arrays as raw little-endian bytes
 /// after the XML (header_type UInt64). Throws IoError if the file cannot be written.
 void writeSphVtp(const std::string& path, const SphParticles& particles,
-                 VtpEncoding encoding = VtpEncoding::kAppendedRaw);
+                 VtpEncoding encoding = VtpEncoding::kAppendedRaw,
+                 const std::vector<double>* temperatures = nullptr);
 
 /// One entry of a ParaView collection: a file (relative to the .pvd) and its simulated time.
 struct SphPvdEntry {

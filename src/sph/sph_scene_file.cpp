@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -64,7 +65,7 @@ class SceneReader {
   void read(const YAML::Node& root) {
     src_.allowKeys(root,
                    {"name", "dimension", "spacing", "enable", "solver", "fluid", "solids", "boundary",
-                    "moving", "frames", "output"},
+                    "moving", "frames", "output", "temperature", "phase_transition"},
                    "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
     dimension_ = int(src_.integer(src_.require(root, "dimension", "scene"), "dimension", 2, 3));
@@ -90,6 +91,8 @@ class SceneReader {
       if (!moving.IsSequence()) src_.fail(moving, "moving: expected a list of boxes");
       for (size_t i = 0; i < moving.size(); ++i) readMoving(moving[i], "moving[" + std::to_string(i) + "]");
     }
+    readThermal(root["temperature"]);
+    readPhaseTransition(root["phase_transition"]);
     readFrames(src_.require(root, "frames", "scene"));
     if (root["output"]) readOutput(root["output"]);
     if (enabled("surface")) finishSurface();
@@ -106,19 +109,204 @@ class SceneReader {
       const std::string what = src_.string(node[i], "enable[" + std::to_string(i) + "]");
       if (std::find(known.begin(), known.end(), what) == known.end())
         src_.fail(node[i], "enable: unknown physics '" + what + "' (known: " + names + ")");
-      if (what != "elasticity" && what != "surface")
-        src_.fail(node[i], "enable: '" + what +
-                               "' is not implemented yet (the fluid of thesis 8.1, elasticity and surface "
-                               "are; remove it from 'enable')");
       if (enabled(what)) src_.fail(node[i], "enable: '" + what + "' is listed twice");
       scene_.enabled_physics.push_back(what);
       enable_nodes_[what] = node[i];
+    }
+    if (enabled("phase_transition"))
+      for (const char* needed : {"temperature", "elasticity"})
+        if (!enabled(needed))
+          src_.fail(enable_nodes_.at("phase_transition"),
+                    std::string("enable: 'phase_transition' needs '") + needed + "' in the 'enable' list");
+  }
+
+  /// Key `temperature` of a fluid box or solid: the start temperature of its particles [first, end).
+  void readBlockTemperature(const YAML::Node& node, const std::string& where, size_t first) {
+    const YAML::Node t = node["temperature"];
+    if (!t) return;
+    if (!enabled("temperature"))
+      src_.fail(t, where + ".temperature: needs 'temperature' in the scene's 'enable' list");
+    SphSceneTemperature range;
+    range.first = first;
+    range.count = scene_.particles.size() - first;
+    range.temperature = src_.number(t, where + ".temperature");
+    scene_.thermal.initial.push_back(range);
+  }
+
+  /// temperature: {conductivity, heat_capacity, initial, ambient, ambient_rate, stability_factor,
+  /// heated_planes: [...], held: [...]}.
+  void readThermal(const YAML::Node& node) {
+    if (node && !enabled("temperature"))
+      src_.fail(node, "temperature: needs 'temperature' in the scene's 'enable' list");
+    if (!enabled("temperature")) return;
+    if (!node)
+      src_.fail(enable_nodes_.at("temperature"), "enable: 'temperature' needs a 'temperature' block");
+    src_.allowKeys(node,
+                   {"conductivity", "heat_capacity", "initial", "ambient", "ambient_rate", "stability_factor",
+                    "heated_planes", "held"},
+                   "temperature");
+    SphSceneThermal& t = scene_.thermal;
+    t.enabled = true;
+    SphThermalConfig& c = t.config;
+    c.rest_density = scene_.config.rest_density;
+    c.num_threads = scene_.config.num_threads;
+    optionalNumber(node, "conductivity", "temperature", &c.conductivity, &Source::nonNegative);
+    optionalNumber(node, "heat_capacity", "temperature", &c.heat_capacity, &Source::positive);
+    optionalNumber(node, "initial", "temperature", &c.initial_temperature, &Source::number);
+    optionalNumber(node, "ambient", "temperature", &c.ambient_temperature, &Source::number);
+    optionalNumber(node, "ambient_rate", "temperature", &c.ambient_rate, &Source::nonNegative);
+    if (node["stability_factor"]) {
+      c.stability_factor = src_.unitInterval(node["stability_factor"], "temperature.stability_factor");
+      if (!(c.stability_factor > 0))
+        src_.fail(node["stability_factor"], "temperature.stability_factor must be in (0, 1]");
+    }
+    if (const YAML::Node planes = node["heated_planes"]) {
+      if (!planes.IsSequence()) src_.fail(planes, "temperature.heated_planes: expected a list");
+      for (size_t i = 0; i < planes.size(); ++i) {
+        const std::string where = "temperature.heated_planes[" + std::to_string(i) + "]";
+        const YAML::Node p = planes[i];
+        src_.allowKeys(
+            p, {"normal", "offset", "point", "distance", "temperature", "transfer_rate", "heat_flux"}, where);
+        SphHeatedPlane plane;
+        planeGeometry(p, where, &plane.normal, &plane.offset);
+        optionalNumber(p, "distance", where, &plane.distance, &Source::positive);
+        optionalNumber(p, "temperature", where, &plane.temperature, &Source::number);
+        optionalNumber(p, "transfer_rate", where, &plane.transfer_rate, &Source::nonNegative);
+        optionalNumber(p, "heat_flux", where, &plane.heat_flux, &Source::number);
+        t.planes.push_back(plane);
+      }
+    }
+    if (const YAML::Node held = node["held"]) {
+      if (!held.IsSequence()) src_.fail(held, "temperature.held: expected a list of boxes");
+      for (size_t i = 0; i < held.size(); ++i) {
+        const std::string where = "temperature.held[" + std::to_string(i) + "]";
+        const YAML::Node h = held[i];
+        src_.allowKeys(h, {"lo", "hi", "temperature", "phase"}, where);
+        const Box box = readBox(src_, h, where, dimension_);
+        SphSceneHeld entry;
+        entry.temperature = src_.number(src_.require(h, "temperature", where), where + ".temperature");
+        if (h["phase"]) {
+          if (!enabled("phase_transition"))
+            src_.fail(h["phase"], where + ".phase: needs 'phase_transition' in the scene's 'enable' list");
+          entry.phase = uint8_t(src_.integer(h["phase"], where + ".phase", 1, 255));
+        }
+        const SphParticles& particles = scene_.particles;
+        for (size_t j = 0; j < particles.size(); ++j) {
+          const Vec3& x = particles.positions[j];
+          bool inside = true;
+          for (int k = 0; k < dimension_; ++k) inside = inside && x[k] >= box.lo[k] && x[k] <= box.hi[k];
+          if (inside) entry.indices.push_back(j);
+        }
+        if (entry.indices.empty()) src_.fail(h, where + ": no particles inside the box");
+        held_nodes_.push_back(h);
+        t.held.push_back(std::move(entry));
+      }
+    }
+    try {
+      c.validate();
+    } catch (const std::invalid_argument& e) {
+      src_.fail(node, std::string("temperature: ") + e.what());
+    }
+  }
+
+  /// phase_transition: {seed, melting: {rate, temperature, phase}, freezing: {rate, temperature, phase,
+  /// min_solid_neighbors, max_relative_speed, max_lattice_force, material: {solid material keys}}}.
+  void readPhaseTransition(const YAML::Node& node) {
+    if (node && !enabled("phase_transition"))
+      src_.fail(node, "phase_transition: needs 'phase_transition' in the scene's 'enable' list");
+    if (!enabled("phase_transition")) return;
+    if (!node)
+      src_.fail(enable_nodes_.at("phase_transition"),
+                "enable: 'phase_transition' needs a 'phase_transition' block");
+    src_.allowKeys(node, {"seed", "melting", "freezing"}, "phase_transition");
+    SphThermalConfig& c = scene_.thermal.config;
+    if (node["seed"])
+      c.seed =
+          uint64_t(src_.integer(node["seed"], "phase_transition.seed", 0, std::numeric_limits<long>::max()));
+    if (!node["melting"] && !node["freezing"])
+      src_.fail(node, "phase_transition: give 'melting' and / or 'freezing'");
+    if (const YAML::Node m = node["melting"]) {
+      const std::string where = "phase_transition.melting";
+      src_.allowKeys(m, {"rate", "temperature", "phase"}, where);
+      c.melting = true;
+      optionalNumber(m, "rate", where, &c.melting_rate, &Source::nonNegative);
+      c.melting_temperature = src_.number(src_.require(m, "temperature", where), where + ".temperature");
+      if (m["phase"]) {
+        c.melting_phase = uint8_t(src_.integer(m["phase"], where + ".phase", 1, 255));
+        if (!phases_.count(c.melting_phase))
+          src_.fail(m["phase"], where + ".phase: no solid has phase " + std::to_string(c.melting_phase));
+      }
+    }
+    if (const YAML::Node f = node["freezing"]) {
+      const std::string where = "phase_transition.freezing";
+      src_.allowKeys(f,
+                     {"rate", "temperature", "phase", "min_solid_neighbors", "max_relative_speed",
+                      "max_lattice_force", "material"},
+                     where);
+      c.freezing = true;
+      optionalNumber(f, "rate", where, &c.freezing_rate, &Source::nonNegative);
+      c.freezing_temperature = src_.number(src_.require(f, "temperature", where), where + ".temperature");
+      optionalNumber(f, "min_solid_neighbors", where, &c.min_solid_neighbors, &Source::number);
+      optionalNumber(f, "max_relative_speed", where, &c.max_relative_speed, &Source::positive);
+      optionalNumber(f, "max_lattice_force", where, &c.max_lattice_force, &Source::positive);
+      const YAML::Node phase = src_.require(f, "phase", where);
+      c.freezing_phase = uint8_t(src_.integer(phase, where + ".phase", 1, 255));
+      // The solid fluid freezes into: a scene solid of that phase, or a new (initially empty) one of
+      // `material`.
+      const YAML::Node material = f["material"];
+      for (size_t s = 0; s < scene_.solids.size(); ++s)
+        if (scene_.solids[s].phase == c.freezing_phase) scene_.thermal.freezing_solid = int(s);
+      if (scene_.thermal.freezing_solid >= 0 && material)
+        src_.fail(material, where + ".material: phase " + std::to_string(c.freezing_phase) +
+                                " is a solid of the scene already (its material applies)");
+      if (scene_.thermal.freezing_solid < 0) {
+        if (!material)
+          src_.fail(f, where + ": phase " + std::to_string(c.freezing_phase) +
+                           " is no solid of the scene; give its 'material' (solid material keys)");
+        src_.allowKeys(material,
+                       {"spacing", "model", "youngs_modulus", "poisson_ratio", "hourglass_control",
+                        "goal_stiffness", "deformation_allowance"},
+                       where + ".material");
+        SphSceneSolid solid;
+        readElasticMaterial(material, where + ".material", &solid.elastic);
+        solid.phase = c.freezing_phase;
+        solid.first = scene_.particles.size();
+        solid.count = 0;
+        phases_.insert(solid.phase);
+        scene_.thermal.freezing_solid = int(scene_.solids.size());
+        scene_.solids.push_back(solid);
+      }
+    }
+    for (size_t i = 0; i < scene_.thermal.held.size(); ++i) {
+      const uint8_t p = scene_.thermal.held[i].phase;
+      if (p != 0 && p != c.freezing_phase)
+        src_.fail(held_nodes_[i]["phase"], "temperature.held[" + std::to_string(i) + "].phase: " +
+                                               std::to_string(p) + " is not the freezing phase");
+    }
+    for (const SphSceneHeld& h : scene_.thermal.held)
+      if (h.phase != 0)
+        for (size_t j : h.indices) scene_.particles.phases[j] = h.phase;
+    try {
+      c.validate();
+    } catch (const std::invalid_argument& e) {
+      src_.fail(node, std::string("phase_transition: ") + e.what());
     }
   }
 
   bool enabled(const std::string& physics) const {
     return std::find(scene_.enabled_physics.begin(), scene_.enabled_physics.end(), physics) !=
            scene_.enabled_physics.end();
+  }
+
+  /// A plane entry's unit `normal` and its `offset` (or a `point` on it).
+  void planeGeometry(const YAML::Node& p, const std::string& where, Vec3* normal, double* offset) const {
+    const YAML::Node n = src_.require(p, "normal", where);
+    *normal = src_.vec(n, where + ".normal", dimension_, true);
+    if (!(normal->norm() > 0)) src_.fail(n, where + ".normal must be non-zero");
+    normal->normalize();
+    if (p["offset"] && p["point"]) src_.fail(p["point"], where + ": give offset or point, not both");
+    if (p["offset"]) *offset = src_.number(p["offset"], where + ".offset");
+    if (p["point"]) *offset = normal->dot(src_.vec(p["point"], where + ".point", dimension_, false));
   }
 
   /// Reads an optional number key of `node` into `value` unless it is absent; `check` validates it.
@@ -128,26 +316,9 @@ class SceneReader {
     if (node[key]) *value = (src_.*check)(node[key], where + "." + key);
   }
 
-  /// An elastic object (thesis 8.2): a box or a sphere (2D: disc) sampled on the closest-packing lattice
-  /// (8.20) around its centre, rotated by `rotation`, with its own phase id.
-  void readSolid(const YAML::Node& node, const std::string& where) {
-    const std::string shape = node["shape"] ? src_.string(node["shape"], where + ".shape") : "box";
-    std::set<std::string> keys = {"shape",          "spacing",
-                                  "model",          "youngs_modulus",
-                                  "poisson_ratio",  "hourglass_control",
-                                  "goal_stiffness", "deformation_allowance",
-                                  "velocity",       "phase",
-                                  "rotation"};
-    if (shape == "box") {
-      keys.insert({"lo", "hi"});
-    } else if (shape == "sphere") {
-      keys.insert({"center", "radius"});
-    } else {
-      src_.fail(node["shape"], where + ".shape: unknown shape '" + shape + "' (box, sphere)");
-    }
-    src_.allowKeys(node, keys, where);
-    SphSceneSolid solid;
-    SphElasticConfig& e = solid.elastic;
+  /// The material keys of a solid (spacing, model and its parameters) into *e, validated.
+  void readElasticMaterial(const YAML::Node& node, const std::string& where, SphElasticConfig* elastic) {
+    SphElasticConfig& e = *elastic;
     e.lattice_spacing = blockSpacing(node, where);
     if (!(e.lattice_spacing < scene_.config.smoothing_length))
       src_.fail(node, where + ": the lattice spacing must be below the smoothing length (no neighbours)");
@@ -175,6 +346,29 @@ class SceneReader {
     } catch (const std::invalid_argument& ex) {
       src_.fail(node, where + ": " + ex.what());
     }
+  }
+
+  /// An elastic object (thesis 8.2): a box or a sphere (2D: disc) sampled on the closest-packing lattice
+  /// (8.20) around its centre, rotated by `rotation`, with its own phase id.
+  void readSolid(const YAML::Node& node, const std::string& where) {
+    const std::string shape = node["shape"] ? src_.string(node["shape"], where + ".shape") : "box";
+    std::set<std::string> keys = {"shape",          "spacing",
+                                  "model",          "youngs_modulus",
+                                  "poisson_ratio",  "hourglass_control",
+                                  "goal_stiffness", "deformation_allowance",
+                                  "velocity",       "phase",
+                                  "rotation",       "temperature"};
+    if (shape == "box") {
+      keys.insert({"lo", "hi"});
+    } else if (shape == "sphere") {
+      keys.insert({"center", "radius"});
+    } else {
+      src_.fail(node["shape"], where + ".shape: unknown shape '" + shape + "' (box, sphere)");
+    }
+    src_.allowKeys(node, keys, where);
+    SphSceneSolid solid;
+    readElasticMaterial(node, where, &solid.elastic);
+    const SphElasticConfig& e = solid.elastic;
     // Phase id: given (unique, 1..255) or the next unused one.
     if (node["phase"]) {
       solid.phase = uint8_t(src_.integer(node["phase"], where + ".phase", 1, 255));
@@ -234,6 +428,7 @@ class SceneReader {
     }
     solid.count = particles.size() - solid.first;
     scene_.solids.push_back(solid);
+    readBlockTemperature(node, where, solid.first);
   }
 
   void readSolver(const YAML::Node& node) {
@@ -363,12 +558,14 @@ class SceneReader {
   }
 
   void readFluid(const YAML::Node& node, const std::string& where) {
-    src_.allowKeys(node, {"lo", "hi", "spacing", "velocity"}, where);
+    src_.allowKeys(node, {"lo", "hi", "spacing", "velocity", "temperature"}, where);
     const Box box = readBox(src_, node, where, dimension_);
     const double dx = blockSpacing(node, where);
     const Vec3 v =
         node["velocity"] ? src_.vec(node["velocity"], where + ".velocity", dimension_, true) : Vec3::Zero();
+    const size_t first = scene_.particles.size();
     addBox(node, where, box, dx, SphParticleKind::kFluid, v);
+    readBlockTemperature(node, where, first);
   }
 
   void readMoving(const YAML::Node& node, const std::string& where) {
@@ -415,14 +612,7 @@ class SceneReader {
       const YAML::Node p = planes[i];
       src_.allowKeys(p, {"normal", "offset", "point", "restitution", "friction"}, where);
       SphPlane plane;
-      const YAML::Node n = src_.require(p, "normal", where);
-      plane.normal = src_.vec(n, where + ".normal", dimension_, true);
-      if (!(plane.normal.norm() > 0)) src_.fail(n, where + ".normal must be non-zero");
-      plane.normal.normalize();
-      if (p["offset"] && p["point"]) src_.fail(p["point"], where + ": give offset or point, not both");
-      if (p["offset"]) plane.offset = src_.number(p["offset"], where + ".offset");
-      if (p["point"])
-        plane.offset = plane.normal.dot(src_.vec(p["point"], where + ".point", dimension_, false));
+      planeGeometry(p, where, &plane.normal, &plane.offset);
       if (p["restitution"]) plane.restitution = src_.unitInterval(p["restitution"], where + ".restitution");
       if (p["friction"]) plane.friction = src_.unitInterval(p["friction"], where + ".friction");
       scene_.planes.push_back(plane);
@@ -528,6 +718,7 @@ class SceneReader {
   const Source& src_;
   SphScene& scene_;
   std::map<std::string, YAML::Node> enable_nodes_;
+  std::vector<YAML::Node> held_nodes_;
   std::set<uint8_t> phases_;
   bool surface_every_given_ = false;
   int dimension_ = 3;

@@ -11,6 +11,7 @@
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_particles.h"
 #include "sph/sph_surface.h"
+#include "sph/sph_thermal.h"
 
 namespace rc {
 
@@ -48,6 +49,32 @@ struct SphSceneSolid {
   size_t first = 0, count = 0;
 };
 
+/// Particles [first, first + count) start at `temperature` (key `temperature` of a fluid box or solid).
+struct SphSceneTemperature {
+  size_t first = 0, count = 0;
+  double temperature = 0.0;
+};
+
+/// Particles held at a temperature (key temperature.held: those inside [lo, hi] at load time, any kind; a
+/// cooled rod or a heater). `phase` (if > 0) is written to their phases: a seed fluid can freeze onto.
+struct SphSceneHeld {
+  std::vector<size_t> indices;
+  double temperature = 0.0;
+  uint8_t phase = 0;
+};
+
+/// Heat and phase transitions (`enable: [temperature]`, `[phase_transition]`; thesis 8.2.4): the model's
+/// config (melting / freezing set by phase_transition), initial temperatures, heated planes, held particles.
+/// The solid fluid freezes into is scene.solids entry `freezing_solid` (-1: none).
+struct SphSceneThermal {
+  bool enabled = false;
+  SphThermalConfig config;
+  std::vector<SphSceneTemperature> initial;
+  std::vector<SphHeatedPlane> planes;
+  std::vector<SphSceneHeld> held;
+  int freezing_solid = -1;
+};
+
 /// A loaded scene, ready for the solver: config is validated, particles are filled, planes collected.
 struct SphScene {
   std::string name;  ///< `name:` or the file name without extension
@@ -61,11 +88,12 @@ struct SphScene {
   SphParticleOutput output;
   SphSurfaceOutput surface;
   std::vector<SphSceneSolid> solids;
+  SphSceneThermal thermal;
 };
 
-/// Optional physics a scene may list under `enable:`. elasticity (key solids) and surface (key
-/// output.surface) are supported; the others are rejected with "not implemented yet", an unknown name as
-/// unknown. The keys of a physics not enabled are rejected.
+/// Optional physics a scene may list under `enable:`: elasticity (key solids), surface (key
+/// output.surface), temperature (key temperature) and phase_transition (key phase_transition; needs
+/// temperature and elasticity). An unknown name is rejected. The keys of a physics not enabled are rejected.
 const std::vector<std::string>& sphOptionalPhysics();
 
 /// Reads a scene file. Throws SphSceneError naming the file, line and problem (syntax, unknown key, wrong

@@ -45,8 +45,9 @@ FluidMeasures measureFluid(const SphParticles& p, const Vec3& gravity) {
 /// Writes the particle files of one output frame.
 class FrameWriter {
  public:
-  FrameWriter(const SphScene& scene, const std::string& out_dir, SphRunStats* stats)
-      : scene_(scene), dir_(out_dir), stats_(*stats) {
+  FrameWriter(const SphScene& scene, const std::string& out_dir, SphRunStats* stats,
+              const SphThermalModel* thermal)
+      : scene_(scene), dir_(out_dir), stats_(*stats), thermal_(thermal) {
     active_ = !out_dir.empty() && scene.output.enabled();
     surface_ = !out_dir.empty() && scene.surface.enabled && (scene.surface.obj || scene.surface.ply);
     if (active_ || surface_) std::filesystem::create_directories(dir_);
@@ -61,12 +62,12 @@ class FrameWriter {
     const std::string base = scene_.name + stem;
     if (scene_.output.ply) {
       const std::string path = (dir_ / (base + ".ply")).string();
-      writeSphPly(path, solver.particles());
+      writeSphPly(path, solver.particles(), temperatures(solver));
       stats_.files.push_back(path);
     }
     if (scene_.output.vtp) {
       const std::string path = (dir_ / (base + ".vtp")).string();
-      writeSphVtp(path, solver.particles());
+      writeSphVtp(path, solver.particles(), VtpEncoding::kAppendedRaw, temperatures(solver));
       stats_.files.push_back(path);
       pvd_.push_back({base + ".vtp", solver.time()});
       const std::string pvd = (dir_ / (scene_.name + ".pvd")).string();
@@ -77,6 +78,14 @@ class FrameWriter {
   }
 
  private:
+  /// The thermal model's temperatures, grown to the particle count (nullptr without temperature).
+  const std::vector<double>* temperatures(const SphFluidSolver& solver) {
+    if (!thermal_) return nullptr;
+    temperatures_ = thermal_->temperatures();
+    temperatures_.resize(solver.particles().size(), thermal_->config().initial_temperature);
+    return &temperatures_;
+  }
+
   /// Marching cubes surface of the frame (8.2.7): <name>_surface_NNNN.obj / .ply.
   void maybeWriteSurface(int frame, const SphFluidSolver& solver) {
     if (!surface_ || frame % scene_.surface.every != 0) return;
@@ -104,6 +113,8 @@ class FrameWriter {
   std::filesystem::path dir_;
   SphRunStats& stats_;
   bool active_ = false, surface_ = false;
+  const SphThermalModel* thermal_;
+  std::vector<double> temperatures_;
   std::vector<SphPvdEntry> pvd_;
 };
 
@@ -165,8 +176,42 @@ SphFluidSolver makeSphSolver(const SphScene& scene) {
   return solver;
 }
 
+std::shared_ptr<SphThermalModel> makeSphThermal(const SphScene& scene, SphFluidSolver& solver) {
+  if (!scene.thermal.enabled) return nullptr;
+  SphThermalConfig config = scene.thermal.config;
+  config.num_threads = solver.config().num_threads;
+  auto model = std::make_shared<SphThermalModel>(config);
+  const size_t n = solver.particles().size();
+  model->setTemperature(0, n, config.initial_temperature);
+  for (const SphSceneTemperature& range : scene.thermal.initial)
+    model->setTemperature(range.first, range.count, range.temperature);
+  for (const SphHeatedPlane& plane : scene.thermal.planes) model->addHeatedPlane(plane);
+  for (const SphSceneHeld& held : scene.thermal.held) {
+    for (size_t i : held.indices) model->temperatures()[i] = held.temperature;
+    model->holdTemperature(held.indices, held.temperature);
+  }
+  if (config.freezing)
+    for (const auto& term : solver.forceTerms()) {
+      auto solid = std::dynamic_pointer_cast<SphElasticSolid>(term);
+      if (solid && solid->phase() == config.freezing_phase) model->setFreezingSolid(solid);
+    }
+  return model;
+}
+
 SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options) {
   SphRunStats stats;
+  std::shared_ptr<SphThermalModel> thermal = options.thermal;
+  if (!thermal) thermal = makeSphThermal(scene, solver);
+  stats.thermal = thermal != nullptr;
+  if (thermal) stats.heat_start = thermal->totalHeat(solver.particles());
+  // Called after every solver step (8.2.4): conduction with that step's dt, melting and freezing.
+  const std::function<void(const SphStepStats&)> after_step =
+      thermal ? std::function<void(const SphStepStats&)>([&](const SphStepStats& st) {
+        const SphThermalStats& ts = thermal->step(solver, st.dt);
+        stats.melted += ts.melted;
+        stats.frozen += ts.frozen;
+      })
+              : std::function<void(const SphStepStats&)>();
   stats.scene = scene.name;
   stats.particles = solver.particles().size();
   std::vector<const SphElasticSolid*> solids;
@@ -185,7 +230,7 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
   stats.momentum_start = start.momentum;
   const uint64_t first_step = solver.stepCount();
   const double start_time = solver.time();
-  FrameWriter writer(scene, options.out_dir, &stats);
+  FrameWriter writer(scene, options.out_dir, &stats, thermal.get());
   writer.maybeWrite(0, solver);
 
   bool have_energy = false;
@@ -225,7 +270,7 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
           // above is exact (Sterbenz), so advance() ends on the same frame_end.
           const uint64_t before = solver.stepCount();
           step_started = std::chrono::steady_clock::now();
-          const SphStepStats& st = solver.advance(remaining);
+          const SphStepStats& st = solver.advance(remaining, after_step);
           const double seconds = secondsSince(step_started);
           frame_seconds += seconds;
           const uint64_t steps = solver.stepCount() - before;
@@ -236,6 +281,11 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
         step_started = std::chrono::steady_clock::now();
         const SphStepStats& st = solver.step();
         frame_seconds += st.seconds;
+        if (after_step) {
+          const auto thermal_started = std::chrono::steady_clock::now();
+          after_step(st);
+          frame_seconds += secondsSince(thermal_started);
+        }
         stats.max_step_us = std::max(stats.max_step_us, 1e6 * st.seconds);
         stats.min_dt = std::min(stats.min_dt, st.dt);
         last_dt = st.dt;
@@ -287,6 +337,17 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
     stats.energy_change =
         (stats.energy_end - stats.energy_first) / std::max(std::abs(stats.energy_first), 1e-300);
   }
+  if (thermal) {
+    stats.heat_end = thermal->totalHeat(solver.particles());
+    stats.min_temperature = std::numeric_limits<double>::infinity();
+    stats.max_temperature = -std::numeric_limits<double>::infinity();
+    const SphParticles& p = solver.particles();
+    for (size_t i = 0; i < p.size() && i < thermal->temperatures().size(); ++i) {
+      if (p.kinds[i] != SphParticleKind::kFluid) continue;
+      stats.min_temperature = std::min(stats.min_temperature, thermal->temperatures()[i]);
+      stats.max_temperature = std::max(stats.max_temperature, thermal->temperatures()[i]);
+    }
+  }
   return stats;
 }
 
@@ -320,6 +381,14 @@ std::string sphRunStatsJson(const SphRunStats& s) {
     appendNumber(out, "solid_particles", double(s.solid_particles));
     appendNumber(out, "elastic_energy", s.elastic_energy);
     appendNumber(out, "max_strain", s.max_strain);
+  }
+  if (s.thermal) {
+    appendNumber(out, "heat_start", s.heat_start);
+    appendNumber(out, "heat_end", s.heat_end);
+    appendNumber(out, "min_temperature", s.min_temperature);
+    appendNumber(out, "max_temperature", s.max_temperature);
+    appendNumber(out, "melted", double(s.melted));
+    appendNumber(out, "frozen", double(s.frozen));
   }
   appendNumber(out, "files", double(s.files.size()));
   appendString(out, "instability", s.instability.empty() ? "none" : s.instability);

@@ -4,11 +4,13 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_scene_file.h"
+#include "sph/sph_thermal.h"
 
 namespace rc {
 
@@ -27,6 +29,9 @@ struct SphFrameReport {
 struct SphRunOptions {
   std::string out_dir;  ///< particle and surface files go here (created); empty: none are written
   std::function<void(const SphFrameReport&)> on_frame;
+  /// Scenes with `enable: [temperature]`: the model stepped after every solver step (made by
+  /// makeSphThermal when null; pass one to read its temperatures after the run).
+  std::shared_ptr<SphThermalModel> thermal;
 };
 
 struct SphRunStats {
@@ -61,20 +66,33 @@ struct SphRunStats {
   double elastic_energy = 0.0, max_strain = 0.0;
   std::string instability;  ///< empty: stable; else the solver's message (step and likely cause)
   uint64_t instability_step = 0;
+  /// Temperature (`enable: [temperature]`): heat sum m c T of the non-held conducting particles at the start
+  /// and end, the temperature range at the end, and phase changes of the run (8.35, 8.36).
+  bool thermal = false;
+  double heat_start = 0.0, heat_end = 0.0;
+  double min_temperature = 0.0, max_temperature = 0.0;
+  uint64_t melted = 0, frozen = 0;
   std::vector<std::string> files;  ///< written particle files (and the .pvd) and surface meshes
 };
 
 /// A solver for the scene (its config, particles and planes) with an SphElasticSolid force term per solid.
 SphFluidSolver makeSphSolver(const SphScene& scene);
 
+/// The thermal model of a scene with `enable: [temperature]` (nullptr otherwise): its config, initial
+/// temperatures, heated planes and held particles; the freezing solid is the solver's SphElasticSolid of the
+/// freezing phase (solver made by makeSphSolver).
+std::shared_ptr<SphThermalModel> makeSphThermal(const SphScene& scene, SphFluidSolver& solver);
+
 /// Runs scene.frame_count frames of scene.frame_time on `solver` (made by makeSphSolver, possibly with
 /// changed threads). Frames end exactly on multiples of frame_time, like SphFluidSolver::advance(frame_time)
 /// per frame, and give the same state bitwise. An unstable step stops the run (it is reported in
-/// SphRunStats::instability, nothing is thrown); I/O errors throw.
+/// SphRunStats::instability, nothing is thrown); I/O errors throw. With temperature, the thermal model
+/// steps after every solver step with that step's dt, and particle files get temperature and phase.
 SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options = {});
 
 /// The statistics as one line of JSON (no newline); non-finite numbers become null. Scenes with solids
-/// add solids, solid_particles, elastic_energy and max_strain.
+/// add solids, solid_particles, elastic_energy and max_strain; scenes with temperature add heat_start,
+/// heat_end, min_temperature, max_temperature, melted and frozen.
 std::string sphRunStatsJson(const SphRunStats& stats);
 
 }  // namespace rc

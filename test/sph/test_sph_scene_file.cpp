@@ -17,6 +17,7 @@
 
 #include "io/cloud_io.h"
 #include "io/obj_io.h"
+#include "scene_file_test_support.h"
 #include "sph/sph_lattice.h"
 #include "sph/sph_output.h"
 #include "sph/sph_scene.h"
@@ -27,8 +28,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kSceneDir =
-    std::string(__FILE__).substr(0, std::string(__FILE__).rfind("/test/")) + "/config/sph/";
+const std::string kSceneDir = sphSceneDir();
 
 fs::path tempDir(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("rc_test_sph_scene_file_" + name);
@@ -57,6 +57,10 @@ TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
       {"elastic_cube_2d", {0, 0, 0, 3, 1, 115}},
       // Nine dice of 249 fcc points each (thesis: 246).
       {"dice_3d", {0, 0, 0, 5, 9, 9 * 249}},
+      // A sphere of radius 4 d on the fcc lattice (temperature; test_sph_scene_thermal.cpp).
+      {"melting_block_3d", {0, 0, 0, 5, 1, 381}},
+      // 8 x 8 fluid over a 12 x 3 rod; the solid fluid freezes into starts empty.
+      {"freezing_rod_2d", {64, 36, 0, 3, 1, 0}},
   };
   size_t loaded = 0;
   for (const auto& entry : fs::directory_iterator(kSceneDir)) {
@@ -168,15 +172,6 @@ TEST(SphSceneFile, DamBreakFileRunsBitwiseLikeTheHandBuiltScene) {
 }
 
 /// The error message of parsing `yaml` (empty if it parses).
-std::string parseError(const std::string& yaml) {
-  try {
-    parseSphScene(yaml, "bad.yaml");
-  } catch (const SphSceneError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 const char* kGoodHead =
     "dimension: 2\n"                                    // 1
     "spacing: 0.02\n"                                   // 2
@@ -184,12 +179,6 @@ const char* kGoodHead =
     "fluid:\n"                                          // 4
     "  - {lo: [0, 0], hi: [0.2, 0.2]}\n"                // 5
     "frames: {count: 2, time: 0.01}\n";                 // 6
-
-void expectErrorAt(const std::string& yaml, int line, const std::string& words) {
-  const std::string message = parseError(yaml);
-  EXPECT_EQ(message.rfind("bad.yaml:" + std::to_string(line) + ":", 0), 0u) << message;
-  EXPECT_NE(message.find(words), std::string::npos) << message;
-}
 
 TEST(SphSceneFile, BadInputsNameFileLineAndProblem) {
   ASSERT_EQ(parseError(kGoodHead), "");
@@ -203,8 +192,8 @@ TEST(SphSceneFile, BadInputsNameFileLineAndProblem) {
                 "normal: expected [x, y]");
   expectErrorAt("dimension: 2\nspacing: 0.02\nsolver: {smoothing_ratio: 2.5, stiffness: stiff}\n", 3,
                 "stiffness: expected a number, got 'stiff'");
-  expectErrorAt(head + "enable: [temperature]\n", 7, "'temperature' is not implemented yet");
-  expectErrorAt(head + "enable:\n  - phase_transition\n", 8, "'phase_transition' is not implemented yet");
+  expectErrorAt(head + "enable: [temperature]\n", 7, "'temperature' needs a 'temperature' block");
+  expectErrorAt(head + "enable:\n  - phase_transition\n", 8, "'phase_transition' needs 'temperature'");
   expectErrorAt(head + "enable: [elasticity, elasticity]\n", 7, "listed twice");
   expectErrorAt(head + "enable: [magnetism]\n", 7, "unknown physics 'magnetism'");
   // Values the solver rejects point at their own line.

@@ -1,0 +1,35 @@
+// Shared by the SPH scene-file tests: the scene folder of the source tree and the parse-error checks.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "sph/sph_scene_file.h"
+
+namespace rc {
+
+/// config/sph/ of this checkout (with the trailing slash).
+inline std::string sphSceneDir() {
+  const std::string here = __FILE__;
+  return here.substr(0, here.rfind("/test/")) + "/config/sph/";
+}
+
+/// The loader's message for `yaml` read as "bad.yaml" (empty if it loads).
+inline std::string parseError(const std::string& yaml) {
+  try {
+    parseSphScene(yaml, "bad.yaml");
+  } catch (const SphSceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+/// The message starts with "bad.yaml:<line>:" and contains `words`.
+inline void expectErrorAt(const std::string& yaml, int line, const std::string& words) {
+  const std::string message = parseError(yaml);
+  EXPECT_EQ(message.rfind("bad.yaml:" + std::to_string(line) + ":", 0), 0u) << message;
+  EXPECT_NE(message.find(words), std::string::npos) << message;
+}
+
+}  // namespace rc
