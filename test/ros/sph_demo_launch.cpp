@@ -48,17 +48,18 @@ bool waitFor(Done&& done, double seconds) {
   return false;
 }
 
-/// The first stats message (received from now on, or already the last one) that satisfies `accept`; an
-/// empty message if none arrives within 10 s.
+/// The first stats message (in arrival order) that satisfies `accept`; it and every message before it are
+/// consumed. An empty message if none arrives within 10 s.
 template <class Accept>
 SphStats waitForStats(Inbox& inbox, Accept&& accept) {
   SphStats found;
   waitFor(
       [&] {
         std::lock_guard<std::mutex> lock(inbox.mutex);
-        for (const SphStats& stats : inbox.stats)
-          if (accept(stats)) {
-            found = stats;
+        for (size_t k = 0; k < inbox.stats.size(); ++k)
+          if (accept(inbox.stats[k])) {
+            found = inbox.stats[k];
+            inbox.stats.erase(inbox.stats.begin(), inbox.stats.begin() + long(k) + 1);
             return true;
           }
         inbox.stats.clear();
@@ -129,7 +130,8 @@ TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
   step.request.steps = 5;
   ASSERT_TRUE(command.call(step));
   EXPECT_TRUE(step.response.success) << step.response.message;
-  const SphStats stepped = waitForStats(inbox, [&](const SphStats& m) { return m.step != paused.step; });
+  const SphStats stepped =
+      waitForStats(inbox, [&](const SphStats& m) { return !m.running && m.step > paused.step; });
   EXPECT_EQ(stepped.step, paused.step + 5);
   EXPECT_GT(stepped.time, paused.time);
   EXPECT_GT(stepped.dt, 0.0);
