@@ -291,7 +291,8 @@ namespace {
 bool setupCircularCommonCase(const Vec3& c, const Vec3& n, double radius, const CameraFrame& camera,
                              const EwaParams& params, SplatRaster* raster, SplatSetup* result) {
   const double n_dot_view = camera.perspective ? n.dot(c) : n.z();
-  if (!(c.z() >= camera.near_clip && c.z() <= camera.far_clip) || (params.backface_culling && n_dot_view > 0)) {
+  if (!(c.z() >= camera.near_clip && c.z() <= camera.far_clip) ||
+      (params.backface_culling && n_dot_view > 0)) {
     *result = SplatSetup::kCulled;
     return true;
   }
