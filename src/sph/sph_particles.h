@@ -25,7 +25,8 @@ struct SphParticles {
   std::vector<double> pressures;
   std::vector<Vec3> forces;
   std::vector<SphParticleKind> kinds;
-  std::vector<uint8_t> phases;  ///< 0: fluid; 1..255: the elastic solid of that id (8.2), for kFluid particles
+  std::vector<uint8_t>
+      phases;  ///< 0: fluid; 1..255: the elastic solid of that id (8.2), for kFluid particles
 
   size_t size() const { return positions.size(); }
   bool empty() const { return positions.empty(); }

@@ -16,6 +16,7 @@
 #include "fem/linear_elasticity.h"
 #include "fem/polyhedral_mesh.h"
 #include "patch_test_support.h"
+#include "random_hull_support.h"
 
 namespace rc {
 namespace {
@@ -163,19 +164,6 @@ TEST(PolyhedralMesh, RejectsInvalidMeshes) {
 // ---------------------------------------------------------------------------------------------------------
 // Element stiffness
 // ---------------------------------------------------------------------------------------------------------
-
-std::vector<Vec3> randomPointsOnEllipsoid(int n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> normal;
-  std::vector<Vec3> points;
-  while (static_cast<int>(points.size()) < n) {
-    Vec3 p(normal(rng), normal(rng), normal(rng));
-    if (p.norm() < 1e-3) continue;
-    p.normalize();
-    points.emplace_back(1.5 * p.x() + 0.2, 1.0 * p.y() - 0.1, 0.7 * p.z() + 0.3);
-  }
-  return points;
-}
 
 std::vector<std::pair<std::string, ConvexPolyhedron>> singleElements() {
   return {

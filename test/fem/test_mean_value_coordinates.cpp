@@ -16,6 +16,7 @@
 
 #include "fem/convex_polyhedron.h"
 #include "fem/mean_value_coordinates.h"
+#include "random_hull_support.h"
 
 #if defined(RC_HAVE_VTK)
 #include <vtkIdList.h>
@@ -26,19 +27,6 @@
 
 namespace rc {
 namespace {
-
-std::vector<Vec3> randomPointsOnEllipsoid(int n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> normal;
-  std::vector<Vec3> points;
-  while (static_cast<int>(points.size()) < n) {
-    Vec3 p(normal(rng), normal(rng), normal(rng));
-    if (p.norm() < 1e-3) continue;
-    p.normalize();
-    points.emplace_back(1.5 * p.x() + 0.2, 1.0 * p.y() - 0.1, 0.7 * p.z() + 0.3);
-  }
-  return points;
-}
 
 std::vector<Vec3> icosahedronPoints() {
   const double phi = 0.5 * (1.0 + std::sqrt(5.0));
