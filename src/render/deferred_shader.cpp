@@ -223,12 +223,21 @@ void DeferredShader::shadeSpan(const AccumulatedSpan& span, int count, int x, in
       __m128 cosine = zero;
       for (int r = 0; r < 3; ++r)
         cosine = _mm_add_ps(cosine, _mm_mul_ps(_mm_sub_ps(_mm_mul_ps(two_lambert, s[r]), light[r]), e[r]));
-      alignas(16) float cosines[4], lamberts[4], shine[4];
-      _mm_store_ps(cosines, cosine);
-      _mm_store_ps(lamberts, lambert);
-      for (int l = 0; l < 4; ++l) shine[l] = lamberts[l] > 0 ? highlight(cosines[l]) : 0.0f;
+      // highlight(cosine) four lanes at a time (same arithmetic), zero where the light is behind.
+      const __m128 t =
+          _mm_mul_ps(_mm_min_ps(_mm_max_ps(cosine, zero), one), _mm_set1_ps(kSpecularTableSteps));
+      const __m128i step = _mm_cvttps_epi32(_mm_min_ps(t, _mm_set1_ps(kSpecularTableSteps - 1)));
+      alignas(16) int32_t steps[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(steps), step);
+      const float* table = specular_table_.data();
+      const __m128 below = _mm_setr_ps(table[steps[0]], table[steps[1]], table[steps[2]], table[steps[3]]);
+      const __m128 above =
+          _mm_setr_ps(table[steps[0] + 1], table[steps[1] + 1], table[steps[2] + 1], table[steps[3] + 1]);
+      const __m128 shine = _mm_and_ps(
+          _mm_cmpgt_ps(lambert, zero),
+          _mm_add_ps(below, _mm_mul_ps(_mm_sub_ps(t, _mm_cvtepi32_ps(step)), _mm_sub_ps(above, below))));
       const __m128 intensity = _mm_add_ps(_mm_set1_ps(ambient_), _mm_mul_ps(_mm_set1_ps(diffuse_), lambert));
-      const __m128 added = _mm_mul_ps(_mm_set1_ps(255.0f * specular_), _mm_load_ps(shine));
+      const __m128 added = _mm_mul_ps(_mm_set1_ps(255.0f * specular_), shine);
       for (int c = 0; c < 3; ++c) rgb[c] = _mm_add_ps(_mm_mul_ps(base[c], intensity), added);
     }
     // Round to bytes and interleave r, g, b, a.

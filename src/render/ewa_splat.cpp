@@ -240,7 +240,7 @@ SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& came
       raster->depth_den[0] = raster->depth_den[1] = 0;
     }
   }
-  raster->flags = edge_on ? SplatRaster::kEdgeOn : 0;
+  raster->flags = (edge_on ? SplatRaster::kEdgeOn : 0) | (n_dot_view > 0 ? SplatRaster::kBackFacing : 0);
   if (center_u_out) *center_u_out = center_u;
   if (center_v_out) *center_v_out = center_v;
   if (edge_on_out) *edge_on_out = edge_on;
@@ -359,7 +359,7 @@ bool setupCircularCommonCase(const Vec3& c, const Vec3& n, double radius, const 
   raster->z_hi = float(z_hi);
   raster->depth_tolerance = depthTolerance(params, params.cutoff_radius * radius,
                                            std::abs(n_dot_view) / std::sqrt(view_length2), c.z());
-  raster->flags = 0;
+  raster->flags = n_dot_view > 0 ? SplatRaster::kBackFacing : 0;
   *result = SplatSetup::kDrawn;
   return true;
 }

@@ -52,10 +52,12 @@ struct alignas(64) SplatRaster {
   float depth_den[2];               ///< d1, d2
   float z_lo, z_hi;                 ///< depth range of the ellipse (guards the degenerate cases)
   float depth_tolerance;            ///< eps_z of this surfel (3.2.1)
-  uint32_t flags;                   ///< kEdgeOn, kClip, kClipColorOnly; the clip slot in the low bits
+  uint32_t flags;  ///< kBackFacing, kEdgeOn, kClip, kClipColorOnly; the clip slot in the low bits
 
-  static constexpr uint32_t kEdgeOn = 1u << 29, kClip = 1u << 30, kClipColorOnly = 1u << 31;
-  static constexpr uint32_t kClipSlotMask = kEdgeOn - 1;  ///< index into the clip geometry table
+  /// kBackFacing: the normal points away from the camera (drawn only when back faces are not culled).
+  static constexpr uint32_t kBackFacing = 1u << 28, kEdgeOn = 1u << 29, kClip = 1u << 30,
+                            kClipColorOnly = 1u << 31;
+  static constexpr uint32_t kClipSlotMask = kBackFacing - 1;  ///< index into the clip geometry table
   static constexpr uint32_t kMaxImageSize = 65535;
   uint32_t clipSlot() const { return flags & kClipSlotMask; }
 

@@ -19,11 +19,26 @@ constexpr int kTileSize = 32;
 /// Splats whose box is at least this wide inside a tile solve each row's span; narrower ones test the
 /// conic at every pixel of their box (no square root or division per row).
 constexpr int kSpanMinWidth = 8;
-constexpr int kTileStride = kTileSize + 8;  ///< row stride of the tile buffers: room for a 4-wide overrun
+constexpr int kTileStride = kTileSize + 8;  ///< row stride of the tile buffers: room for an 8-wide overrun
 
 struct TileRect {
   int x0, y0, x1, y1;  ///< inclusive pixel range
 };
+
+/// Narrows [*x_begin, *x_end] (the splat's box in the tile) to the pixels of row offset dv that can lie
+/// inside the cut-off: the roots of a du^2 + 2 b dv du + c dv^2 = 1, widened by a pixel (the r2 test
+/// decides). r2_row = c dv^2. False if the row misses the ellipse.
+inline bool rowSpan(const SplatRaster& s, float dv, float r2_row, int* x_begin, int* x_end) {
+  const float b_dv = s.conic_b * dv;
+  const float discriminant = b_dv * b_dv - s.conic_a * (r2_row - 1.0f);
+  if (!(discriminant >= 0)) return false;
+  const float root = std::sqrt(discriminant), inv_a = 1.0f / s.conic_a;
+  const float u_lo = s.center_u + (-b_dv - root) * inv_a, u_hi = s.center_u + (-b_dv + root) * inv_a;
+  const int xb = *x_begin, xe = *x_end;
+  *x_begin = std::max(xb, int(std::max(u_lo, float(xb))) - 1);
+  *x_end = std::min(xe, int(std::min(u_hi, float(xe))) + 1);
+  return true;
+}
 
 /// Calls visit(x, y, r2, z) for every pixel of the tile inside the cut-off ellipse of `s` (r2 <= 1), with
 /// the clamped plane depth z. Coverage depends only on the splat and the tile, so both passes agree.
@@ -39,15 +54,7 @@ inline void rasterizeSplat(const SplatRaster& s, const TileRect& tile, Visit&& v
     const float dv = float(y) - s.center_v;
     const float r2_row = c * dv * dv, r2_cross = 2.0f * b * dv;
     int x_begin = xb, x_end = xe;
-    if (solve_span) {  // roots of a du^2 + 2 b dv du + c dv^2 = 1, widened by a pixel (the r2 test decides)
-      const float b_dv = b * dv;
-      const float discriminant = b_dv * b_dv - a * (r2_row - 1.0f);
-      if (!(discriminant >= 0)) continue;
-      const float root = std::sqrt(discriminant), inv_a = 1.0f / a;
-      const float u_lo = s.center_u + (-b_dv - root) * inv_a, u_hi = s.center_u + (-b_dv + root) * inv_a;
-      x_begin = std::max(xb, int(std::max(u_lo, float(xb))) - 1);
-      x_end = std::min(xe, int(std::min(u_hi, float(xe))) + 1);
-    }
+    if (solve_span && !rowSpan(s, dv, r2_row, &x_begin, &x_end)) continue;
     const float num_row = s.depth_num[0] + s.depth_num[2] * dv;
     const float den_row = 1.0f + s.depth_den[1] * dv;
     for (int x = x_begin; x <= x_end; ++x) {
@@ -84,15 +91,7 @@ inline void rasterizeSplat4(const SplatRaster& s, const TileRect& tile, Visit&& 
     const float dv = float(y) - s.center_v;
     const float r2_row = c * dv * dv, r2_cross = 2.0f * b * dv;
     int x_begin = xb, x_end = xe;
-    if (solve_span) {
-      const float b_dv = b * dv;
-      const float discriminant = b_dv * b_dv - s.conic_a * (r2_row - 1.0f);
-      if (!(discriminant >= 0)) continue;
-      const float root = std::sqrt(discriminant), inv_a = 1.0f / s.conic_a;
-      const float u_lo = s.center_u + (-b_dv - root) * inv_a, u_hi = s.center_u + (-b_dv + root) * inv_a;
-      x_begin = std::max(xb, int(std::max(u_lo, float(xb))) - 1);
-      x_end = std::min(xe, int(std::min(u_hi, float(xe))) + 1);
-    }
+    if (solve_span && !rowSpan(s, dv, r2_row, &x_begin, &x_end)) continue;
     const __m128 row = _mm_set1_ps(r2_row), cross = _mm_set1_ps(r2_cross);
     const __m128 num_row = _mm_set1_ps(s.depth_num[0] + s.depth_num[2] * dv);
     const __m128 den_row = _mm_set1_ps(1.0f + s.depth_den[1] * dv);
