@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "render/surfel_renderer.h"
+#include "render/tile_passes_avx2.h"
 
 namespace rc {
 
@@ -31,6 +32,7 @@ DeferredShader::DeferredShader(const SplatConfig& config, const CameraFrame& cam
       inv_fy_(float(1.0 / camera.fy)),
       width_(camera.width),
       outputs_(config.outputs),
+      wide_(config.wide_simd && splat_tile::avx2TilePassesAvailable()),
       camera_R_world_(camera.camera_R_world.cast<float>()),
       to_light_((-config.light_direction_camera.normalized()).cast<float>()),
       ambient_(float(config.ambient)),
@@ -142,6 +144,12 @@ void DeferredShader::shadeSpan(const AccumulatedSpan& span, int count, int x, in
   for (; k + 4 <= count; k += 4) {
     const __m128 w = _mm_loadu_ps(span.weight + k);
     const int valid = _mm_movemask_ps(_mm_cmpgt_ps(w, zero));
+    if (wide_ && valid == 0xF && k + 8 <= count &&
+        _mm_movemask_ps(_mm_cmpgt_ps(_mm_loadu_ps(span.weight + k + 4), zero)) == 0xF) {
+      shadeEight(span, k, x, y, p0 + k, out);
+      k += 4;
+      continue;
+    }
     if (valid == 0) {
       clearSpan(4, x + k, y, out);
       continue;

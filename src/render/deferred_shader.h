@@ -1,6 +1,7 @@
 // Normalisation and deferred Phong shading of the splatting renderer (thesis 3.2): the accumulated
 // weight-sums of depth, normal and colour of a pixel are divided by the weight, and the pixel is lit with
-// the blended normal (two-sided: turned towards the viewer), four pixels at a time.
+// the blended normal (two-sided: turned towards the viewer), four pixels at a time, or eight with AVX2
+// where the CPU has it (deferred_shader_avx2.cpp: the same arithmetic, bitwise the same images).
 #pragma once
 
 #include <Eigen/Core>
@@ -38,6 +39,8 @@ class DeferredShader {
  private:
   static constexpr int kSpecularTableSteps = 1024;  ///< cos^shininess over [0, 1], interpolated
   void shadePixel(const AccumulatedSpan& span, int k, int x, int y, size_t p, RenderImages* out) const;
+  /// Pixels k .. k + 7 of the span, all with positive weight (AVX2).
+  void shadeEight(const AccumulatedSpan& span, int k, int x, int y, size_t p, RenderImages* out) const;
   float highlight(float cosine) const;
 
   const SplatConfig& config_;
@@ -45,6 +48,7 @@ class DeferredShader {
   float cx_, cy_, inv_fx_, inv_fy_;
   uint32_t width_;
   uint32_t outputs_;  ///< RenderOutput flags
+  bool wide_;         ///< shadeEight where eight pixels in a row are covered
   Eigen::Matrix3f camera_R_world_;
   Eigen::Vector3f to_light_;  ///< camera frame
   float ambient_, diffuse_, specular_;
