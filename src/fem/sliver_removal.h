@@ -1,0 +1,72 @@
+// Element quality, sliver and needle detection and sliver removal by projection onto the sliver plane
+// (thesis 9.2): the sliver's nodes are projected onto its least-squares plane, nodes that come too close are
+// merged (needle avoidance), the edges in the plane are intersected, the plane is re-tessellated (overlay of
+// the sliver's upper and lower faces) and every new face connects the two elements that were attached to
+// the old faces it covers. The sliver element disappears; its neighbours keep their identity.
+#pragma once
+
+#include <vector>
+
+#include "fem/polyhedral_mesh.h"
+
+namespace rc {
+
+struct ElementQuality {
+  double diameter = 0.0;            // largest node-node distance
+  double thickness = 0.0;           // min over faces of the farthest node's distance to the face plane
+  double relative_thickness = 0.0;  // thickness / diameter (0: planar)
+  double relative_min_edge = 0.0;   // shortest edge / diameter
+  double volume_ratio = 0.0;        // volume / diameter^3
+};
+
+/// Thickness, edges and volume of one element.
+ElementQuality elementQuality(const ConvexPolyhedron& element);
+
+/// Shewchuk's naming (9.2): almost planar elements are needles if they have a degenerated (short) edge and
+/// slivers otherwise.
+enum class ElementDefect { kNone, kSliver, kNeedle };
+
+struct SliverRemovalOptions {
+  /// Elements with relative_thickness below this are almost planar (sliver or needle).
+  double sliver_relative_thickness = 0.05;
+  /// Almost planar elements whose relative_min_edge is below this are needles.
+  double needle_relative_edge = 0.1;
+  /// Needle avoidance: nodes of the element closer than this (relative to its diameter) after projection onto
+  /// the sliver plane are merged into one node.
+  double merge_relative_distance = 0.1;
+  /// Neighbours deformed by the projection may become slightly non-convex or get slightly non-planar faces
+  /// (9.2 accepts this); the result's relative tolerance is raised to cover it, but a removal that would need
+  /// more than this is rejected (the element is kept and counted in num_rejected).
+  double max_relative_tolerance = 1e-3;
+  /// Upper bound on removals (< 0: no bound).
+  int max_removals = -1;
+};
+
+/// Per element defect of mesh. Throws std::invalid_argument for bad options.
+std::vector<ElementDefect> classifyElements(const PolyhedralMesh& mesh,
+                                            const SliverRemovalOptions& options = SliverRemovalOptions());
+
+struct SliverRemovalResult {
+  PolyhedralMesh mesh;
+  /// Rest displacements at the nodes of mesh (empty if none were given): projected nodes keep theirs, merged
+  /// nodes get the mean of the merged ones, an intersection node the mean of the linear interpolations along
+  /// its two edges (the interpolant is linear on edges).
+  std::vector<Vec3> displacements;
+  std::vector<int> node_map;        // per input node: its node in mesh (merged nodes share one)
+  std::vector<int> parent_element;  // per element of mesh: its element in the input mesh
+  int num_slivers_removed = 0;
+  int num_needles_removed = 0;
+  int num_collapsed_elements = 0;        // neighbours that became flat by node merging and were dropped
+  int num_new_nodes = 0;                 // edge intersection nodes in sliver planes
+  int num_merged_nodes = 0;              // nodes merged into another node
+  int num_rejected = 0;                  // bad elements whose removal was rejected (left in the mesh)
+  double max_projection_distance = 0.0;  // largest node move onto a sliver plane
+};
+
+/// Repeatedly removes the thinnest sliver or needle (relative_thickness < sliver_relative_thickness) until
+/// none is left that can be removed. displacements: empty or one per mesh node. Throws
+/// std::invalid_argument for bad options or a wrong displacement count.
+SliverRemovalResult removeSlivers(const PolyhedralMesh& mesh, const std::vector<Vec3>& displacements = {},
+                                  const SliverRemovalOptions& options = SliverRemovalOptions());
+
+}  // namespace rc
