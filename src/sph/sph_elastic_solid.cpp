@@ -21,6 +21,24 @@ void require(bool ok, const char* field, const std::string& what) {
   if (!ok) throw std::invalid_argument(std::string("SphElasticConfig.") + field + ": " + what);
 }
 
+uint64_t splitMix64(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+/// Lattice index packed into 30 bits (10 per coordinate, offset 512).
+uint32_t latticeKey(const Eigen::Vector3i& n) {
+  const auto c = [](int v) { return uint32_t(std::clamp(v + 512, 0, 1023)); };
+  return (c(n.x()) << 20) | (c(n.y()) << 10) | c(n.z());
+}
+
+/// Probability of a Poisson event of `rate` within dt (8.34); an infinite rate gives 1.
+double eventProbability(double rate, double dt) {
+  return std::isinf(rate) ? 1.0 : -std::expm1(-rate * dt);
+}
+
 bool isRotation(const Mat3& q) {
   return q.allFinite() && (q.transpose() * q - Mat3::Identity()).norm() < 1e-9 && q.determinant() > 0.0;
 }
@@ -41,6 +59,24 @@ void SphElasticConfig::validate() const {
   require(deformation_allowance >= 0.0 && deformation_allowance <= 1.0, "deformation_allowance",
           "(s) must be in [0, 1], got " + std::to_string(deformation_allowance));
   require(min_neighbors >= 2, "min_neighbors", "must be >= 2, got " + std::to_string(min_neighbors));
+  require(fracture_strain >= 0.0, "fracture_strain", "must be >= 0, got " + std::to_string(fracture_strain));
+  require(fracture_rate >= 0.0, "fracture_rate", "must be >= 0, got " + std::to_string(fracture_rate));
+  require(max_docking_rate >= 0.0 && std::isfinite(max_docking_rate), "max_docking_rate",
+          "must be finite and >= 0, got " + std::to_string(max_docking_rate));
+  require(docking_rate_increase >= 0.0 && std::isfinite(docking_rate_increase), "docking_rate_increase",
+          "must be finite and >= 0, got " + std::to_string(docking_rate_increase));
+  require(docking_rate_decrease >= 0.0 && std::isfinite(docking_rate_decrease), "docking_rate_decrease",
+          "must be finite and >= 0, got " + std::to_string(docking_rate_decrease));
+  require(docking_distance > 0.0 && docking_distance <= 1.0, "docking_distance",
+          "must be in (0, 1], got " + std::to_string(docking_distance));
+  require(yield_strain >= 0.0, "yield_strain", "must be >= 0, got " + std::to_string(yield_strain));
+  require(plastic_flow_rate >= 0.0 && std::isfinite(plastic_flow_rate), "plastic_flow_rate",
+          "must be finite and >= 0, got " + std::to_string(plastic_flow_rate));
+  require(max_plastic_strain > 0.0 && std::isfinite(max_plastic_strain), "max_plastic_strain",
+          "must be finite and > 0, got " + std::to_string(max_plastic_strain));
+  require(!(docking || plasticity()) || (time_step > 0.0 && std::isfinite(time_step)), "time_step",
+          "must be finite and > 0 with docking or plasticity (the solver's fixed_dt), got " +
+              std::to_string(time_step));
 }
 
 void assignLatticePoints(const SphLattice& lattice, const Mat3& transform, const std::vector<Vec3>& offsets,
@@ -176,15 +212,34 @@ void SphElasticSolid::prepare(const SphParticles& particles) {
     has_transform_.resize(n, 0);
     unassigned_count_.resize(n, 0);
   }
+  if (config_.docking && dock_.size() != n) {
+    dock_.resize(n);
+    dock_initialized_.resize(n, 0);
+    docked_count_.resize(n, 0);
+  }
+  if (config_.plasticity() && plastic_.size() != n) {
+    plastic_.resize(n, Mat3::Identity());
+    plastic_strain_.resize(n, 0.0);
+  }
   std::vector<Vec3> points;
   std::vector<uint32_t> members;
   for (size_t i = 0; i < n; ++i) {
-    const bool solid = particles.phases[i] == phase_ && particles.kinds[i] == SphParticleKind::kFluid;
+    const bool solid = particles.phases[i] == phase_ &&
+                       (particles.kinds[i] == SphParticleKind::kFluid || config_.anchor_boundary_particles);
     if (!solid) {
       has_transform_[i] = 0;  // a particle that (re)joins starts from the lattice orientation
       transform_[i] = rotation_[i] = orientation_;
       strain_[i].setZero();
       unassigned_count_[i] = 0;
+      if (config_.docking && dock_initialized_[i]) {  // it docks anew when it (re)joins
+        dock_[i].clear();
+        dock_initialized_[i] = 0;
+        docked_count_[i] = 0;
+      }
+      if (config_.plasticity()) {
+        plastic_[i].setIdentity();
+        plastic_strain_[i] = 0.0;
+      }
       continue;
     }
     members.push_back(static_cast<uint32_t>(i));
@@ -208,6 +263,114 @@ void SphElasticSolid::prepare(const SphParticles& particles) {
   assigned_.assign(m, 0);
   unassigned_.assign(m, 0);
   matched_.assign(m, 0);
+  if (config_.docking) {
+    detached_.assign(m, 0);
+    separated_.assign(m, 0);
+    redocked_.assign(m, 0);
+  }
+}
+
+double SphElasticSolid::uniformRandom(uint64_t seed, uint64_t evaluation, uint64_t particle, uint64_t key) {
+  uint64_t x = splitMix64(seed ^ 0x5DEECE66DULL);
+  x = splitMix64(x ^ evaluation);
+  x = splitMix64(x ^ (particle * 0xD6E8FEB86659FD93ULL));
+  x = splitMix64(x ^ (key * 0x9E3779B97F4A7C15ULL));
+  return double(x >> 11) * 0x1.0p-53;
+}
+
+void SphElasticSolid::updateDocking(size_t s, Scratch& sc) {
+  const uint32_t i = solid_[s];
+  const size_t nn = sc.offsets.size();
+  const double dt = config_.time_step, d = lattice_.spacing();
+  const double up = config_.docking_rate_increase, down = config_.docking_rate_decrease;
+  const double max_rate = config_.max_docking_rate;
+  const double near2 = std::pow(config_.docking_distance * d, 2);
+  const double p_break = eventProbability(config_.fracture_rate, dt);
+  const bool first = !dock_initialized_[i];
+  std::vector<DockPoint>& state = dock_[i];  // sorted by key
+  sc.keyed.clear();
+  for (size_t k = 0; k < nn; ++k)
+    if (sc.assignment.assigned[k])
+      sc.keyed.emplace_back(latticeKey(sc.assignment.indices[k]), static_cast<uint32_t>(k));
+  std::sort(sc.keyed.begin(), sc.keyed.end());
+  const Mat3 inverse = transform_[i].inverse();
+  sc.next.clear();
+  uint32_t docked = 0;
+  size_t old = 0;
+  // Lattice points without a particle: a docked one detaches, the rate decays.
+  const auto unoccupied = [&](const DockPoint& q) {
+    if (q.docked) ++separated_[s];
+    const double rate = std::max(0.0, q.rate - down);
+    if (rate > 0.0) sc.next.push_back({q.key, 0, rate});
+  };
+  for (const auto& [key, k] : sc.keyed) {
+    while (old < state.size() && state[old].key < key) unoccupied(state[old++]);
+    DockPoint q{key, 0, 0.0};
+    if (old < state.size() && state[old].key == key) q = state[old++];
+    const Eigen::Vector3i& index = sc.assignment.indices[k];
+    const bool near = (lattice_.point(index) - inverse * sc.offsets[k]).squaredNorm() <= near2;
+    if (first) {  // the sampled lattice: every occupied point starts docked
+      q.docked = near ? 1 : 0;
+      q.rate = near ? max_rate : 0.0;
+    } else if (q.docked) {
+      const double stretch = sc.offsets[k].norm() / sc.rest[k].norm() - 1.0;
+      if (stretch > config_.fracture_strain &&
+          uniformRandom(config_.seed, evaluations_, i, key) < p_break) {  // (8.34)
+        q.docked = 0;
+        q.rate = 0.0;  // a crack: it has to heal from zero
+        ++detached_[s];
+      } else {
+        q.rate = std::min(max_rate, q.rate + up);
+      }
+    } else if (near) {
+      q.rate = std::min(max_rate, q.rate + up);                                                // occupied
+      if (uniformRandom(config_.seed, evaluations_, i, key) < eventProbability(q.rate, dt)) {  // (8.34)
+        q.docked = 1;
+        ++redocked_[s];
+      }
+    } else {
+      q.rate = std::max(0.0, q.rate - down);
+    }
+    if (q.docked) {
+      ++docked;
+    } else {
+      sc.assignment.assigned[k] = 0;  // free: no shape matching, no forces
+    }
+    if (q.docked || q.rate > 0.0) sc.next.push_back(q);
+  }
+  while (old < state.size()) unoccupied(state[old++]);
+  state.assign(sc.next.begin(), sc.next.end());
+  docked_count_[i] = docked;
+  dock_initialized_[i] = 1;
+}
+
+void SphElasticSolid::updatePlasticity(uint32_t i, const Mat3& v, const Vec3& sigma) {
+  const int dim = lattice_.dimension();
+  Vec3 excess = sigma - Vec3::Ones();
+  if (dim == 2) excess.z() = 0.0;
+  const double e = excess.norm();
+  if (!(e > config_.yield_strain) || !(sigma.x() > 0.0 && sigma.y() > 0.0 && sigma.z() > 0.0)) return;
+  const double a =
+      -std::expm1(-config_.plastic_flow_rate * config_.time_step) * (e - config_.yield_strain) / e;
+  Vec3 flow = Vec3::Ones();  // S / S'
+  for (int k = 0; k < dim; ++k) flow[k] = sigma[k] / (1.0 + (1.0 - a) * excess[k]);
+  flow /= std::pow(dim == 3 ? flow.prod() : flow.x() * flow.y(), 1.0 / dim);  // volume preserving
+  if (dim == 2) flow.z() = 1.0;
+  Mat3 p = v * flow.asDiagonal() * v.transpose() * plastic_[i];
+  // Keep the singular values of P in [1 / (1 + c), 1 + c].
+  Mat3 pu, pv;
+  Vec3 ps;
+  rotationSvd(p, dim, pu, ps, pv);
+  const double c = 1.0 + config_.max_plastic_strain;
+  double log_stretch = 0.0;
+  for (int k = 0; k < dim; ++k) {
+    ps[k] = std::clamp(ps[k], 1.0 / c, c);
+    log_stretch = std::max(log_stretch, std::abs(std::log(ps[k])));
+  }
+  p = pu * ps.asDiagonal() * pv.transpose();
+  if (!p.allFinite()) return;
+  plastic_[i] = p;
+  plastic_strain_[i] = log_stretch;
 }
 
 void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
@@ -236,15 +399,24 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   // Lattice assignment from the previous transform (8.21).
   assignLatticePoints(lattice_, transform_[i], sc.offsets, sc.assignment);
   const size_t nn = sc.offsets.size();
-  Mat3 rl = Mat3::Zero(), ll = Mat3::Zero();
-  size_t count = 0;
+  // Rest points of the (plastically deformed) lattice: P_i l_ij.
+  sc.rest.resize(nn);
+  const bool plastic = config_.plasticity();
   for (size_t k = 0; k < nn; ++k) {
+    sc.rest[k] = lattice_.point(sc.assignment.indices[k]);
+    if (plastic) sc.rest[k] = plastic_[i] * sc.rest[k];
+  }
+  for (size_t k = 0; k < nn; ++k)
     if (!sc.assignment.assigned[k]) {
       ++unassigned_[s];
       lost_[s].push_back(solid_[sc.neighbors[k]]);
-      continue;
     }
-    const Vec3 l = lattice_.point(sc.assignment.indices[k]);
+  if (config_.docking) updateDocking(s, sc);  // 8.2.5: only docked lattice points count
+  Mat3 rl = Mat3::Zero(), ll = Mat3::Zero();
+  size_t count = 0;
+  for (size_t k = 0; k < nn; ++k) {
+    if (!sc.assignment.assigned[k]) continue;
+    const Vec3& l = sc.rest[k];
     rl += sc.weights[k] * sc.offsets[k] * l.transpose();
     ll += sc.weights[k] * l * l.transpose();
     ++count;
@@ -255,7 +427,8 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   const double scale = ll.trace() / dim;
   const double det = dim == 3 ? ll.determinant() : ll.topLeftCorner<2, 2>().determinant();
   if (!(det > 1e-6 * std::pow(scale, dim))) return;  // (near) planar neighbourhood: no fit
-  const Mat3 a = rl * ll.inverse();                  // (8.23)
+  // (8.23) fitted to the rest points: with plasticity the elastic part A_i P_i^-1.
+  const Mat3 a = rl * ll.inverse();
   if (!a.allFinite()) return;
   Mat3 u, v;
   Vec3 sigma;
@@ -263,6 +436,10 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   const Mat3 rot = u * v.transpose();  // (8.24)
   const Vec3 clamped = sigma.cwiseMax(0.25).cwiseMin(4.0);
   transform_[i] = u * clamped.asDiagonal() * v.transpose();  // A_i for the next assignment
+  if (plastic) {
+    transform_[i] = transform_[i] * plastic_[i];
+    updatePlasticity(i, v, sigma);  // takes effect at the next evaluation
+  }
   rotation_[i] = rot;
   has_transform_[i] = 1;
   matched_[s] = 1;
@@ -274,7 +451,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   Mat3 num = Mat3::Zero(), den = Mat3::Zero();
   for (size_t k = 0; k < nn; ++k) {
     if (!sc.assignment.assigned[k]) continue;
-    const Vec3 g = rot * lattice_.point(sc.assignment.indices[k]);
+    const Vec3 g = rot * sc.rest[k];
     num += sc.weights[k] * (sc.offsets[k] - g) * g.transpose();
     den += sc.weights[k] * g * g.transpose();
   }
@@ -310,7 +487,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     const double hourglass = config_.hourglass_control * config_.youngs_modulus * volume / den.trace();
     for (size_t k = 0; k < nn; ++k) {
       if (!sc.assignment.assigned[k]) continue;
-      const Vec3 l = lattice_.point(sc.assignment.indices[k]);
+      const Vec3& l = sc.rest[k];
       const Vec3 g = rot * l;
       const Vec3 residual = a * l - sc.offsets[k];
       energy_[s] += 0.5 * hourglass * sc.weights[k] * residual.squaredNorm();
@@ -332,7 +509,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     double energy = 0.0;
     for (size_t k = 0; k < nn; ++k) {
       if (!sc.assignment.assigned[k]) continue;
-      const Vec3 delta = goal * lattice_.point(sc.assignment.indices[k]) - sc.offsets[k];
+      const Vec3 delta = goal * sc.rest[k] - sc.offsets[k];
       const Vec3 f = (0.5 * k_e * sc.weights[k]) * delta;
       energy += 0.5 * k_e * sc.weights[k] * delta.squaredNorm();
       out.push_back({solid_[sc.neighbors[k]], f});
@@ -419,7 +596,18 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
     st.energy += energy_[s];
     st.max_strain = std::max(st.max_strain, max_strain_[s]);
     if (!matched_[s]) strain_[solid_[s]].setZero();
+    if (config_.docking) {
+      st.docked_points += docked_count_[solid_[s]];
+      st.detached += detached_[s];
+      st.separated += separated_[s];
+      st.redocked += redocked_[s];
+    }
+    if (config_.plasticity())
+      st.max_plastic_strain = std::max(st.max_plastic_strain, plastic_strain_[solid_[s]]);
   }
+  total_detached_ += st.detached;
+  total_redocked_ += st.redocked;
+  ++evaluations_;
   stats_ = st;
 }
 

@@ -4,7 +4,10 @@
 // through goal positions (8.29-8.31), with the linear and angular momentum correction (8.32-8.33).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <limits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -42,6 +45,48 @@ struct SphElasticConfig {
   /// Minimum assigned neighbours of a neighbourhood for shape matching (fewer: no forces from it).
   int min_neighbors = 4;
 
+  /// Boundary-kind particles (static or moving) of the solid's phase take part in the shape matching like
+  /// the others (they receive no forces): the solid is anchored to them, e.g. fixed to a wall (Fig. 8.7 c).
+  bool anchor_boundary_particles = false;
+
+  // Fracture and healing (8.2.5), off unless `docking`. Every particle keeps, per lattice point q of its
+  // neighbourhood, whether q is docked (the particle assigned to q (8.21) enters the shape matching and
+  // the forces) and a docking rate lambda_d^q. A docked q stays docked while a particle is assigned to it,
+  // unless the pair is stretched beyond fracture_strain: then it detaches with the Poisson rate
+  // fracture_rate (8.34) and its docking rate drops to 0 (a crack). A free q that is occupied (an assigned
+  // particle within docking_distance of it) docks with probability 1 - exp(-lambda_d^q dt) (8.34).
+  // lambda_d^q grows by docking_rate_increase per evaluation while q is docked or occupied, up to
+  // max_docking_rate, and shrinks by docking_rate_decrease while it is unoccupied (never below 0). At a
+  // particle's first evaluation its occupied points start docked at max_docking_rate, the others free at 0.
+  bool docking = false;
+  /// Pair stretch |r_ij| / |P_i l_ij| - 1 above which a docked pair may detach (>= 0; infinity: only
+  /// particles that leave the neighbourhood detach, the inherent fracture of 8.2.5).
+  double fracture_strain = std::numeric_limits<double>::infinity();
+  double fracture_rate = std::numeric_limits<double>::infinity();  ///< 1/s, >= 0; infinity: at once
+  double max_docking_rate = 1000.0;                                ///< 1/s, >= 0
+  double docking_rate_increase = 100.0;                            ///< Delta lambda_d^+ (1/s), >= 0
+  double docking_rate_decrease = 100.0;                            ///< Delta lambda_d^- (1/s), >= 0
+  /// A free lattice point is occupied by its assigned particle within this distance (in units of d, in
+  /// lattice coordinates A_i^-1 r_ij), in (0, 1].
+  double docking_distance = 0.3;
+
+  // Plasticity (8.2.5: "stored plastic strain"), off unless yield_strain is finite. Each particle stores a
+  // plastic transform P_i of its rest lattice (rest points P_i l); the elastic part A_i P_i^-1 = U S V^T of
+  // the fit (8.23) has the elastic strain e = |S - I|. Beyond yield_strain, P_i absorbs the excess at
+  // plastic_flow_rate: S' = I + (1 - a)(S - I) with a = (1 - exp(-rate dt)) (e - yield) / e,
+  // P_i <- V (S / S') V^T P_i normalised to det 1 (volume preserving), its singular values kept in
+  // [1 / (1 + max_plastic_strain), 1 + max_plastic_strain].
+  double yield_strain = std::numeric_limits<double>::infinity();  ///< >= 0
+  double plastic_flow_rate = 10.0;                                ///< 1/s, >= 0 and finite
+  double max_plastic_strain = 1.0;                                ///< > 0
+
+  /// Simulated time per force evaluation: dt of (8.34) and of the plastic flow (the solver evaluates the
+  /// forces once per step, so this is its fixed_dt). Must be > 0 when docking or plasticity is on.
+  double time_step = 0.0;
+  uint64_t seed = 1;  ///< of the counter-based random numbers of the docking process
+
+  bool plasticity() const { return std::isfinite(yield_strain); }
+
   /// Throws std::invalid_argument naming the first invalid field.
   void validate() const;
 };
@@ -54,9 +99,16 @@ struct SphElasticStats {
   size_t assigned_pairs = 0;         ///< (i, j) pairs with a lattice point
   size_t unassigned_pairs = 0;       ///< neighbours that lost their lattice point to a closer particle (8.21)
   double max_strain = 0.0;           ///< max over particles of the largest |eigenvalue| of the strain
-  double energy = 0.0;               ///< elastic energy estimate
-  Vec3 net_force = Vec3::Zero();     ///< sum of the elastic forces
-  Vec3 net_torque = Vec3::Zero();    ///< sum of x cross elastic force
+  // Docking (config.docking): lattice points docked after this evaluation, and the changes of this one.
+  size_t docked_points = 0;
+  size_t detached = 0;   ///< docked points whose pair was stretched beyond fracture_strain and let go
+  size_t separated = 0;  ///< docked points whose particle left (no particle assigned any more)
+  size_t redocked = 0;   ///< free points that docked (healing)
+  /// Plasticity: max over particles of |log sigma_k(P_i)| (0 without plasticity).
+  double max_plastic_strain = 0.0;
+  double energy = 0.0;             ///< elastic energy estimate
+  Vec3 net_force = Vec3::Zero();   ///< sum of the elastic forces
+  Vec3 net_torque = Vec3::Zero();  ///< sum of x cross elastic force
 };
 
 /// Result of the lattice assignment of one neighbourhood (8.21).
@@ -78,10 +130,13 @@ void assignLatticePoints(const SphLattice& lattice, const Eigen::Matrix3d& trans
 void rotationSvd(const Eigen::Matrix3d& a, int dimension, Eigen::Matrix3d& u, Vec3& sigma,
                  Eigen::Matrix3d& v);
 
-/// One elastic object: all particles with phases[i] == phase (and kind kFluid) in one solver. It stores
-/// only the per-particle lattice transform A_i of the previous evaluation (the lattice itself is implicit,
-/// (8.20)); neighbours are found anew at every evaluation. Add it to a SphFluidSolver with addForceTerm().
-/// Results are identical for any thread count.
+/// One elastic object: all particles with phases[i] == phase (and kind kFluid; boundary kinds too with
+/// anchor_boundary_particles) in one solver. It stores the per-particle lattice transform A_i of the
+/// previous evaluation (the lattice itself is implicit, (8.20)); neighbours are found anew at every
+/// evaluation. Only when switched on, it also stores per particle the docking state of its lattice points
+/// (fracture and healing, 8.2.5) and a plastic transform P_i. Add it to a SphFluidSolver with
+/// addForceTerm(). Results are identical for any thread count (random draws are a hash of (seed,
+/// evaluation, particle, lattice point)).
 class SphElasticSolid : public SphForceTerm {
  public:
   /// `kernels`: those of the solver (h = neighbourhood radius, poly6 weights W_ij, spiky gradient for
@@ -128,7 +183,28 @@ class SphElasticSolid : public SphForceTerm {
   /// i < latticeTransforms().size(), std::invalid_argument for a non-finite or singular transform.
   void setLatticeTransform(size_t i, const Eigen::Matrix3d& transform);
 
+  /// Docking (config.docking; empty otherwise): per particle, its docked lattice points after the last
+  /// evaluation. Particles with fewer than a full neighbourhood lie on a surface or a crack (Fig. 8.7 c).
+  const std::vector<uint32_t>& dockedCounts() const { return docked_count_; }
+  /// Sums of SphElasticStats::detached / redocked over all evaluations.
+  uint64_t totalDetached() const { return total_detached_; }
+  uint64_t totalRedocked() const { return total_redocked_; }
+  /// Plasticity (config.plasticity(); empty otherwise): per particle the plastic transform P_i of its rest
+  /// lattice (identity for particles that never yielded).
+  const std::vector<Eigen::Matrix3d>& plasticTransforms() const { return plastic_; }
+  /// Number of force evaluations so far (the step counter of the docking draws).
+  uint64_t evaluations() const { return evaluations_; }
+  /// The uniform number in [0, 1) that decides lattice point `key` of particle `particle` at evaluation
+  /// `evaluation` (8.34).
+  static double uniformRandom(uint64_t seed, uint64_t evaluation, uint64_t particle, uint64_t key);
+
  private:
+  /// Per particle and lattice point: docking state and rate (8.2.5).
+  struct DockPoint {
+    uint32_t key;  // packed lattice index
+    uint8_t docked;
+    double rate;  // lambda_d^q
+  };
   struct Contribution {
     uint32_t particle;
     Vec3 force;
@@ -137,11 +213,19 @@ class SphElasticSolid : public SphForceTerm {
     std::vector<Vec3> offsets;
     std::vector<uint32_t> neighbors;
     std::vector<double> weights;
+    std::vector<Vec3> rest;  // P_i l_ij (l_ij without plasticity)
     SphLatticeAssignment assignment;
+    std::vector<std::pair<uint32_t, uint32_t>> keyed;  // (lattice key, neighbour) of assigned neighbours
+    std::vector<DockPoint> next;
   };
   void prepare(const SphParticles& particles);
   /// Shape matching and forces of the neighbourhood of solid particle s (sorted order).
   void processNeighborhood(size_t s, Scratch& scratch);
+  /// Docking decisions of the neighbourhood of solid particle s (8.2.5): clears assignment.assigned of
+  /// the neighbours whose lattice point is not docked.
+  void updateDocking(size_t s, Scratch& scratch);
+  /// Plastic flow of particle i from the elastic fit A_i P_i^-1 = U diag(sigma) V^T.
+  void updatePlasticity(uint32_t i, const Eigen::Matrix3d& v, const Vec3& sigma);
 
   SphElasticConfig config_;
   SphKernels kernels_;
@@ -165,6 +249,14 @@ class SphElasticSolid : public SphForceTerm {
   std::vector<double> energy_, max_strain_;
   std::vector<uint32_t> assigned_, unassigned_;
   std::vector<uint8_t> matched_;
+  // Docking and plasticity state (per particle, sized only when on).
+  std::vector<std::vector<DockPoint>> dock_;
+  std::vector<uint8_t> dock_initialized_;
+  std::vector<uint32_t> docked_count_;
+  std::vector<uint32_t> detached_, separated_, redocked_;
+  std::vector<Eigen::Matrix3d> plastic_;
+  std::vector<double> plastic_strain_;  // max |log sigma_k(P_i)|
+  uint64_t evaluations_ = 0, total_detached_ = 0, total_redocked_ = 0;
 };
 
 }  // namespace rc

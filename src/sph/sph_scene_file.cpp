@@ -348,6 +348,44 @@ class SceneReader {
     }
   }
 
+  /// Keys `fracture` (docking, 8.2.5) and `plasticity` of a solid into *e; both need solver.fixed_dt (the
+  /// time per force evaluation of their Poisson processes and flow).
+  void readFracturePlasticity(const YAML::Node& node, const std::string& where, SphElasticConfig* elastic) {
+    SphElasticConfig& e = *elastic;
+    const YAML::Node f = node["fracture"], p = node["plasticity"];
+    if (!f && !p) return;
+    if (f) {
+      const std::string w = where + ".fracture";
+      src_.allowKeys(f,
+                     {"strain", "rate", "max_docking_rate", "docking_rate_increase", "docking_rate_decrease",
+                      "docking_distance", "seed"},
+                     w);
+      e.docking = true;
+      optionalNumber(f, "strain", w, &e.fracture_strain, &Source::nonNegative);
+      optionalNumber(f, "rate", w, &e.fracture_rate, &Source::nonNegative);
+      optionalNumber(f, "max_docking_rate", w, &e.max_docking_rate, &Source::nonNegative);
+      optionalNumber(f, "docking_rate_increase", w, &e.docking_rate_increase, &Source::nonNegative);
+      optionalNumber(f, "docking_rate_decrease", w, &e.docking_rate_decrease, &Source::nonNegative);
+      optionalNumber(f, "docking_distance", w, &e.docking_distance, &Source::positive);
+      if (f["seed"]) e.seed = uint64_t(src_.integer(f["seed"], w + ".seed", 0, 2147483647L));
+    }
+    if (p) {
+      const std::string w = where + ".plasticity";
+      src_.allowKeys(p, {"yield_strain", "flow_rate", "max_strain"}, w);
+      e.yield_strain = src_.nonNegative(src_.require(p, "yield_strain", w), w + ".yield_strain");
+      optionalNumber(p, "flow_rate", w, &e.plastic_flow_rate, &Source::nonNegative);
+      optionalNumber(p, "max_strain", w, &e.max_plastic_strain, &Source::positive);
+    }
+    if (!(scene_.config.fixed_dt > 0.0))
+      src_.fail(f ? f : p, where + ": fracture and plasticity need solver.fixed_dt (their time per step)");
+    e.time_step = scene_.config.fixed_dt;
+    try {
+      e.validate();
+    } catch (const std::invalid_argument& ex) {
+      src_.fail(f ? f : p, where + ": " + ex.what());
+    }
+  }
+
   /// An elastic object (thesis 8.2): a box or a sphere (2D: disc) sampled on the closest-packing lattice
   /// (8.20) around its centre, rotated by `rotation`, with its own phase id.
   void readSolid(const YAML::Node& node, const std::string& where) {
@@ -357,7 +395,9 @@ class SceneReader {
                                   "poisson_ratio",  "hourglass_control",
                                   "goal_stiffness", "deformation_allowance",
                                   "velocity",       "phase",
-                                  "rotation",       "temperature"};
+                                  "rotation",       "temperature",
+                                  "fracture",       "plasticity",
+                                  "anchor"};
     if (shape == "box") {
       keys.insert({"lo", "hi"});
     } else if (shape == "sphere") {
@@ -368,6 +408,7 @@ class SceneReader {
     src_.allowKeys(node, keys, where);
     SphSceneSolid solid;
     readElasticMaterial(node, where, &solid.elastic);
+    readFracturePlasticity(node, where, &solid.elastic);
     const SphElasticConfig& e = solid.elastic;
     // Phase id: given (unique, 1..255) or the next unused one.
     if (node["phase"]) {
@@ -427,6 +468,22 @@ class SceneReader {
       src_.fail(node, where + ": " + ex.what());
     }
     solid.count = particles.size() - solid.first;
+    if (const YAML::Node a = node["anchor"]) {  // Fig. 8.7 (c): the solid is fixed to a wall
+      src_.allowKeys(a, {"lo", "hi"}, where + ".anchor");
+      const Box box = readBox(src_, a, where + ".anchor", dimension_);
+      size_t anchored = 0;
+      for (size_t i = solid.first; i < particles.size(); ++i) {
+        const Vec3& x = particles.positions[i];
+        bool inside = true;
+        for (int k = 0; k < dimension_; ++k) inside = inside && x[k] >= box.lo[k] && x[k] <= box.hi[k];
+        if (!inside) continue;
+        particles.kinds[i] = SphParticleKind::kStaticBoundary;
+        particles.velocities[i].setZero();
+        ++anchored;
+      }
+      if (anchored == 0) src_.fail(a, where + ".anchor: the box holds no particle of the solid");
+      solid.elastic.anchor_boundary_particles = true;
+    }
     scene_.solids.push_back(solid);
     readBlockTemperature(node, where, solid.first);
   }

@@ -41,7 +41,11 @@ struct SphSurfaceOutput {
 
 /// One elastic object of the scene (`enable: [elasticity]`, key solids; thesis 8.2): its particles are
 /// the `count` particles from `first` (kind kFluid, phases == phase), sampled on the closest-packing
-/// lattice of elastic.lattice_spacing in the orientation `orientation`.
+/// lattice of elastic.lattice_spacing in the orientation `orientation`. Optional solid keys: `fracture`
+/// {strain, rate, max_docking_rate, docking_rate_increase, docking_rate_decrease, docking_distance, seed}
+/// (docking, 8.2.5), `plasticity` {yield_strain, flow_rate, max_strain} (both need solver.fixed_dt, which
+/// becomes elastic.time_step), and `anchor` {lo, hi}: the solid's particles in that box become static
+/// boundary particles it is fixed to (kind kStaticBoundary, still of this phase; Fig. 8.7 c).
 struct SphSceneSolid {
   SphElasticConfig elastic;
   uint8_t phase = 1;

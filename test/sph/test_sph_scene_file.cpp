@@ -61,6 +61,9 @@ TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
       {"melting_block_3d", {0, 0, 0, 5, 1, 381}},
       // 8 x 8 fluid over a 12 x 3 rod; the solid fluid freezes into starts empty.
       {"freezing_rod_2d", {64, 36, 0, 3, 1, 0}},
+      {"fig87_plastic_cube_2d", {0, 0, 0, 3, 1, 115}},
+      // 16 of the 115 particles are anchored (static boundary kind, phase 1)
+      {"fig87_fracturing_cube_2d", {0, 16, 0, 3, 1, 99}},
   };
   size_t loaded = 0;
   for (const auto& entry : fs::directory_iterator(kSceneDir)) {
