@@ -88,8 +88,8 @@ Eigen::Matrix2d screenToLocal(const Eigen::Matrix2d& local_to_screen, bool edge_
 }
 
 /// Pixel box of a splat with centre (u, v) and half extents, clamped to the image; false if empty.
-bool pixelBox(double center_u, double center_v, double half_u, double half_v, const CameraFrame& camera,
-              SplatRaster* raster) {
+inline bool pixelBox(double center_u, double center_v, double half_u, double half_v,
+                     const CameraFrame& camera, SplatRaster* raster) {
   const int32_t x0 = std::max(0, ceilToPixel(center_u - half_u, camera.width));
   const int32_t x1 = std::min(int32_t(camera.width) - 1, floorToPixel(center_u + half_u, camera.width));
   const int32_t y0 = std::max(0, ceilToPixel(center_v - half_v, camera.height));
@@ -107,7 +107,7 @@ bool pixelBox(double center_u, double center_v, double half_u, double half_v, co
 /// 1 / cos(view angle): eps = s * k r / max(cos, c_min). The depth span of the whole disc (r sin) is NOT a
 /// measure of that: for a large oblique surfel it would reach sheets far behind it (a cube face of one surfel
 /// would blend with the faces behind). A relative term absorbs float rounding.
-float depthTolerance(const EwaParams& params, double radius, double cos_view, double center_z) {
+inline float depthTolerance(const EwaParams& params, double radius, double cos_view, double center_z) {
   return float(params.depth_tolerance_scale * kFacingDepthTolerance * radius /
                    std::max(cos_view, kMinToleranceCosine) +
                1e-5 * std::abs(center_z));
@@ -118,8 +118,8 @@ float depthTolerance(const EwaParams& params, double radius, double cos_view, do
 /// the pixel offset; orthographic z affine. Widens [z_lo, z_hi] to the plane depths at the box corners (the
 /// EWA-widened footprint extends beyond the disc). False if the plane is seen edge-on inside the box (the
 /// denominator changes sign): then nothing is written.
-bool planeDepth(const Vec3& c, const Vec3& n, double center_u, double center_v, const CameraFrame& camera,
-                SplatRaster* raster, double* z_lo, double* z_hi) {
+inline bool planeDepth(const Vec3& c, const Vec3& n, double center_u, double center_v,
+                       const CameraFrame& camera, SplatRaster* raster, double* z_lo, double* z_hi) {
   const double x0 = raster->x0, x1 = raster->x1, y0 = raster->y0, y1 = raster->y1;
   if (camera.perspective) {
     const double d1 = n.x() / camera.fx, d2 = n.y() / camera.fy;

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "render/circular_setup_avx2.h"
 #include "render/deferred_shader.h"
 #include "render/ewa_splat.h"
 #include "render/splat_rasterizer.h"
@@ -228,6 +229,8 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   if (clipper) ws.clip_staged.reserve(n);
   ws.chunk_tile_counts.assign(chunks * size_t(tiles), 0);
   const bool circular = !cloud.hasAxes();
+  const bool wide_setup =
+      circular && !clipper && frame.perspective && config_.wide_simd && circularSetupAvx2Available();
 
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
   for (size_t chunk = 0; chunk < chunks; ++chunk) {
@@ -236,7 +239,48 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
     SplatShading* staged_shading = ws.staged_shading.data() + counts.begin;
     uint32_t* clip_staged = clipper ? ws.clip_staged.data() + counts.begin : nullptr;
     uint32_t* tile_counts = ws.chunk_tile_counts.data() + chunk * size_t(tiles);
-    for (size_t i = counts.begin; i < counts.end; ++i) {
+    // Records the set-up of surfel i, whose record and normal are in staged[counts.drawn].
+    auto account = [&](size_t i, SplatSetup result) {
+      if (result == SplatSetup::kInvalid) {
+        ++counts.invalid;
+        return;
+      }
+      if (result == SplatSetup::kCulled) {
+        ++counts.culled;
+        return;
+      }
+      SplatRaster& raster = staged[counts.drawn];
+      SplatShading& shading = staged_shading[counts.drawn];
+      counts.edge_on += result == SplatSetup::kDrawnEdgeOn;
+      shading.color = cloud.hasColors() ? cloud.colors[i] : config_.default_color;
+      shading.patch_id = patch_attribute ? int32_t(patch_attribute->get(i)) : 0;
+      if (clipper && clipper->needsClipping(uint32_t(i))) {
+        raster.flags |=
+            clipper->clipsColorOnly(uint32_t(i)) ? SplatRaster::kClipColorOnly : SplatRaster::kClip;
+        raster.flags |= counts.clipped;  // clip slot, chunk-local until binned
+        clip_staged[counts.clipped++] = uint32_t(i);
+      }
+      forEachTileOfSplat(raster, tiles_x, [&](int tile) { ++tile_counts[tile]; });
+      ++counts.drawn;
+    };
+    size_t first = counts.begin;
+    if (wide_setup) {  // four circular surfels at a time (bitwise the scalar set-up)
+      for (; first + 4 <= counts.end; first += 4) {
+        SplatRaster rasters[4];
+        float unit_normals[4][3];
+        SplatSetup results[4];
+        setupCircularEwaSplats4(&cloud.positions[first], &cloud.normals[first], &cloud.radii[first], frame,
+                                params, rasters, unit_normals, results);
+        for (int k = 0; k < 4; ++k) {
+          if (results[k] == SplatSetup::kDrawn || results[k] == SplatSetup::kDrawnEdgeOn) {
+            staged[counts.drawn] = rasters[k];
+            std::copy_n(unit_normals[k], 3, staged_shading[counts.drawn].normal);
+          }
+          account(first + k, results[k]);
+        }
+      }
+    }
+    for (size_t i = first; i < counts.end; ++i) {
       if (clipper && !clipper->isVisible(uint32_t(i))) {
         ++counts.culled;
         continue;
@@ -258,25 +302,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
         const Vec3 unit_normal = normal.normalized();
         for (int k = 0; k < 3; ++k) shading.normal[k] = float(unit_normal[k]);
       }
-      if (result == SplatSetup::kInvalid) {
-        ++counts.invalid;
-        continue;
-      }
-      if (result == SplatSetup::kCulled) {
-        ++counts.culled;
-        continue;
-      }
-      counts.edge_on += result == SplatSetup::kDrawnEdgeOn;
-      shading.color = cloud.hasColors() ? cloud.colors[i] : config_.default_color;
-      shading.patch_id = patch_attribute ? int32_t(patch_attribute->get(i)) : 0;
-      if (clipper && clipper->needsClipping(uint32_t(i))) {
-        raster.flags |=
-            clipper->clipsColorOnly(uint32_t(i)) ? SplatRaster::kClipColorOnly : SplatRaster::kClip;
-        raster.flags |= counts.clipped;  // clip slot, chunk-local until binned
-        clip_staged[counts.clipped++] = uint32_t(i);
-      }
-      forEachTileOfSplat(raster, tiles_x, [&](int tile) { ++tile_counts[tile]; });
-      ++counts.drawn;
+      account(i, result);
     }
     chunk_counts[chunk] = counts;
   }

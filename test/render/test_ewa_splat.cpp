@@ -5,6 +5,9 @@
 #include <cmath>
 #include <random>
 
+#include <cstring>
+
+#include "render/circular_setup_avx2.h"
 #include "render/ewa_splat.h"
 
 namespace rc {
@@ -73,6 +76,64 @@ TEST(EwaSplat, CircularSetupAgreesWithTheAxesSetup) {
       EXPECT_EQ(compared, drawn + edge_on);
     }
   }
+}
+
+// The four-wide (AVX2) set-up gives bitwise the scalar records and results: random, near-edge-on, tiny and
+// huge surfels, behind the camera, outside the image, back-facing (culled or not), invalid ones.
+TEST(EwaSplat, FourWideCircularSetupIsBitwiseTheScalarOne) {
+  if (!circularSetupAvx2Available()) GTEST_SKIP() << "this CPU or build has no AVX2 set-up";
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), log_radius(-5.0, 0.5);
+  Camera camera = Camera::perspective(320, 240, 60 * M_PI / 180);
+  camera.lookAt(Vec3(0.3, -4, 1), Vec3::Zero());
+  const CameraFrame frame(camera);
+  size_t counts[4] = {0, 0, 0, 0};  // per SplatSetup value
+  for (const bool cull : {false, true})
+    for (const bool ewa : {true, false}) {
+      EwaParams params;
+      params.ewa_filter = ewa;
+      params.backface_culling = cull;
+      std::vector<Vec3> centers, normals;
+      std::vector<double> radii;
+      for (int i = 0; i < 8000; ++i) {
+        Vec3 center(2.5 * unit(random), 2.5 * unit(random), 2.5 * unit(random));
+        if (i % 97 == 0) center = frame.eye + Vec3(0, -1, 0) * unit(random);  // behind / at the camera
+        Vec3 normal(unit(random), unit(random), unit(random));
+        if (i % 10 == 0) {  // nearly edge-on
+          const Vec3 view = (center - frame.eye).normalized();
+          normal -= normal.dot(view) * view;
+          normal += 1e-3 * unit(random) * view;
+        }
+        double radius = std::pow(10.0, log_radius(random));
+        if (i % 211 == 0) radius = 0;                                             // invalid
+        if (i % 223 == 0) normal = Vec3::Zero();                                  // invalid
+        if (i % 227 == 0) center.x() = std::numeric_limits<double>::quiet_NaN();  // invalid
+        centers.push_back(center);
+        normals.push_back(normal);
+        radii.push_back(radius);
+      }
+      for (size_t first = 0; first + 4 <= centers.size(); first += 4) {
+        SplatRaster wide[4], scalar[4];
+        float wide_normals[4][3], scalar_normals[4][3];
+        SplatSetup wide_results[4];
+        setupCircularEwaSplats4(&centers[first], &normals[first], &radii[first], frame, params, wide,
+                                wide_normals, wide_results);
+        for (int k = 0; k < 4; ++k) {
+          const SplatSetup result =
+              setupCircularEwaSplat(centers[first + k], normals[first + k], radii[first + k], frame, params,
+                                    &scalar[k], scalar_normals[k]);
+          ASSERT_EQ(int(result), int(wide_results[k])) << "surfel " << first + k;
+          ++counts[int(result)];
+          if (result != SplatSetup::kDrawn && result != SplatSetup::kDrawnEdgeOn) continue;
+          EXPECT_EQ(0, std::memcmp(&wide[k], &scalar[k], sizeof(SplatRaster))) << "surfel " << first + k;
+          EXPECT_EQ(0, std::memcmp(wide_normals[k], scalar_normals[k], sizeof(float[3])));
+        }
+      }
+    }
+  EXPECT_GT(counts[int(SplatSetup::kDrawn)], 10000u);
+  EXPECT_GT(counts[int(SplatSetup::kDrawnEdgeOn)], 100u);
+  EXPECT_GT(counts[int(SplatSetup::kCulled)], 1000u);
+  EXPECT_GT(counts[int(SplatSetup::kInvalid)], 100u);
 }
 
 }  // namespace
