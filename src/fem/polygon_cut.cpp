@@ -1,0 +1,788 @@
+#include "fem/polygon_cut.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <numeric>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <utility>
+
+namespace rc {
+namespace {
+
+using Face = PolyhedralMesh::Face;
+using ElementFaces = PolyhedralMesh::ElementFaces;
+using Vec2 = Eigen::Vector2d;
+
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument("ProgressiveCutMesh: " + what);
+}
+
+double boundingDiagonal(const std::vector<Vec3>& points) {
+  Vec3 lo = points.front(), hi = points.front();
+  for (const Vec3& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return (hi - lo).norm();
+}
+
+std::vector<int> sortedKey(const Face& face) {
+  std::vector<int> key = face;
+  std::sort(key.begin(), key.end());
+  return key;
+}
+
+double cross2(const Vec2& a, const Vec2& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+double signedArea(const std::vector<Vec2>& polygon) {
+  double area = 0.0;
+  for (size_t i = 0; i < polygon.size(); ++i) area += cross2(polygon[i], polygon[(i + 1) % polygon.size()]);
+  return 0.5 * area;
+}
+
+// All turns of the closed polygon have the same sign; area above area_tolerance.
+bool isConvexPolygon(const std::vector<Vec2>& polygon, double area_tolerance) {
+  const size_t k = polygon.size();
+  int sign = 0;
+  for (size_t i = 0; i < k; ++i) {
+    const double turn =
+        cross2(polygon[(i + 1) % k] - polygon[i], polygon[(i + 2) % k] - polygon[(i + 1) % k]);
+    if (std::abs(turn) <= area_tolerance) continue;
+    const int s = turn > 0.0 ? 1 : -1;
+    if (sign != 0 && s != sign) return false;
+    sign = s;
+  }
+  return std::abs(signedArea(polygon)) > area_tolerance;
+}
+
+// Interiors of two convex polygons overlap by more than tol (separating axis test over both edge sets).
+bool convexPolygonsOverlap(const std::vector<Vec2>& a, const std::vector<Vec2>& b, double tol) {
+  for (const auto* polygon : {&a, &b})
+    for (size_t k = 0; k < polygon->size(); ++k) {
+      const Vec2 edge = (*polygon)[(k + 1) % polygon->size()] - (*polygon)[k];
+      if (!(edge.norm() > 0.0)) continue;
+      const Vec2 axis = Vec2(-edge.y(), edge.x()).normalized();
+      double lo_a = INFINITY, hi_a = -INFINITY, lo_b = INFINITY, hi_b = -INFINITY;
+      for (const auto& p : a) {
+        lo_a = std::min(lo_a, axis.dot(p));
+        hi_a = std::max(hi_a, axis.dot(p));
+      }
+      for (const auto& p : b) {
+        lo_b = std::min(lo_b, axis.dot(p));
+        hi_b = std::max(hi_b, axis.dot(p));
+      }
+      if (std::min(hi_a, hi_b) - std::max(lo_a, lo_b) <= tol) return false;
+    }
+  return true;
+}
+
+// Fan triangulation from the apex that maximises the smallest fan triangle (as PolyhedralMesh does).
+std::vector<std::array<int, 3>> bestFan(const std::vector<Vec3>& nodes, const Face& face) {
+  const int k = static_cast<int>(face.size());
+  Vec3 normal = Vec3::Zero();
+  for (int j = 1; j + 1 < k; ++j)
+    normal += (nodes[face[j]] - nodes[face[0]]).cross(nodes[face[j + 1]] - nodes[face[0]]);
+  int best_apex = 0;
+  double best_min_area = -INFINITY;
+  for (int apex = 0; apex < k; ++apex) {
+    double min_area = INFINITY;
+    for (int j = 1; j + 1 < k; ++j) {
+      const Vec3& a = nodes[face[apex]];
+      min_area = std::min(
+          min_area, normal.dot((nodes[face[(apex + j) % k]] - a).cross(nodes[face[(apex + j + 1) % k]] - a)));
+    }
+    if (min_area > best_min_area) {
+      best_min_area = min_area;
+      best_apex = apex;
+    }
+  }
+  std::vector<std::array<int, 3>> fan;
+  for (int j = 1; j + 1 < k; ++j)
+    fan.push_back({face[best_apex], face[(best_apex + j) % k], face[(best_apex + j + 1) % k]});
+  return fan;
+}
+
+// The interpolant at x on a face: the mean value interpolant is linear on the face's boundary triangles.
+Vec3 interpolateOnFace(const std::vector<Vec3>& nodes, const std::vector<Vec3>& u, const Face& face,
+                       const Vec3& x) {
+  double best = -INFINITY;
+  Vec3 value = Vec3::Zero();
+  for (const auto& t : bestFan(nodes, face)) {
+    const Vec3 v0 = nodes[t[1]] - nodes[t[0]], v1 = nodes[t[2]] - nodes[t[0]], v2 = x - nodes[t[0]];
+    const double d00 = v0.dot(v0), d01 = v0.dot(v1), d11 = v1.dot(v1), d20 = v2.dot(v0), d21 = v2.dot(v1);
+    const double denom = d00 * d11 - d01 * d01;
+    if (!(denom > 0.0)) continue;
+    const double b1 = (d11 * d20 - d01 * d21) / denom, b2 = (d00 * d21 - d01 * d20) / denom;
+    const double b0 = 1.0 - b1 - b2;
+    const double worst = std::min({b0, b1, b2});
+    if (worst > best) {
+      best = worst;
+      value = b0 * u[t[0]] + b1 * u[t[1]] + b2 * u[t[2]];
+    }
+  }
+  return value;
+}
+
+// Union-find over 0..n-1.
+struct DisjointSets {
+  std::vector<int> parent;
+  explicit DisjointSets(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  void unite(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+using FaceUsers = std::map<std::vector<int>, std::vector<std::pair<int, int>>>;
+
+FaceUsers faceUsers(const std::vector<ElementFaces>& elements) {
+  FaceUsers users;
+  for (size_t e = 0; e < elements.size(); ++e)
+    for (size_t f = 0; f < elements[e].size(); ++f)
+      users[sortedKey(elements[e][f])].emplace_back(int(e), int(f));
+  return users;
+}
+
+}  // namespace
+
+ProgressiveCutMesh::ProgressiveCutMesh(const PolyhedralMesh& mesh, std::vector<Vec3> displacements,
+                                       const PolygonCutOptions& options)
+    : nodes_(mesh.nodes()), displacements_(std::move(displacements)) {
+  if (!displacements_.empty() && static_cast<int>(displacements_.size()) != mesh.numNodes())
+    fail("displacements has " + std::to_string(displacements_.size()) + " entries, the mesh has " +
+         std::to_string(mesh.numNodes()) + " nodes");
+  if (!(options.snap_relative_distance >= 0.0) || !std::isfinite(options.snap_relative_distance))
+    fail("snap_relative_distance must be finite and >= 0");
+  for (int e = 0; e < mesh.numElements(); ++e) {
+    elements_.push_back(mesh.elementFaces(e));
+    crack_.emplace_back(elements_.back().size(), 0);
+    const ConvexPolyhedron& element = mesh.element(e);
+    relative_tolerance_ = std::max(relative_tolerance_, element.tolerance() / element.scale());
+  }
+  duplicate_of_.assign(nodes_.size(), -1);
+  snap_distance_ = options.snap_relative_distance * boundingDiagonal(nodes_);
+}
+
+int ProgressiveCutMesh::addNode(const Vec3& x, const Vec3& u) {
+  nodes_.push_back(x);
+  if (!displacements_.empty()) displacements_.push_back(u);
+  duplicate_of_.push_back(-1);
+  return static_cast<int>(nodes_.size()) - 1;
+}
+
+std::vector<PolygonCutStats> ProgressiveCutMesh::cutSurface(const std::vector<std::vector<Vec3>>& polygons) {
+  std::vector<PolygonCutStats> stats;
+  for (const auto& polygon : polygons) stats.push_back(cut(polygon));
+  return stats;
+}
+
+PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
+  // The cut shape: plane, in-plane frame (e1, e2, normal right-handed) and counter-clockwise 2D polygon.
+  if (polygon.size() < 3)
+    fail("the cut polygon needs at least 3 points, got " + std::to_string(polygon.size()));
+  Vec3 normal = Vec3::Zero(), center = Vec3::Zero();
+  for (size_t k = 0; k < polygon.size(); ++k) {
+    if (!polygon[k].allFinite()) fail("cut polygon point " + std::to_string(k) + " is not finite");
+    normal += polygon[k].cross(polygon[(k + 1) % polygon.size()]);  // Newell
+    center += polygon[k];
+  }
+  center /= static_cast<double>(polygon.size());
+  const double polygon_scale = boundingDiagonal(polygon);
+  if (!(normal.norm() > 1e-12 * polygon_scale * polygon_scale)) fail("the cut polygon has zero area");
+  normal.normalize();
+  for (size_t k = 0; k < polygon.size(); ++k)
+    if (std::abs(normal.dot(polygon[k] - center)) > 1e-9 * polygon_scale)
+      fail("cut polygon point " + std::to_string(k) + " is not in the polygon's plane");
+  const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
+  auto planar = [&](const Vec3& x) { return Vec2(e1.dot(x - center), e2.dot(x - center)); };
+  std::vector<Vec2> shape;
+  for (const Vec3& p : polygon) shape.push_back(planar(p));
+  if (!isConvexPolygon(shape, 1e-12 * polygon_scale * polygon_scale)) fail("the cut polygon is not convex");
+  if (signedArea(shape) < 0.0) std::reverse(shape.begin(), shape.end());
+  const int num_lines = static_cast<int>(shape.size());
+  // Signed distance to polygon edge line k, positive inside.
+  auto lineDistance = [&](int k, const Vec2& x) {
+    const Vec2 d = (shape[(k + 1) % num_lines] - shape[k]).normalized();
+    return cross2(d, x - shape[k]);
+  };
+
+  PolygonCutStats stats;
+  const double snap = snap_distance_;
+  const bool has_disp = !displacements_.empty();
+  const Vec3 zero = Vec3::Zero();
+
+  // 9.3.1 split of every element crossed by the plane whose section overlaps the cut shape.
+  std::vector<double> distance(nodes_.size());
+  std::vector<int> side(nodes_.size());
+  for (size_t i = 0; i < nodes_.size(); ++i) {
+    distance[i] = normal.dot(nodes_[i] - center);
+    side[i] = std::abs(distance[i]) <= snap ? 0 : (distance[i] > 0.0 ? 1 : -1);
+  }
+  const int num_elements = numElements();
+  std::vector<char> crossed(num_elements, 0), selected(num_elements, 0);
+  for (int e = 0; e < num_elements; ++e) {
+    bool has_positive = false, has_negative = false;
+    for (const Face& face : elements_[e])
+      for (int v : face) {
+        has_positive = has_positive || side[v] > 0;
+        has_negative = has_negative || side[v] < 0;
+      }
+    if (!has_positive && !has_negative)
+      throw std::runtime_error("ProgressiveCutMesh: element " + std::to_string(e) +
+                               " lies within the snap distance of the cutting plane");
+    crossed[e] = has_positive && has_negative;
+    if (!crossed[e]) continue;
+    std::vector<Vec2> points;  // element section
+    for (const Face& face : elements_[e])
+      for (size_t k = 0; k < face.size(); ++k) {
+        const int a = face[k], b = face[(k + 1) % face.size()];
+        if (side[a] == 0) points.push_back(planar(nodes_[a]));
+        if (side[a] * side[b] < 0) {
+          const double t = distance[a] / (distance[a] - distance[b]);
+          points.push_back(planar((1.0 - t) * nodes_[a] + t * nodes_[b]));
+        }
+      }
+    Vec2 mean = Vec2::Zero();
+    for (const Vec2& p : points) mean += p;
+    mean /= static_cast<double>(points.size());
+    std::sort(points.begin(), points.end(), [&](const Vec2& a, const Vec2& b) {
+      return std::atan2(a.y() - mean.y(), a.x() - mean.x()) < std::atan2(b.y() - mean.y(), b.x() - mean.x());
+    });
+    selected[e] = convexPolygonsOverlap(points, shape, snap);
+  }
+
+  // New nodes on mesh edges (plane crossings and polygon edges in the plane), inserted into every face
+  // using the edge (T-junctions, 9.3.1).
+  std::map<std::pair<int, int>, std::vector<int>> edge_refinement;
+  std::map<std::pair<int, int>, int> edge_node;
+  auto planeCrossingNode = [&](int a, int b) {
+    const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+    auto it = edge_node.find(key);
+    if (it != edge_node.end()) return it->second;
+    const double t = distance[key.first] / (distance[key.first] - distance[key.second]);
+    const int id = addNode(
+        (1.0 - t) * nodes_[key.first] + t * nodes_[key.second],
+        has_disp ? Vec3((1.0 - t) * displacements_[key.first] + t * displacements_[key.second]) : zero);
+    distance.push_back(0.0);
+    side.push_back(0);
+    edge_node.emplace(key, id);
+    edge_refinement[key].push_back(id);
+    ++stats.num_new_nodes;
+    return id;
+  };
+
+  std::set<std::vector<int>> split_faces;
+  std::vector<ElementFaces> elements;
+  std::vector<std::vector<char>> crack;
+  std::vector<int> parent;
+  double max_snapped_distance = 0.0, min_part_scale = INFINITY;
+  for (int e = 0; e < num_elements; ++e) {
+    if (!selected[e]) {
+      elements.push_back(std::move(elements_[e]));
+      crack.push_back(std::move(crack_[e]));
+      parent.push_back(e);
+      continue;
+    }
+    ++stats.num_split_elements;
+    const ElementFaces& faces = elements_[e];
+    ElementFaces positive, negative;
+    std::vector<char> positive_crack, negative_crack;
+    std::vector<int> section;
+    auto addSection = [&section](int v) {
+      if (std::find(section.begin(), section.end(), v) == section.end()) section.push_back(v);
+    };
+    for (size_t f = 0; f < faces.size(); ++f) {
+      const Face& face = faces[f];
+      Face pos, neg;
+      bool face_positive = false, face_negative = false;
+      for (size_t k = 0; k < face.size(); ++k) {
+        const int a = face[k], b = face[(k + 1) % face.size()];
+        if (side[a] >= 0) pos.push_back(a);
+        if (side[a] <= 0) neg.push_back(a);
+        face_positive = face_positive || side[a] > 0;
+        face_negative = face_negative || side[a] < 0;
+        if (side[a] == 0) {
+          addSection(a);
+          max_snapped_distance = std::max(max_snapped_distance, std::abs(distance[a]));
+        }
+        if (side[a] * side[b] < 0) {
+          const int m = planeCrossingNode(a, b);
+          pos.push_back(m);
+          neg.push_back(m);
+          addSection(m);
+        }
+      }
+      if (!face_positive && !face_negative)
+        throw std::runtime_error("ProgressiveCutMesh: face " + std::to_string(f) + " of element " +
+                                 std::to_string(e) + " lies in the cutting plane but the element is crossed");
+      if (face_positive) {
+        positive.push_back(pos);
+        positive_crack.push_back(crack_[e][f]);
+      }
+      if (face_negative) {
+        negative.push_back(neg);
+        negative_crack.push_back(crack_[e][f]);
+      }
+      if (face_positive && face_negative) split_faces.insert(sortedKey(face));
+    }
+    // Section polygon counter-clockwise around the normal: outward for the negative part.
+    Vec2 mean = Vec2::Zero();
+    for (int v : section) mean += planar(nodes_[v]);
+    mean /= static_cast<double>(section.size());
+    std::sort(section.begin(), section.end(), [&](int a, int b) {
+      const Vec2 pa = planar(nodes_[a]) - mean, pb = planar(nodes_[b]) - mean;
+      return std::atan2(pa.y(), pa.x()) < std::atan2(pb.y(), pb.x());
+    });
+    negative.push_back(section);
+    negative_crack.push_back(0);
+    positive.push_back(Face(section.rbegin(), section.rend()));
+    positive_crack.push_back(0);
+    for (const ElementFaces* part : {&negative, &positive}) {
+      std::vector<Vec3> points;
+      for (const Face& face : *part)
+        for (int v : face) points.push_back(nodes_[v]);
+      min_part_scale = std::min(min_part_scale, boundingDiagonal(points));
+    }
+    elements.push_back(std::move(negative));
+    crack.push_back(std::move(negative_crack));
+    elements.push_back(std::move(positive));
+    crack.push_back(std::move(positive_crack));
+    parent.push_back(e);
+    parent.push_back(e);
+  }
+  // Crossed elements left whole split their faces shared with split elements alike (coplanar faces).
+  for (size_t e = 0; e < elements.size(); ++e) {
+    if (selected[parent[e]] || !crossed[parent[e]]) continue;
+    ElementFaces faces;
+    std::vector<char> flags;
+    for (size_t f = 0; f < elements[e].size(); ++f) {
+      const Face& face = elements[e][f];
+      if (!split_faces.count(sortedKey(face))) {
+        faces.push_back(face);
+        flags.push_back(crack[e][f]);
+        continue;
+      }
+      Face pos, neg;
+      for (size_t k = 0; k < face.size(); ++k) {
+        const int a = face[k], b = face[(k + 1) % face.size()];
+        if (side[a] >= 0) pos.push_back(a);
+        if (side[a] <= 0) neg.push_back(a);
+        if (side[a] * side[b] < 0) {
+          const int m = planeCrossingNode(a, b);
+          pos.push_back(m);
+          neg.push_back(m);
+        }
+      }
+      faces.push_back(pos);
+      faces.push_back(neg);
+      flags.push_back(crack[e][f]);
+      flags.push_back(crack[e][f]);
+    }
+    elements[e] = std::move(faces);
+    crack[e] = std::move(flags);
+  }
+  elements_ = std::move(elements);
+  crack_ = std::move(crack);
+  if (max_snapped_distance > 0.0 && std::isfinite(min_part_scale))
+    relative_tolerance_ = std::max(relative_tolerance_, 4.0 * max_snapped_distance / min_part_scale);
+
+  // 9.3.2: faces in the cutting plane shared by two elements are split along the polygon edges into convex
+  // pieces (sequential clipping by the edge lines); pieces inside the polygon become crack faces.
+  std::map<std::tuple<int, int, int>, int> clip_node;  // (segment end, segment end, line) -> node
+  std::map<std::pair<int, int>, std::vector<std::pair<Face, char>>> replacement;  // (element, face)
+  const FaceUsers users = faceUsers(elements_);
+  for (const auto& entry : users) {
+    if (entry.second.size() != 2) continue;
+    const auto [e0, f0] = entry.second[0];
+    const auto [e1, f1] = entry.second[1];
+    const Face face = elements_[e0][f0];
+    bool in_plane = true;
+    for (int v : face) in_plane = in_plane && side[v] == 0;
+    if (!in_plane || crack_[e0][f0] || crack_[e1][f1]) continue;
+    std::vector<Vec2> face2;
+    for (int v : face) face2.push_back(planar(nodes_[v]));
+    if (!convexPolygonsOverlap(face2, shape, snap)) continue;
+    // Original face edges each node lies on (to insert polygon-edge nodes into all faces using the edge).
+    std::map<int, std::vector<int>> on_edges;
+    const int num_corners = static_cast<int>(face.size());
+    for (int i = 0; i < num_corners; ++i) {
+      on_edges[face[i]] = {(i + num_corners - 1) % num_corners, i};
+      std::sort(on_edges[face[i]].begin(), on_edges[face[i]].end());
+    }
+    std::vector<std::pair<Face, char>> pieces;
+    std::map<std::pair<int, int>, int> split_segment;  // segment of a piece -> node splitting it
+    Face remaining = face;
+    for (int k = 0; k < num_lines && !remaining.empty(); ++k) {
+      std::vector<double> d;
+      std::vector<int> s;
+      bool any_inside = false, any_outside = false;
+      for (int v : remaining) {
+        d.push_back(lineDistance(k, planar(nodes_[v])));
+        s.push_back(d.back() > snap ? 1 : (d.back() < -snap ? -1 : 0));
+        any_inside = any_inside || s.back() > 0;
+        any_outside = any_outside || s.back() < 0;
+      }
+      if (!any_outside) continue;
+      if (!any_inside) {
+        pieces.emplace_back(remaining, 0);
+        remaining.clear();
+        break;
+      }
+      Face inside, outside;
+      for (size_t j = 0; j < remaining.size(); ++j) {
+        const size_t jn = (j + 1) % remaining.size();
+        const int a = remaining[j], b = remaining[jn];
+        if (s[j] >= 0) inside.push_back(a);
+        if (s[j] <= 0) outside.push_back(a);
+        if (s[j] * s[jn] >= 0) continue;
+        const auto key = std::make_tuple(std::min(a, b), std::max(a, b), k);
+        auto it = clip_node.find(key);
+        int m;
+        std::vector<int> edges;
+        std::set_intersection(on_edges[a].begin(), on_edges[a].end(), on_edges[b].begin(), on_edges[b].end(),
+                              std::back_inserter(edges));
+        if (it != clip_node.end()) {
+          m = it->second;
+        } else {
+          const double t = d[j] / (d[j] - d[jn]);
+          const Vec3 x = (1.0 - t) * nodes_[a] + t * nodes_[b];
+          Vec3 u = zero;
+          if (has_disp)
+            u = edges.empty() ? interpolateOnFace(nodes_, displacements_, face, x)
+                              : Vec3((1.0 - t) * displacements_[a] + t * displacements_[b]);
+          m = addNode(x, u);
+          distance.push_back(0.0);
+          side.push_back(0);
+          clip_node.emplace(key, m);
+          ++stats.num_new_nodes;
+        }
+        split_segment[{std::min(a, b), std::max(a, b)}] = m;
+        on_edges[m] = edges;
+        for (int i : edges) {
+          const int u0 = face[i], u1 = face[(i + 1) % num_corners];
+          edge_refinement[std::make_pair(std::min(u0, u1), std::max(u0, u1))].push_back(m);
+        }
+        inside.push_back(m);
+        outside.push_back(m);
+      }
+      pieces.emplace_back(outside, 0);
+      remaining = inside;
+    }
+    if (!remaining.empty()) pieces.emplace_back(remaining, 1);
+    // Earlier pieces get the nodes later lines put on their edges (no T-junctions inside the face).
+    std::function<void(int, int, Face&)> appendSplits = [&](int a, int b, Face& out) {
+      auto it = split_segment.find({std::min(a, b), std::max(a, b)});
+      if (it == split_segment.end()) return;
+      const int m = it->second;
+      appendSplits(a, m, out);
+      out.push_back(m);
+      appendSplits(m, b, out);
+    };
+    for (auto& piece : pieces) {
+      Face refined;
+      for (size_t k = 0; k < piece.first.size(); ++k) {
+        refined.push_back(piece.first[k]);
+        appendSplits(piece.first[k], piece.first[(k + 1) % piece.first.size()], refined);
+      }
+      piece.first = std::move(refined);
+    }
+    std::vector<std::pair<Face, char>> reversed;
+    for (const auto& piece : pieces) {
+      reversed.emplace_back(Face(piece.first.rbegin(), piece.first.rend()), piece.second);
+      stats.num_new_crack_faces += 2 * piece.second;
+    }
+    // Pieces are in face's (element e0's) orientation; e1 uses the face reversed.
+    replacement[{e0, f0}] = pieces;
+    replacement[{e1, f1}] = reversed;
+  }
+  for (int e = 0; e < numElements(); ++e) {
+    bool changed = false;
+    for (size_t f = 0; f < elements_[e].size() && !changed; ++f) changed = replacement.count({e, int(f)}) > 0;
+    if (!changed) continue;
+    ElementFaces faces;
+    std::vector<char> flags;
+    for (size_t f = 0; f < elements_[e].size(); ++f) {
+      auto it = replacement.find({e, int(f)});
+      if (it == replacement.end()) {
+        faces.push_back(elements_[e][f]);
+        flags.push_back(crack_[e][f]);
+        continue;
+      }
+      for (const auto& piece : it->second) {
+        faces.push_back(piece.first);
+        flags.push_back(piece.second);
+      }
+    }
+    elements_[e] = std::move(faces);
+    crack_[e] = std::move(flags);
+  }
+
+  // New edge nodes go into every face that still uses the whole edge.
+  for (auto& entry : edge_refinement) {
+    auto& ids = entry.second;
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  }
+  for (ElementFaces& faces : elements_)
+    for (Face& face : faces) {
+      Face refined;
+      for (size_t k = 0; k < face.size(); ++k) {
+        const int a = face[k], b = face[(k + 1) % face.size()];
+        refined.push_back(a);
+        auto it = edge_refinement.find({std::min(a, b), std::max(a, b)});
+        if (it == edge_refinement.end()) continue;
+        std::vector<std::pair<double, int>> along;
+        for (int m : it->second)
+          if (m != a && m != b) along.emplace_back((nodes_[m] - nodes_[a]).dot(nodes_[b] - nodes_[a]), m);
+        std::sort(along.begin(), along.end());
+        for (const auto& entry : along) refined.push_back(entry.second);
+      }
+      face = std::move(refined);
+    }
+
+  // Duplicate nodes the crack separates; crack faces that cannot open get a centroid node (pocket).
+  duplicateSeparatedNodes(stats);
+  stats.num_pocket_nodes = openClosedCracks();
+  if (stats.num_pocket_nodes > 0) duplicateSeparatedNodes(stats);
+  return stats;
+}
+
+void ProgressiveCutMesh::duplicateSeparatedNodes(PolygonCutStats& stats) {
+  const int n = numNodes();
+  std::vector<std::vector<int>> incident(n);
+  for (int e = 0; e < numElements(); ++e)
+    for (const Face& face : elements_[e])
+      for (int v : face)
+        if (incident[v].empty() || incident[v].back() != e) incident[v].push_back(e);
+  for (auto& list : incident) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  // Per node: elements around it joined through shared non-crack faces containing it.
+  std::vector<DisjointSets> groups;
+  groups.reserve(n);
+  for (int v = 0; v < n; ++v) groups.emplace_back(static_cast<int>(incident[v].size()));
+  auto position = [&](int v, int e) {
+    return static_cast<int>(std::lower_bound(incident[v].begin(), incident[v].end(), e) -
+                            incident[v].begin());
+  };
+  for (const auto& entry : faceUsers(elements_)) {
+    if (entry.second.size() != 2) continue;
+    const auto [e0, f0] = entry.second[0];
+    const auto [e1, f1] = entry.second[1];
+    if (crack_[e0][f0] || crack_[e1][f1]) continue;
+    for (int v : entry.first) groups[v].unite(position(v, e0), position(v, e1));
+  }
+  for (int v = 0; v < n; ++v) {
+    std::map<int, int> copy_of_group;  // group root -> node
+    for (size_t i = 0; i < incident[v].size(); ++i) {
+      const int root = groups[v].find(static_cast<int>(i));
+      if (root == 0) continue;  // the group of the first element keeps v
+      auto it = copy_of_group.find(root);
+      if (it == copy_of_group.end()) {
+        const int copy =
+            addNode(Vec3(nodes_[v]), displacements_.empty() ? Vec3(Vec3::Zero()) : Vec3(displacements_[v]));
+        duplicate_of_[copy] = duplicate_of_[v] >= 0 ? duplicate_of_[v] : v;
+        ++stats.num_duplicated_nodes;
+        it = copy_of_group.emplace(root, copy).first;
+      }
+      for (Face& face : elements_[incident[v][i]])
+        for (int& w : face)
+          if (w == v) w = it->second;
+    }
+  }
+}
+
+int ProgressiveCutMesh::openClosedCracks() {
+  int num_pockets = 0;
+  for (const auto& entry : faceUsers(elements_)) {
+    if (entry.second.size() != 2) continue;
+    const auto [e0, f0] = entry.second[0];
+    const auto [e1, f1] = entry.second[1];
+    if (!crack_[e0][f0] || !crack_[e1][f1]) continue;
+    const Face face = elements_[e0][f0];
+    Vec3 centroid = Vec3::Zero();
+    for (int v : face) centroid += nodes_[v];
+    centroid /= static_cast<double>(face.size());
+    const Vec3 u = displacements_.empty() ? Vec3(Vec3::Zero())
+                                          : interpolateOnFace(nodes_, displacements_, face, centroid);
+    const int c = addNode(centroid, u);
+    ++num_pockets;
+    for (const auto& [e, f] : entry.second) {
+      const Face polygon = elements_[e][f];
+      ElementFaces faces;
+      std::vector<char> flags;
+      for (size_t g = 0; g < elements_[e].size(); ++g)
+        if (static_cast<int>(g) != f) {
+          faces.push_back(elements_[e][g]);
+          flags.push_back(crack_[e][g]);
+        }
+      for (size_t k = 0; k < polygon.size(); ++k) {
+        faces.push_back({c, polygon[k], polygon[(k + 1) % polygon.size()]});
+        flags.push_back(1);
+      }
+      elements_[e] = std::move(faces);
+      crack_[e] = std::move(flags);
+    }
+  }
+  return num_pockets;
+}
+
+int ProgressiveCutMesh::numCrackFaces() const {
+  int count = 0;
+  for (const auto& flags : crack_)
+    for (char flag : flags) count += flag != 0;
+  return count;
+}
+
+int ProgressiveCutMesh::numDuplicatedNodes() const {
+  return static_cast<int>(
+      std::count_if(duplicate_of_.begin(), duplicate_of_.end(), [](int d) { return d >= 0; }));
+}
+
+double ProgressiveCutMesh::volume() const {
+  double total = 0.0;
+  for (const ElementFaces& faces : elements_)
+    for (const Face& face : faces)
+      for (size_t k = 1; k + 1 < face.size(); ++k)
+        total += nodes_[face[0]].dot(nodes_[face[k]].cross(nodes_[face[k + 1]])) / 6.0;
+  return total;
+}
+
+void ProgressiveCutMesh::validate() const {
+  auto error = [](const std::string& what) { throw std::logic_error("ProgressiveCutMesh: " + what); };
+  double element_volume = 0.0;
+  for (int e = 0; e < numElements(); ++e) {
+    std::vector<int> ids, local(nodes_.size(), -1);
+    std::vector<ConvexPolyhedron::Face> faces;
+    for (const Face& face : elements_[e]) {
+      ConvexPolyhedron::Face local_face;
+      for (int v : face) {
+        if (v < 0 || v >= numNodes())
+          error("element " + std::to_string(e) + " references node " + std::to_string(v));
+        if (local[v] < 0) {
+          local[v] = static_cast<int>(ids.size());
+          ids.push_back(v);
+        }
+        local_face.push_back(local[v]);
+      }
+      faces.push_back(local_face);
+    }
+    std::vector<Vec3> points;
+    for (int v : ids) points.push_back(nodes_[v]);
+    try {
+      element_volume += ConvexPolyhedron(points, faces, relative_tolerance_, ids).volume();
+    } catch (const std::invalid_argument& problem) {
+      error("element " + std::to_string(e) + ": " + problem.what());
+    }
+  }
+  std::map<std::pair<int, int>, int> boundary_edges;
+  double enclosed = 0.0;
+  for (const auto& entry : faceUsers(elements_)) {
+    const auto& list = entry.second;
+    const std::string name =
+        "element " + std::to_string(list[0].first) + " face " + std::to_string(list[0].second);
+    if (list.size() > 2) error(name + " is used by more than two elements");
+    if (list.size() == 2) {
+      const Face& a = elements_[list[0].first][list[0].second];
+      const Face& b = elements_[list[1].first][list[1].second];
+      const int p = static_cast<int>(std::find(b.begin(), b.end(), a[0]) - b.begin());
+      for (size_t j = 0; j < a.size(); ++j)
+        if (b[(p - int(j) + int(b.size()) * 2) % b.size()] != a[j])
+          error(name + " and its neighbour do not use the face in opposite order");
+      const bool crack_a = crack_[list[0].first][list[0].second],
+                 crack_b = crack_[list[1].first][list[1].second];
+      if (crack_a || crack_b) error(name + " is a crack face whose two sides still share all nodes");
+      continue;
+    }
+    const Face& face = elements_[list[0].first][list[0].second];
+    for (size_t k = 0; k < face.size(); ++k) {
+      const auto edge = std::make_pair(face[k], face[(k + 1) % face.size()]);
+      if (++boundary_edges[edge] > 1)
+        error("boundary edge (" + std::to_string(edge.first) + ", " + std::to_string(edge.second) +
+              ") is used twice in the same direction");
+    }
+    for (size_t k = 1; k + 1 < face.size(); ++k)
+      enclosed += nodes_[face[0]].dot(nodes_[face[k]].cross(nodes_[face[k + 1]])) / 6.0;
+  }
+  for (const auto& entry : boundary_edges)
+    if (!boundary_edges.count({entry.first.second, entry.first.first}))
+      error("the boundary is not closed at edge (" + std::to_string(entry.first.first) + ", " +
+            std::to_string(entry.first.second) + ")");
+  if (std::abs(enclosed - element_volume) > 1e-9 * element_volume)
+    error("element volumes sum to " + std::to_string(element_volume) + " but the boundary encloses " +
+          std::to_string(enclosed));
+}
+
+std::vector<int> ProgressiveCutMesh::elementComponents(int* num_components) const {
+  DisjointSets sets(numElements());
+  for (const auto& entry : faceUsers(elements_)) {
+    if (entry.second.size() != 2) continue;
+    const auto [e0, f0] = entry.second[0];
+    const auto [e1, f1] = entry.second[1];
+    if (!crack_[e0][f0] && !crack_[e1][f1]) sets.unite(e0, e1);
+  }
+  std::map<int, int> label;
+  std::vector<int> component(numElements());
+  for (int e = 0; e < numElements(); ++e)
+    component[e] = label.emplace(sets.find(e), static_cast<int>(label.size())).first->second;
+  if (num_components) *num_components = static_cast<int>(label.size());
+  return component;
+}
+
+int ProgressiveCutMesh::numComponents() const {
+  int count = 0;
+  elementComponents(&count);
+  return count;
+}
+
+PolyhedralMesh ProgressiveCutMesh::componentMesh(int c, std::vector<int>* node_ids) const {
+  int count = 0;
+  const std::vector<int> component = elementComponents(&count);
+  if (c < 0 || c >= count)
+    throw std::invalid_argument("ProgressiveCutMesh::componentMesh: component " + std::to_string(c) +
+                                " out of range (" + std::to_string(count) + " components)");
+  std::vector<int> local(nodes_.size(), -1), ids;
+  std::vector<ElementFaces> elements;
+  for (int e = 0; e < numElements(); ++e) {
+    if (component[e] != c) continue;
+    ElementFaces faces = elements_[e];
+    for (Face& face : faces)
+      for (int& v : face) {
+        if (local[v] < 0) {
+          local[v] = static_cast<int>(ids.size());
+          ids.push_back(v);
+        }
+        v = local[v];
+      }
+    elements.push_back(std::move(faces));
+  }
+  std::vector<Vec3> points;
+  for (int v : ids) points.push_back(nodes_[v]);
+  if (node_ids) *node_ids = ids;
+  try {
+    return PolyhedralMesh(std::move(points), std::move(elements), relative_tolerance_);
+  } catch (const std::invalid_argument& problem) {
+    throw std::invalid_argument("ProgressiveCutMesh::componentMesh: component " + std::to_string(c) +
+                                " is not a valid PolyhedralMesh (an internal crack of a partial cut has "
+                                "coincident faces): " +
+                                problem.what());
+  }
+}
+
+}  // namespace rc

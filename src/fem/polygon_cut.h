@@ -1,0 +1,91 @@
+// Progressive cuts by convex polygons (thesis 9.3.2): a cut surface given as a sequence of convex polygons
+// (consecutive ones may share an edge: non-planar cuts) is applied one polygon at a time. Elements crossed by
+// the polygon are split by its plane (9.3.1), faces in the plane are split along the polygon edges into
+// convex pieces, pieces inside the polygon become crack faces, and nodes are duplicated where the crack
+// separates the material around them. Nodes on the crack front keep the material connected (partial cut);
+// a crack face without a node that can open gets a node at its centroid (pocket).
+#pragma once
+
+#include <vector>
+
+#include "fem/polyhedral_mesh.h"
+
+namespace rc {
+
+struct PolygonCutOptions {
+  /// Needle avoidance (9.2): nodes closer than this (relative to the initial mesh bounding-box diagonal) to
+  /// a cutting plane or a polygon edge line count as lying on it (no new node next to them).
+  double snap_relative_distance = 1e-6;
+};
+
+/// What one polygon did.
+struct PolygonCutStats {
+  int num_split_elements = 0;    // elements split by the cutting plane
+  int num_new_nodes = 0;         // plane/edge intersections and polygon-edge nodes in the cut plane
+  int num_pocket_nodes = 0;      // centroid nodes of crack faces that could not open otherwise
+  int num_duplicated_nodes = 0;  // node copies created to open the crack
+  int num_new_crack_faces = 0;   // element faces that became crack faces
+};
+
+/// A polyhedral mesh with internal cracks. Elements are closed polygon surfaces over node ids (outward,
+/// counter-clockwise); two elements are connected through a face when both use the same node set and
+/// neither marks it as a crack face. Crack faces come in coincident pairs with opposite orientation (one per
+/// side) and share at least one node pair only through duplicates, so PolyhedralMesh (which rejects
+/// coincident boundary faces) cannot hold a component with an internal crack; validate() checks the mesh.
+class ProgressiveCutMesh {
+ public:
+  /// displacements: empty or one per node (rest displacements carried through the cuts). Throws
+  /// std::invalid_argument for a wrong displacement count or a bad snap distance.
+  explicit ProgressiveCutMesh(const PolyhedralMesh& mesh, std::vector<Vec3> displacements = {},
+                              const PolygonCutOptions& options = PolygonCutOptions());
+
+  /// Cuts by one convex polygon (>= 3 coplanar points, either orientation). Throws std::invalid_argument
+  /// for a non-finite, non-planar or non-convex polygon and std::runtime_error if an element lies within
+  /// the snap distance of the plane.
+  PolygonCutStats cut(const std::vector<Vec3>& polygon);
+  /// Cuts by a sequence of polygons (a blade sweep / tessellated non-planar cut surface).
+  std::vector<PolygonCutStats> cutSurface(const std::vector<std::vector<Vec3>>& polygons);
+
+  int numNodes() const { return static_cast<int>(nodes_.size()); }
+  int numElements() const { return static_cast<int>(elements_.size()); }
+  const std::vector<Vec3>& nodes() const { return nodes_; }
+  /// Empty if none were given; new nodes get the interpolant u (linear on edges and on the face triangles
+  /// of the mean value interpolant), duplicates copy their original.
+  const std::vector<Vec3>& displacements() const { return displacements_; }
+  const PolyhedralMesh::ElementFaces& elementFaces(int e) const { return elements_[e]; }
+  bool isCrackFace(int e, int f) const { return crack_[e][f] != 0; }
+  int numCrackFaces() const;
+  /// Per node: the node it was duplicated from (-1 for an original or cut node).
+  const std::vector<int>& duplicateOf() const { return duplicate_of_; }
+  int numDuplicatedNodes() const;
+  double relativeTolerance() const { return relative_tolerance_; }
+
+  /// Validates the mesh and throws std::logic_error naming the problem: invalid (non-convex, open, ...)
+  /// element, a face used by more than two elements or twice with the same orientation, an unopened crack
+  /// face pair (shared node set), a boundary (including crack faces) that is not closed, or element volumes
+  /// that do not add up to the enclosed volume.
+  void validate() const;
+  /// Sum of element volumes.
+  double volume() const;
+  /// Connected components of elements (through shared non-crack faces); returns per element its component.
+  std::vector<int> elementComponents(int* num_components = nullptr) const;
+  int numComponents() const;
+  /// A validated PolyhedralMesh for component c (its nodes renumbered in order of first use; node_ids
+  /// receives the mesh node of each). Throws std::invalid_argument if the component contains a crack face
+  /// pair (partial cut), which PolyhedralMesh rejects as non-conforming.
+  PolyhedralMesh componentMesh(int c, std::vector<int>* node_ids = nullptr) const;
+
+ private:
+  struct Frame;
+  int addNode(const Vec3& x, const Vec3& u);
+  void duplicateSeparatedNodes(PolygonCutStats& stats);
+  int openClosedCracks();
+
+  std::vector<Vec3> nodes_, displacements_;
+  std::vector<PolyhedralMesh::ElementFaces> elements_;
+  std::vector<std::vector<char>> crack_;  // per element face
+  std::vector<int> duplicate_of_;
+  double snap_distance_ = 0.0, relative_tolerance_ = ConvexPolyhedron::kDefaultRelativeTolerance;
+};
+
+}  // namespace rc
