@@ -75,7 +75,7 @@ void SphElasticConfig::validate() const {
   require(max_plastic_strain > 0.0 && std::isfinite(max_plastic_strain), "max_plastic_strain",
           "must be finite and > 0, got " + std::to_string(max_plastic_strain));
   require(!(docking || plasticity()) || (time_step > 0.0 && std::isfinite(time_step)), "time_step",
-          "must be finite and > 0 with docking or plasticity (the solver's fixed_dt), got " +
+          "must be finite and > 0 with docking or plasticity (the dt of unannounced evaluations), got " +
               std::to_string(time_step));
 }
 
@@ -147,7 +147,8 @@ SphElasticSolid::SphElasticSolid(const SphElasticConfig& config, const SphKernel
       kernels_(kernels),
       lattice_(kernels.dimension, config.lattice_spacing > 0.0 ? config.lattice_spacing : 1.0),
       phase_(phase),
-      orientation_(lattice_orientation) {
+      orientation_(lattice_orientation),
+      step_dt_(config.time_step) {
   config_.validate();
   if (phase == 0) throw std::invalid_argument("SphElasticSolid: phase 0 is the fluid phase");
   if (!isRotation(lattice_orientation))
@@ -281,7 +282,7 @@ double SphElasticSolid::uniformRandom(uint64_t seed, uint64_t evaluation, uint64
 void SphElasticSolid::updateDocking(size_t s, Scratch& sc) {
   const uint32_t i = solid_[s];
   const size_t nn = sc.offsets.size();
-  const double dt = config_.time_step, d = lattice_.spacing();
+  const double dt = step_dt_, d = lattice_.spacing();
   const double up = config_.docking_rate_increase, down = config_.docking_rate_decrease;
   const double max_rate = config_.max_docking_rate;
   const double near2 = std::pow(config_.docking_distance * d, 2);
@@ -350,8 +351,7 @@ void SphElasticSolid::updatePlasticity(uint32_t i, const Mat3& v, const Vec3& si
   if (dim == 2) excess.z() = 0.0;
   const double e = excess.norm();
   if (!(e > config_.yield_strain) || !(sigma.x() > 0.0 && sigma.y() > 0.0 && sigma.z() > 0.0)) return;
-  const double a =
-      -std::expm1(-config_.plastic_flow_rate * config_.time_step) * (e - config_.yield_strain) / e;
+  const double a = -std::expm1(-config_.plastic_flow_rate * step_dt_) * (e - config_.yield_strain) / e;
   Vec3 flow = Vec3::Ones();  // S / S'
   for (int k = 0; k < dim; ++k) flow[k] = sigma[k] / (1.0 + (1.0 - a) * excess[k]);
   flow /= std::pow(dim == 3 ? flow.prod() : flow.x() * flow.y(), 1.0 / dim);  // volume preserving
@@ -554,6 +554,13 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     if (!sc.assignment.assigned[k]) continue;
     out[e++].force += sc.weights[k] * omega.cross(sc.offsets[k] - c);
   }
+}
+
+void SphElasticSolid::beginStep(double dt) {
+  if (!(dt >= 0.0) || !std::isfinite(dt))
+    throw std::invalid_argument("SphElasticSolid::beginStep: dt must be finite and >= 0, got " +
+                                std::to_string(dt));
+  step_dt_ = dt;
 }
 
 void SphElasticSolid::computeForces(const SphParticles& particles, std::vector<Vec3>& forces) {

@@ -58,6 +58,7 @@ struct SphElasticConfig {
   // lambda_d^q grows by docking_rate_increase per evaluation while q is docked or occupied, up to
   // max_docking_rate, and shrinks by docking_rate_decrease while it is unoccupied (never below 0). At a
   // particle's first evaluation its occupied points start docked at max_docking_rate, the others free at 0.
+  // dt is the evaluation's step (SphForceTerm::beginStep; fixed or adaptive), else time_step.
   bool docking = false;
   /// Pair stretch |r_ij| / |P_i l_ij| - 1 above which a docked pair may detach (>= 0; infinity: only
   /// particles that leave the neighbourhood detach, the inherent fracture of 8.2.5).
@@ -80,8 +81,10 @@ struct SphElasticConfig {
   double plastic_flow_rate = 10.0;                                ///< 1/s, >= 0 and finite
   double max_plastic_strain = 1.0;                                ///< > 0
 
-  /// Simulated time per force evaluation: dt of (8.34) and of the plastic flow (the solver evaluates the
-  /// forces once per step, so this is its fixed_dt). Must be > 0 when docking or plasticity is on.
+  /// Simulated time of a force evaluation for which no step was announced (SphForceTerm::beginStep), e.g.
+  /// computeForces() outside a solver: dt of (8.34) and of the plastic flow. Inside an SphFluidSolver every
+  /// evaluation is announced with its step's dt (fixed or adaptive), which replaces this value. Must be > 0
+  /// when docking or plasticity is on.
   double time_step = 0.0;
   uint64_t seed = 1;  ///< of the counter-based random numbers of the docking process
 
@@ -166,6 +169,11 @@ class SphElasticSolid : public SphForceTerm {
   /// the P-wave speed over the spacing).
   double stableTimeStep(const SphParticles& particles, double cfl) const override;
   double potentialEnergy() const override { return stats_.energy; }
+  /// The dt of the next evaluations' docking draws (8.34) and plastic flow (config().time_step until the
+  /// first call). Throws std::invalid_argument for dt not finite and >= 0.
+  void beginStep(double dt) override;
+  /// The dt the next evaluation uses for docking and plasticity.
+  double stepTime() const { return step_dt_; }
 
   /// Forces of this term alone at the current state (zeroed first); updates A_i like addForces.
   void computeForces(const SphParticles& particles, std::vector<Vec3>& forces);
@@ -257,6 +265,7 @@ class SphElasticSolid : public SphForceTerm {
   std::vector<Eigen::Matrix3d> plastic_;
   std::vector<double> plastic_strain_;  // max |log sigma_k(P_i)|
   uint64_t evaluations_ = 0, total_detached_ = 0, total_redocked_ = 0;
+  double step_dt_ = 0.0;  // dt of (8.34) and the plastic flow for the next evaluation
 };
 
 }  // namespace rc

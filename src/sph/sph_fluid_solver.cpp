@@ -452,6 +452,7 @@ const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
   const size_t n = p.size();
   if (!forces_valid_ || accelerations_.size() != n) {
     validateParticles();
+    announceStep(config_.fixed_dt > 0.0 ? config_.fixed_dt : stats_.dt);
     computeForces(p.velocities);
     measureState();
   }
@@ -483,6 +484,7 @@ const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
   bool finite = true;
   for (size_t i = 0; i < n && finite; ++i) finite = p.positions[i].allFinite() && predicted_[i].allFinite();
   if (finite) {
+    announceStep(dt);
     computeForces(predicted_);
     for (size_t i = 0; i < n; ++i)  // final kick
       if (p.kinds[i] == SphParticleKind::kFluid) p.velocities[i] += 0.5 * dt * accelerations_[i];
@@ -515,6 +517,10 @@ const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
     if (config_.throw_on_instability) throw SphInstabilityError(step_count_, stats_.instability);
   }
   return stats_;
+}
+
+void SphFluidSolver::announceStep(double dt) {
+  for (const auto& term : force_terms_) term->beginStep(dt);
 }
 
 bool SphFluidSolver::measureState() {

@@ -139,8 +139,9 @@ class SphFluidSolver {
   void addPlane(const SphPlane& plane);
   const std::vector<SphPlane>& planes() const { return planes_; }
 
-  /// Adds a force term (e.g. an SphElasticSolid, 8.2) evaluated with every force computation; its
-  /// stableTimeStep enters the adaptive step as SphStepLimit::kElastic. Throws for a null term.
+  /// Adds a force term (e.g. an SphElasticSolid, 8.2) evaluated with every force computation (after
+  /// SphForceTerm::beginStep with the step's dt); its stableTimeStep enters the adaptive step as
+  /// SphStepLimit::kElastic. Throws for a null term.
   void addForceTerm(std::shared_ptr<SphForceTerm> term);
   const std::vector<std::shared_ptr<SphForceTerm>>& forceTerms() const { return force_terms_; }
 
@@ -167,6 +168,8 @@ class SphFluidSolver {
   void boundaryPressurePass(int t);
   void forcePass(int t);
   void addTermForces(const std::vector<Vec3>& velocities);
+  /// SphForceTerm::beginStep(dt) of every force term.
+  void announceStep(double dt);
   double pressureOf(double density) const;
   double compressionEnergyOf(double density) const;
   void chooseTimeStep(double requested_dt);

@@ -13,6 +13,11 @@ namespace rc {
 class SphForceTerm {
  public:
   virtual ~SphForceTerm() = default;
+  /// Called by SphFluidSolver before each force evaluation with the time step it belongs to: the step just
+  /// taken (the evaluation at its end), or for the evaluation before the first step (or after
+  /// particlesChanged()) the fixed step, else the previous step (0 before any). For terms with rates per
+  /// simulated time (Poisson processes, flow); the default ignores it.
+  virtual void beginStep(double /*dt*/) {}
   /// Adds the term's forces (mass * acceleration) at the particles' current positions and the given
   /// velocities to `forces` (original particle order, size particles.size()). May update internal state
   /// that persists between evaluations.

@@ -32,7 +32,7 @@ struct VtpArray {
 size_t vtkTypeSize(const char* type) {
   const std::string t = type;
   if (t == "Float64" || t == "Int64") return 8;
-  if (t == "Float32") return 4;
+  if (t == "Float32" || t == "UInt32") return 4;
   return 1;  // UInt8
 }
 
@@ -48,12 +48,14 @@ void put(std::vector<uint8_t>& out, T value) {
 }
 
 /// Points, connectivity, offsets, then the PointData arrays.
-std::vector<VtpArray> vtpArrays(const SphParticles& p, const std::vector<double>* temperatures) {
+std::vector<VtpArray> vtpArrays(const SphParticles& p, const std::vector<double>* temperatures,
+                                const std::vector<uint32_t>* docked_points) {
   const size_t n = p.size();
   VtpArray points{"Points", "Float64", 3, {}}, velocity{"velocity", "Float32", 3, {}};
   VtpArray density{"density", "Float32", 1, {}}, pressure{"pressure", "Float32", 1, {}};
   VtpArray kind{"kind", "UInt8", 1, {}};
   VtpArray temperature{"temperature", "Float32", 1, {}}, phase{"phase", "UInt8", 1, {}};
+  VtpArray docked{"docked_points", "UInt32", 1, {}};
   VtpArray connectivity{"connectivity", "Int64", 1, {}}, offsets{"offsets", "Int64", 1, {}};
   for (size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) {
@@ -67,6 +69,7 @@ std::vector<VtpArray> vtpArrays(const SphParticles& p, const std::vector<double>
       put<float>(temperature.bytes, float(i < temperatures->size() ? (*temperatures)[i] : 0.0));
       put<uint8_t>(phase.bytes, p.phases[i]);
     }
+    if (docked_points) put<uint32_t>(docked.bytes, i < docked_points->size() ? (*docked_points)[i] : 0u);
     put<int64_t>(connectivity.bytes, int64_t(i));
     put<int64_t>(offsets.bytes, int64_t(i + 1));
   }
@@ -75,6 +78,7 @@ std::vector<VtpArray> vtpArrays(const SphParticles& p, const std::vector<double>
     arrays.push_back(temperature);
     arrays.push_back(phase);
   }
+  if (docked_points) arrays.push_back(docked);
   return arrays;
 }
 
@@ -94,6 +98,10 @@ std::string asciiValues(const VtpArray& a) {
       float f;
       std::memcpy(&f, v, 4);
       std::snprintf(buf, sizeof(buf), "%.9g", double(f));
+    } else if (type == "UInt32") {
+      uint32_t k;
+      std::memcpy(&k, v, 4);
+      std::snprintf(buf, sizeof(buf), "%u", unsigned(k));
     } else if (type == "Int64") {
       int64_t k;
       std::memcpy(&k, v, 8);
@@ -109,7 +117,8 @@ std::string asciiValues(const VtpArray& a) {
 
 }  // namespace
 
-SurfelCloud sphParticlesToCloud(const SphParticles& p, const std::vector<double>* temperatures) {
+SurfelCloud sphParticlesToCloud(const SphParticles& p, const std::vector<double>* temperatures,
+                                const std::vector<uint32_t>* docked_points) {
   const size_t n = p.size();
   SurfelCloud cloud;
   cloud.positions = p.positions;
@@ -131,19 +140,24 @@ SurfelCloud sphParticlesToCloud(const SphParticles& p, const std::vector<double>
       phase.set(i, double(p.phases[i]));
     }
   }
+  if (docked_points) {
+    Attribute& docked = cloud.attributes.add("docked_points", ScalarType::kUInt32, 1, n);
+    for (size_t i = 0; i < n; ++i)
+      docked.set(i, i < docked_points->size() ? double((*docked_points)[i]) : 0.0);
+  }
   return cloud;
 }
 
 void writeSphPly(const std::string& path, const SphParticles& particles,
-                 const std::vector<double>* temperatures) {
+                 const std::vector<double>* temperatures, const std::vector<uint32_t>* docked_points) {
   WriteOptions options;
   options.encoding = Encoding::kBinary;
-  writePlyCloud(path, sphParticlesToCloud(particles, temperatures), options);
+  writePlyCloud(path, sphParticlesToCloud(particles, temperatures, docked_points), options);
 }
 
 void writeSphVtp(const std::string& path, const SphParticles& particles, VtpEncoding encoding,
-                 const std::vector<double>* temperatures) {
-  const std::vector<VtpArray> arrays = vtpArrays(particles, temperatures);
+                 const std::vector<double>* temperatures, const std::vector<uint32_t>* docked_points) {
+  const std::vector<VtpArray> arrays = vtpArrays(particles, temperatures, docked_points);
   const bool appended = encoding == VtpEncoding::kAppendedRaw;
   const size_t n = particles.size();
   std::ostringstream xml;
@@ -190,19 +204,6 @@ void writeSphVtp(const std::string& path, const SphParticles& particles, VtpEnco
     out << "\n  </AppendedData>\n";
   }
   out << "</VTKFile>\n";
-  if (!out) throw IoError(path, "write failed");
-}
-
-void writeSphPvd(const std::string& path, const std::vector<SphPvdEntry>& entries) {
-  std::ofstream out(path);
-  if (!out) throw IoError(path, "cannot open for writing");
-  out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
-  char time[32];
-  for (const SphPvdEntry& e : entries) {
-    std::snprintf(time, sizeof(time), "%.9g", e.time);
-    out << "    <DataSet timestep=\"" << time << "\" part=\"0\" file=\"" << e.file << "\"/>\n";
-  }
-  out << "  </Collection>\n</VTKFile>\n";
   if (!out) throw IoError(path, "write failed");
 }
 

@@ -65,7 +65,7 @@ class SceneReader {
   void read(const YAML::Node& root) {
     src_.allowKeys(root,
                    {"name", "dimension", "spacing", "enable", "solver", "fluid", "solids", "boundary",
-                    "moving", "frames", "output", "temperature", "phase_transition"},
+                    "moving", "frames", "output", "temperature", "phase_transition", "collisions"},
                    "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
     dimension_ = int(src_.integer(src_.require(root, "dimension", "scene"), "dimension", 2, 3));
@@ -93,6 +93,7 @@ class SceneReader {
     }
     readThermal(root["temperature"]);
     readPhaseTransition(root["phase_transition"]);
+    readCollisions(root["collisions"]);
     readFrames(src_.require(root, "frames", "scene"));
     if (root["output"]) readOutput(root["output"]);
     if (enabled("surface")) finishSurface();
@@ -113,6 +114,9 @@ class SceneReader {
       scene_.enabled_physics.push_back(what);
       enable_nodes_[what] = node[i];
     }
+    if (enabled("collisions") && !enabled("elasticity"))
+      src_.fail(enable_nodes_.at("collisions"),
+                "enable: 'collisions' needs 'elasticity' in the 'enable' list");
     if (enabled("phase_transition"))
       for (const char* needed : {"temperature", "elasticity"})
         if (!enabled(needed))
@@ -293,6 +297,41 @@ class SceneReader {
     }
   }
 
+  /// collisions: {stiffness, contact_distance, damping} (8.37) between the solids.
+  void readCollisions(const YAML::Node& node) {
+    if (node && !enabled("collisions"))
+      src_.fail(node, "collisions: needs 'collisions' in the scene's 'enable' list");
+    if (!enabled("collisions")) return;
+    const YAML::Node at = node ? node : enable_nodes_.at("collisions");
+    if (scene_.solids.size() < 2)
+      src_.fail(at,
+                "collisions: need two or more solids, the scene has " + std::to_string(scene_.solids.size()));
+    SphSceneCollisions& c = scene_.collisions;
+    c.enabled = true;
+    SphObjectPenaltyConfig& p = c.config;
+    p.contact_distance = scene_.solids[0].elastic.lattice_spacing;
+    for (const SphSceneSolid& solid : scene_.solids)
+      p.contact_distance = std::min(p.contact_distance, solid.elastic.lattice_spacing);
+    const bool given = node && node["contact_distance"];
+    if (node) {
+      src_.allowKeys(node, {"stiffness", "contact_distance", "damping"}, "collisions");
+      optionalNumber(node, "stiffness", "collisions", &p.stiffness, &Source::positive);
+      optionalNumber(node, "contact_distance", "collisions", &p.contact_distance, &Source::positive);
+      optionalNumber(node, "damping", "collisions", &p.damping, &Source::nonNegative);
+    }
+    const double h = scene_.config.smoothing_length;
+    if (!(p.contact_distance <= h))
+      src_.fail(given ? node["contact_distance"] : at,
+                "collisions.contact_distance: " + std::to_string(p.contact_distance) +
+                    " exceeds the smoothing length " + std::to_string(h));
+    try {
+      p.validate();
+      SphObjectPenalty(p, SphKernels(dimension_, h));
+    } catch (const std::invalid_argument& e) {
+      src_.fail(at, std::string("collisions: ") + e.what());
+    }
+  }
+
   bool enabled(const std::string& physics) const {
     return std::find(scene_.enabled_physics.begin(), scene_.enabled_physics.end(), physics) !=
            scene_.enabled_physics.end();
@@ -348,8 +387,7 @@ class SceneReader {
     }
   }
 
-  /// Keys `fracture` (docking, 8.2.5) and `plasticity` of a solid into *e; both need solver.fixed_dt (the
-  /// time per force evaluation of their Poisson processes and flow).
+  /// Keys `fracture` (docking, 8.2.5) and `plasticity` of a solid into *e (fixed or adaptive steps).
   void readFracturePlasticity(const YAML::Node& node, const std::string& where, SphElasticConfig* elastic) {
     SphElasticConfig& e = *elastic;
     const YAML::Node f = node["fracture"], p = node["plasticity"];
@@ -376,9 +414,9 @@ class SceneReader {
       optionalNumber(p, "flow_rate", w, &e.plastic_flow_rate, &Source::nonNegative);
       optionalNumber(p, "max_strain", w, &e.max_plastic_strain, &Source::positive);
     }
-    if (!(scene_.config.fixed_dt > 0.0))
-      src_.fail(f ? f : p, where + ": fracture and plasticity need solver.fixed_dt (their time per step)");
-    e.time_step = scene_.config.fixed_dt;
+    // The solver announces every step's dt (SphForceTerm::beginStep); time_step only covers evaluations
+    // outside a step.
+    e.time_step = scene_.config.fixed_dt > 0.0 ? scene_.config.fixed_dt : scene_.config.max_dt;
     try {
       e.validate();
     } catch (const std::invalid_argument& ex) {
@@ -789,7 +827,9 @@ class SceneReader {
 
 const std::vector<std::string>& sphOptionalPhysics() {
   // elasticity (8.2), phase_transition (8.2.4), temperature (heat conduction driving 8.2.4), surface (8.2.7).
-  static const std::vector<std::string> names = {"elasticity", "phase_transition", "temperature", "surface"};
+  // collisions: the penalty (8.37) between solids (8.2.6).
+  static const std::vector<std::string> names = {"elasticity", "collisions", "phase_transition",
+                                                 "temperature", "surface"};
   return names;
 }
 

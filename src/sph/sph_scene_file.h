@@ -9,6 +9,7 @@
 
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
+#include "sph/sph_object_penalty.h"
 #include "sph/sph_particles.h"
 #include "sph/sph_surface.h"
 #include "sph/sph_thermal.h"
@@ -43,9 +44,10 @@ struct SphSurfaceOutput {
 /// the `count` particles from `first` (kind kFluid, phases == phase), sampled on the closest-packing
 /// lattice of elastic.lattice_spacing in the orientation `orientation`. Optional solid keys: `fracture`
 /// {strain, rate, max_docking_rate, docking_rate_increase, docking_rate_decrease, docking_distance, seed}
-/// (docking, 8.2.5), `plasticity` {yield_strain, flow_rate, max_strain} (both need solver.fixed_dt, which
-/// becomes elastic.time_step), and `anchor` {lo, hi}: the solid's particles in that box become static
-/// boundary particles it is fixed to (kind kStaticBoundary, still of this phase; Fig. 8.7 c).
+/// (docking, 8.2.5), `plasticity` {yield_strain, flow_rate, max_strain} (both work with fixed and adaptive
+/// steps: the solver announces each step's dt; elastic.time_step is solver.fixed_dt, else solver.max_dt),
+/// and `anchor` {lo, hi}: the solid's particles in that box become static boundary particles it is fixed to
+/// (kind kStaticBoundary, still of this phase; Fig. 8.7 c).
 struct SphSceneSolid {
   SphElasticConfig elastic;
   uint8_t phase = 1;
@@ -79,6 +81,14 @@ struct SphSceneThermal {
   int freezing_solid = -1;
 };
 
+/// Penalty collisions between the solids (`enable: [collisions]`, key collisions {stiffness,
+/// contact_distance, damping}; thesis 8.2.6, (8.37)): an SphObjectPenalty term. contact_distance defaults to
+/// the smallest lattice spacing of the solids.
+struct SphSceneCollisions {
+  bool enabled = false;
+  SphObjectPenaltyConfig config;
+};
+
 /// A loaded scene, ready for the solver: config is validated, particles are filled, planes collected.
 struct SphScene {
   std::string name;  ///< `name:` or the file name without extension
@@ -92,12 +102,14 @@ struct SphScene {
   SphParticleOutput output;
   SphSurfaceOutput surface;
   std::vector<SphSceneSolid> solids;
+  SphSceneCollisions collisions;
   SphSceneThermal thermal;
 };
 
-/// Optional physics a scene may list under `enable:`: elasticity (key solids), surface (key
-/// output.surface), temperature (key temperature) and phase_transition (key phase_transition; needs
-/// temperature and elasticity). An unknown name is rejected. The keys of a physics not enabled are rejected.
+/// Optional physics a scene may list under `enable:`: elasticity (key solids), collisions (key collisions;
+/// needs elasticity and two or more solids), surface (key output.surface), temperature (key temperature)
+/// and phase_transition (key phase_transition; needs temperature and elasticity). An unknown name is
+/// rejected. The keys of a physics not enabled are rejected.
 const std::vector<std::string>& sphOptionalPhysics();
 
 /// Reads a scene file. Throws SphSceneError naming the file, line and problem (syntax, unknown key, wrong

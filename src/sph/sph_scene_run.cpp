@@ -11,7 +11,9 @@
 
 #include "io/obj_io.h"
 #include "io/ply_io.h"
+#include "io/pvd_io.h"
 #include "sph/sph_elastic_solid.h"
+#include "sph/sph_object_penalty.h"
 #include "sph/sph_output.h"
 #include "sph/sph_surface.h"
 
@@ -62,16 +64,17 @@ class FrameWriter {
     const std::string base = scene_.name + stem;
     if (scene_.output.ply) {
       const std::string path = (dir_ / (base + ".ply")).string();
-      writeSphPly(path, solver.particles(), temperatures(solver));
+      writeSphPly(path, solver.particles(), temperatures(solver), dockedPoints(solver));
       stats_.files.push_back(path);
     }
     if (scene_.output.vtp) {
       const std::string path = (dir_ / (base + ".vtp")).string();
-      writeSphVtp(path, solver.particles(), VtpEncoding::kAppendedRaw, temperatures(solver));
+      writeSphVtp(path, solver.particles(), VtpEncoding::kAppendedRaw, temperatures(solver),
+                  dockedPoints(solver));
       stats_.files.push_back(path);
       pvd_.push_back({base + ".vtp", solver.time()});
       const std::string pvd = (dir_ / (scene_.name + ".pvd")).string();
-      writeSphPvd(pvd, pvd_);  // rewritten each time: a stopped run stays viewable
+      writePvd(pvd, pvd_);  // rewritten each time: a stopped run stays viewable
       if (pvd_.size() == 1) stats_.files.push_back(pvd);
     }
     stats_.output_seconds += secondsSince(t0);
@@ -84,6 +87,11 @@ class FrameWriter {
     temperatures_ = thermal_->temperatures();
     temperatures_.resize(solver.particles().size(), thermal_->config().initial_temperature);
     return &temperatures_;
+  }
+
+  /// Docked lattice points per particle of the solids with fracture (nullptr if none has it).
+  const std::vector<uint32_t>* dockedPoints(const SphFluidSolver& solver) {
+    return sphDockedPoints(solver, docked_) ? &docked_ : nullptr;
   }
 
   /// Marching cubes surface of the frame (8.2.7): <name>_surface_NNNN.obj / .ply.
@@ -115,7 +123,8 @@ class FrameWriter {
   bool active_ = false, surface_ = false;
   const SphThermalModel* thermal_;
   std::vector<double> temperatures_;
-  std::vector<SphPvdEntry> pvd_;
+  std::vector<uint32_t> docked_;
+  std::vector<PvdEntry> pvd_;
 };
 
 void appendNumber(std::string& out, const char* key, double v) {
@@ -166,6 +175,21 @@ void appendVector(std::string& out, const char* key, const Vec3& v) {
 
 }  // namespace
 
+bool sphDockedPoints(const SphFluidSolver& solver, std::vector<uint32_t>& docked) {
+  const SphParticles& p = solver.particles();
+  bool any = false;
+  docked.assign(p.size(), 0);
+  for (const auto& term : solver.forceTerms()) {
+    const auto* solid = dynamic_cast<const SphElasticSolid*>(term.get());
+    if (!solid || !solid->config().docking) continue;
+    any = true;
+    const std::vector<uint32_t>& counts = solid->dockedCounts();
+    for (size_t i = 0; i < p.size() && i < counts.size(); ++i)
+      if (p.phases[i] == solid->phase()) docked[i] = counts[i];
+  }
+  return any;
+}
+
 SphFluidSolver makeSphSolver(const SphScene& scene) {
   SphFluidSolver solver(scene.config, scene.particles);
   for (const SphPlane& plane : scene.planes) solver.addPlane(plane);
@@ -173,6 +197,8 @@ SphFluidSolver makeSphSolver(const SphScene& scene) {
   for (const SphSceneSolid& solid : scene.solids)
     solver.addForceTerm(
         std::make_shared<SphElasticSolid>(solid.elastic, kernels, solid.phase, solid.orientation));
+  if (scene.collisions.enabled)
+    solver.addForceTerm(std::make_shared<SphObjectPenalty>(scene.collisions.config, kernels));
   return solver;
 }
 

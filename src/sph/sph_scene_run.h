@@ -75,8 +75,14 @@ struct SphRunStats {
   std::vector<std::string> files;  ///< written particle files (and the .pvd) and surface meshes
 };
 
-/// A solver for the scene (its config, particles and planes) with an SphElasticSolid force term per solid.
+/// A solver for the scene (its config, particles and planes) with an SphElasticSolid force term per solid
+/// and, with `enable: [collisions]`, an SphObjectPenalty term after them.
 SphFluidSolver makeSphSolver(const SphScene& scene);
+
+/// Per particle of the solver: the docked lattice points (SphElasticSolid::dockedCounts) of the solids
+/// with fracture (docking), 0 for other particles and before the first force evaluation. Returns false
+/// (and zeros) when no solid of the solver has fracture.
+bool sphDockedPoints(const SphFluidSolver& solver, std::vector<uint32_t>& docked);
 
 /// The thermal model of a scene with `enable: [temperature]` (nullptr otherwise): its config, initial
 /// temperatures, heated planes and held particles; the freezing solid is the solver's SphElasticSolid of the

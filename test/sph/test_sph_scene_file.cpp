@@ -87,7 +87,10 @@ TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
     EXPECT_EQ(scene.surface.enabled,
               std::count(scene.enabled_physics.begin(), scene.enabled_physics.end(), "surface") == 1);
     EXPECT_NO_THROW(scene.config.validate());
-    EXPECT_EQ(makeSphSolver(scene).forceTerms().size(), it->second.solids) << stem;
+    // A term per solid, plus the penalty with enable: [collisions].
+    EXPECT_EQ(makeSphSolver(scene).forceTerms().size(),
+              it->second.solids + (scene.collisions.enabled ? 1 : 0))
+        << stem;
     ++loaded;
   }
   EXPECT_EQ(loaded, expected.size());
@@ -573,6 +576,34 @@ TEST(SphSceneFile, ElasticCubeBouncesAndKeepsItsShape) {
   EXPECT_NE(json.find("\"solids\":1,"), std::string::npos) << json;
 }
 
+TEST(SphSceneFile, CollisionsNeedElasticityTwoSolidsAndAContactWithinH) {
+  const std::string head = "dimension: 2\nspacing: 0.02\nsolver: {smoothing_ratio: 2}\n";  // lines 1-3
+  const std::string two =
+      "solids:\n"                                            // 5
+      "  - {lo: [0, 0], hi: [0.1, 0.1]}\n"                   // 6
+      "  - {lo: [0.2, 0], hi: [0.3, 0.1], spacing: 0.03}\n"  // 7
+      "frames: {count: 1, time: 0.01}\n";                    // 8
+  const SphScene ok = parseSphScene(head + "enable: [elasticity, collisions]\n" + two, "ok.yaml");
+  EXPECT_TRUE(ok.collisions.enabled);
+  EXPECT_EQ(ok.collisions.config.contact_distance, 0.02);  // the smallest lattice spacing
+  EXPECT_EQ(makeSphSolver(ok).forceTerms().size(), 3u);
+  const SphScene given = parseSphScene(
+      head + "enable: [elasticity, collisions]\n" + two + "collisions: {stiffness: 5.0e4, damping: 2}\n",
+      "ok.yaml");
+  EXPECT_EQ(given.collisions.config.stiffness, 5.0e4);
+  EXPECT_EQ(given.collisions.config.damping, 2.0);
+  expectErrorAt(head + "enable: [collisions]\n" + two, 4, "'collisions' needs 'elasticity'");
+  expectErrorAt(head + "enable: [elasticity]\n" + two + "collisions: {stiffness: 1}\n", 9,
+                "needs 'collisions' in the scene's 'enable' list");
+  expectErrorAt(head + "enable: [elasticity, collisions]\nsolids:\n  - {lo: [0, 0], hi: [0.1, 0.1]}\n" +
+                    "frames: {count: 1, time: 0.01}\ncollisions: {stiffness: 1}\n",
+                8, "need two or more solids");
+  expectErrorAt(head + "enable: [elasticity, collisions]\n" + two + "collisions: {contact_distance: 0.05}\n",
+                9, "exceeds the smoothing length");
+  expectErrorAt(head + "enable: [elasticity, collisions]\n" + two + "collisions: {stiffness: -1}\n", 9,
+                "stiffness");
+}
+
 TEST(SphSceneFile, DiceAreNineSeparateStiffSolidsAndWriteSurfaces) {
   SphScene scene = loadSphScene(kSceneDir + "dice_3d.yaml");
   ASSERT_EQ(scene.solids.size(), 9u);
@@ -588,6 +619,10 @@ TEST(SphSceneFile, DiceAreNineSeparateStiffSolidsAndWriteSurfaces) {
     for (size_t i = die.first; i < die.first + die.count; ++i) ASSERT_EQ(p.phases[i], die.phase);
   }
   EXPECT_EQ(phases.size(), 9u);
+  // Thesis 8.2.6 / Fig. 8.8: penalty collisions (8.37) between the dice.
+  EXPECT_TRUE(scene.collisions.enabled);
+  EXPECT_EQ(scene.collisions.config.stiffness, 1.0e7);
+  EXPECT_EQ(scene.collisions.config.contact_distance, 0.07);
   // No two dice overlap at the start: particles of different dice are more than a spacing apart, and all lie
   // above the floor.
   double closest = 1e9;
