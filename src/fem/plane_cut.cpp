@@ -4,88 +4,19 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
+
+#include "fem/element_split.h"
+#include "fem/polygon_geometry.h"
 
 namespace rc {
 namespace {
 
 [[noreturn]] void fail(const std::string& what) {
   throw std::invalid_argument("cutMeshByPlane: " + what);
-}
-
-double boundingDiagonal(const std::vector<Vec3>& points) {
-  Vec3 lo = points.front(), hi = points.front();
-  for (const Vec3& p : points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  return (hi - lo).norm();
-}
-
-// Indices of points (around a plane section, coplanar) sorted counter-clockwise around e1 x e2.
-std::vector<int> angularOrderIndices(const std::vector<Vec3>& points, const Vec3& e1, const Vec3& e2) {
-  Vec3 center = Vec3::Zero();
-  for (const Vec3& p : points) center += p;
-  center /= static_cast<double>(points.size());
-  std::vector<std::pair<double, int>> by_angle;
-  for (size_t k = 0; k < points.size(); ++k) {
-    const Vec3 d = points[k] - center;
-    by_angle.emplace_back(std::atan2(e2.dot(d), e1.dot(d)), static_cast<int>(k));
-  }
-  std::sort(by_angle.begin(), by_angle.end());
-  std::vector<int> order;
-  for (const auto& entry : by_angle) order.push_back(entry.second);
-  return order;
-}
-
-std::vector<Vec3> angularOrder(const std::vector<Vec3>& points, const Vec3& e1, const Vec3& e2) {
-  std::vector<Vec3> sorted;
-  for (int k : angularOrderIndices(points, e1, e2)) sorted.push_back(points[k]);
-  return sorted;
-}
-
-// All turns of the closed polygon have the same sign (either orientation); area above area_tolerance.
-bool isConvexPolygon(const std::vector<Eigen::Vector2d>& polygon, double area_tolerance) {
-  const size_t k = polygon.size();
-  int sign = 0;
-  double area = 0.0;
-  for (size_t i = 0; i < k; ++i) {
-    const Eigen::Vector2d a = polygon[(i + 1) % k] - polygon[i],
-                          b = polygon[(i + 2) % k] - polygon[(i + 1) % k];
-    const double turn = a.x() * b.y() - a.y() * b.x();
-    area += polygon[i].x() * polygon[(i + 1) % k].y() - polygon[i].y() * polygon[(i + 1) % k].x();
-    if (std::abs(turn) <= area_tolerance) continue;
-    const int s = turn > 0.0 ? 1 : -1;
-    if (sign != 0 && s != sign) return false;
-    sign = s;
-  }
-  return std::abs(area) > area_tolerance;
-}
-
-// Interiors of two convex polygons overlap by more than tol (separating axis test over both edge sets).
-bool convexPolygonsOverlap(const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b,
-                           double tol) {
-  for (const auto* polygon : {&a, &b})
-    for (size_t k = 0; k < polygon->size(); ++k) {
-      const Eigen::Vector2d edge = (*polygon)[(k + 1) % polygon->size()] - (*polygon)[k];
-      if (!(edge.norm() > 0.0)) continue;
-      const Eigen::Vector2d axis = Eigen::Vector2d(-edge.y(), edge.x()).normalized();
-      double lo_a = INFINITY, hi_a = -INFINITY, lo_b = INFINITY, hi_b = -INFINITY;
-      for (const auto& p : a) {
-        lo_a = std::min(lo_a, axis.dot(p));
-        hi_a = std::max(hi_a, axis.dot(p));
-      }
-      for (const auto& p : b) {
-        lo_b = std::min(lo_b, axis.dot(p));
-        hi_b = std::max(hi_b, axis.dot(p));
-      }
-      if (std::min(hi_a, hi_b) - std::max(lo_a, lo_b) <= tol) return false;
-    }
-  return true;
 }
 
 }  // namespace
@@ -118,20 +49,13 @@ PlaneCutResult cutMeshByPlane(const PolyhedralMesh& mesh, const std::vector<Vec3
     if (side[i] == 0 && distance[i] != 0.0) ++result.num_snapped_nodes;
   }
 
-  std::map<std::pair<int, int>, int> edge_node;
-  auto cutNode = [&](int a, int b) {
-    const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-    auto it = edge_node.find(key);
-    if (it != edge_node.end()) return it->second;
-    const double t = distance[key.first] / (distance[key.first] - distance[key.second]);
-    nodes.push_back((1.0 - t) * nodes[key.first] + t * nodes[key.second]);
-    if (has_disp) disp.push_back((1.0 - t) * disp[key.first] + t * disp[key.second]);
+  EdgeCrossingNodes crossing(distance, [&](int a, int b, double t) {
+    nodes.push_back((1.0 - t) * nodes[a] + t * nodes[b]);
+    if (has_disp) disp.push_back((1.0 - t) * disp[a] + t * disp[b]);
     distance.push_back(0.0);
     side.push_back(0);
-    const int id = static_cast<int>(nodes.size()) - 1;
-    edge_node.emplace(key, id);
-    return id;
-  };
+    return static_cast<int>(nodes.size()) - 1;
+  });
 
   const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
   auto planeCoordinates = [&](const Vec3& x) { return Eigen::Vector2d(e1.dot(x), e2.dot(x)); };
@@ -145,103 +69,60 @@ PlaneCutResult cutMeshByPlane(const PolyhedralMesh& mesh, const std::vector<Vec3
         fail("region point " + std::to_string(k) + " does not lie in the plane");
       region.push_back(planeCoordinates(options.region[k]));
     }
-    if (!isConvexPolygon(region, 1e-12 * diagonal * diagonal)) fail("region is not a convex polygon");
+    const double area_tolerance = 1e-12 * diagonal * diagonal;
+    if (!isConvexPolygon(region, area_tolerance, 0.5 * area_tolerance))
+      fail("region is not a convex polygon");
   }
 
   // Crossed elements and the ones to split (crossed, and their cut polygon overlaps the region).
   const int num_elements = mesh.numElements();
   std::vector<char> crossed(num_elements, 0), selected(num_elements, 0);
   for (int e = 0; e < num_elements; ++e) {
-    bool has_positive = false, has_negative = false;
-    for (int v : mesh.element(e).globalNodeIds()) {
-      has_positive = has_positive || side[v] > 0;
-      has_negative = has_negative || side[v] < 0;
-    }
-    if (!has_positive && !has_negative)
+    const ElementSides sides = elementSides(mesh.elementFaces(e), side);
+    if (!sides.positive && !sides.negative)
       throw std::runtime_error("cutMeshByPlane: element " + std::to_string(e) +
                                " lies within the snap distance of the plane (lower snap_relative_distance)");
-    crossed[e] = has_positive && has_negative;
+    crossed[e] = sides.crossed();
     if (!crossed[e]) continue;
     if (region.empty()) {
       selected[e] = 1;
       continue;
     }
-    std::vector<Vec3> points;  // element section: nodes on the plane and edge intersections
-    for (const auto& face : mesh.elementFaces(e))
-      for (size_t k = 0; k < face.size(); ++k) {
-        const int a = face[k], b = face[(k + 1) % face.size()];
-        if (side[a] == 0) points.push_back(nodes[a]);
-        if (side[a] * side[b] < 0) {
-          const double t = distance[a] / (distance[a] - distance[b]);
-          points.push_back((1.0 - t) * nodes[a] + t * nodes[b]);
-        }
-      }
+    const std::vector<Vec3> points = planeSectionPoints(mesh.elementFaces(e), side, distance, nodes);
     std::vector<Eigen::Vector2d> section;
-    for (const Vec3& x : angularOrder(points, e1, e2)) section.push_back(planeCoordinates(x));
+    for (int k : counterClockwiseOrder(points, planeCoordinates))
+      section.push_back(planeCoordinates(points[k]));
     selected[e] = convexPolygonsOverlap(section, region, 1e-9 * diagonal);
   }
   // Faces of split elements that get split (shared neighbours must split them identically: T-junctions).
   std::set<std::vector<int>> split_faces;
 
+  auto sectionOrder = [&](const std::vector<int>& section_nodes) {
+    std::vector<Vec3> points;
+    for (int v : section_nodes) points.push_back(nodes[v]);
+    return counterClockwiseOrder(points, planeCoordinates);
+  };
   std::vector<std::vector<PolyhedralMesh::ElementFaces>> parts(num_elements);
   double max_snapped_distance = 0.0, min_part_scale = INFINITY;
   for (int e = 0; e < num_elements; ++e) {
     if (!selected[e]) continue;
     const PolyhedralMesh::ElementFaces& faces = mesh.elementFaces(e);
     ++result.num_split_elements;
-    PolyhedralMesh::ElementFaces positive, negative;
-    std::vector<int> cut;  // nodes of the cut polygon
-    auto addCut = [&cut](int v) {
-      if (std::find(cut.begin(), cut.end(), v) == cut.end()) cut.push_back(v);
-    };
-    for (size_t f = 0; f < faces.size(); ++f) {
-      const PolyhedralMesh::Face& face = faces[f];
-      PolyhedralMesh::Face pos, neg;
-      bool face_positive = false, face_negative = false;
-      for (size_t k = 0; k < face.size(); ++k) {
-        const int a = face[k], b = face[(k + 1) % face.size()];
-        if (side[a] >= 0) pos.push_back(a);
-        if (side[a] <= 0) neg.push_back(a);
-        face_positive = face_positive || side[a] > 0;
-        face_negative = face_negative || side[a] < 0;
-        if (side[a] == 0) {
-          addCut(a);
-          max_snapped_distance = std::max(max_snapped_distance, std::abs(distance[a]));
-        }
-        if (side[a] * side[b] < 0) {
-          const int m = cutNode(a, b);
-          pos.push_back(m);
-          neg.push_back(m);
-          addCut(m);
-        }
-      }
-      if (!face_positive && !face_negative)
-        throw std::runtime_error("cutMeshByPlane: face " + std::to_string(f) + " of element " +
-                                 std::to_string(e) +
-                                 " lies in the cut plane but the element is crossed (lower "
-                                 "snap_relative_distance)");
-      if (face_positive) positive.push_back(pos);
-      if (face_negative) negative.push_back(neg);
-      if (face_positive && face_negative) {
-        std::vector<int> key = face;
-        std::sort(key.begin(), key.end());
-        split_faces.insert(key);
-      }
-    }
-    // Cut polygon counter-clockwise around the normal: outward for the negative part.
-    std::vector<Vec3> cut_points;
-    for (int m : cut) cut_points.push_back(nodes[m]);
-    PolyhedralMesh::Face polygon;
-    for (int k : angularOrderIndices(cut_points, e1, e2)) polygon.push_back(cut[k]);
-    negative.push_back(polygon);
-    positive.push_back(PolyhedralMesh::Face(polygon.rbegin(), polygon.rend()));
-    for (const auto* part : {&negative, &positive}) {
+    ElementSplit split = splitElement(faces, side, crossing, sectionOrder);
+    if (split.face_in_plane >= 0)
+      throw std::runtime_error("cutMeshByPlane: face " + std::to_string(split.face_in_plane) +
+                               " of element " + std::to_string(e) +
+                               " lies in the cut plane but the element is crossed (lower "
+                               "snap_relative_distance)");
+    for (int v : split.section) max_snapped_distance = std::max(max_snapped_distance, std::abs(distance[v]));
+    for (int f : split.split_faces) split_faces.insert(sortedFaceKey(faces[f]));
+    for (const auto* part : {&split.negative, &split.positive}) {
       std::vector<Vec3> points;
       for (const auto& face : *part)
         for (int v : face) points.push_back(nodes[v]);
       min_part_scale = std::min(min_part_scale, boundingDiagonal(points));
     }
-    parts[e] = {std::move(negative), std::move(positive)};
+    parts[e] = {std::move(split.negative), std::move(split.positive)};
   }
   // Crossed elements left whole: faces shared with a split element are split alike (two coplanar faces),
   // other faces get the new nodes on their edges (T-junctions, 9.3.1).
@@ -249,28 +130,20 @@ PlaneCutResult cutMeshByPlane(const PolyhedralMesh& mesh, const std::vector<Vec3
     if (!crossed[e] || selected[e]) continue;
     PolyhedralMesh::ElementFaces whole;
     for (const auto& face : mesh.elementFaces(e)) {
-      std::vector<int> key = face;
-      std::sort(key.begin(), key.end());
-      const bool split = split_faces.count(key) > 0;
-      PolyhedralMesh::Face pos, neg, all;
+      if (split_faces.count(sortedFaceKey(face)) > 0) {
+        FaceSplit halves = splitFace(face, side, crossing);
+        whole.push_back(std::move(halves.positive));
+        whole.push_back(std::move(halves.negative));
+        continue;
+      }
+      PolyhedralMesh::Face all;
       for (size_t k = 0; k < face.size(); ++k) {
         const int a = face[k], b = face[(k + 1) % face.size()];
-        if (side[a] >= 0) pos.push_back(a);
-        if (side[a] <= 0) neg.push_back(a);
         all.push_back(a);
-        auto it = edge_node.find(std::make_pair(std::min(a, b), std::max(a, b)));
-        if (side[a] * side[b] < 0 && it != edge_node.end()) {
-          pos.push_back(it->second);
-          neg.push_back(it->second);
-          all.push_back(it->second);
-        }
+        const int m = side[a] * side[b] < 0 ? crossing.find(a, b) : -1;
+        if (m >= 0) all.push_back(m);
       }
-      if (split) {
-        whole.push_back(pos);
-        whole.push_back(neg);
-      } else {
-        whole.push_back(all);
-      }
+      whole.push_back(std::move(all));
     }
     parts[e] = {std::move(whole)};
   }
@@ -280,9 +153,7 @@ PlaneCutResult cutMeshByPlane(const PolyhedralMesh& mesh, const std::vector<Vec3
     if (parts[e].empty()) {
       elements.push_back(mesh.elementFaces(e));
       result.parent_element.push_back(e);
-      bool has_positive = false;
-      for (int v : mesh.element(e).globalNodeIds()) has_positive = has_positive || side[v] > 0;
-      result.element_side.push_back(has_positive ? 1 : -1);
+      result.element_side.push_back(elementSides(mesh.elementFaces(e), side).positive ? 1 : -1);
       continue;
     }
     for (size_t k = 0; k < parts[e].size(); ++k) {
@@ -291,7 +162,7 @@ PlaneCutResult cutMeshByPlane(const PolyhedralMesh& mesh, const std::vector<Vec3
       result.element_side.push_back(parts[e].size() == 1 ? 0 : (k == 0 ? -1 : 1));
     }
   }
-  result.num_new_nodes = static_cast<int>(edge_node.size());
+  result.num_new_nodes = crossing.size();
 
   // Keep the input tolerance; widen it to cover cut faces bent through snapped nodes.
   double relative_tolerance = ConvexPolyhedron::kDefaultRelativeTolerance;

@@ -3,7 +3,6 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -13,6 +12,9 @@
 #include <string>
 #include <tuple>
 #include <utility>
+
+#include "fem/element_split.h"
+#include "fem/polygon_geometry.h"
 
 namespace rc {
 namespace {
@@ -25,99 +27,12 @@ using Vec2 = Eigen::Vector2d;
   throw std::invalid_argument("ProgressiveCutMesh: " + what);
 }
 
-double boundingDiagonal(const std::vector<Vec3>& points) {
-  Vec3 lo = points.front(), hi = points.front();
-  for (const Vec3& p : points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  return (hi - lo).norm();
-}
-
-std::vector<int> sortedKey(const Face& face) {
-  std::vector<int> key = face;
-  std::sort(key.begin(), key.end());
-  return key;
-}
-
-double cross2(const Vec2& a, const Vec2& b) {
-  return a.x() * b.y() - a.y() * b.x();
-}
-
-double signedArea(const std::vector<Vec2>& polygon) {
-  double area = 0.0;
-  for (size_t i = 0; i < polygon.size(); ++i) area += cross2(polygon[i], polygon[(i + 1) % polygon.size()]);
-  return 0.5 * area;
-}
-
-// All turns of the closed polygon have the same sign; area above area_tolerance.
-bool isConvexPolygon(const std::vector<Vec2>& polygon, double area_tolerance) {
-  const size_t k = polygon.size();
-  int sign = 0;
-  for (size_t i = 0; i < k; ++i) {
-    const double turn =
-        cross2(polygon[(i + 1) % k] - polygon[i], polygon[(i + 2) % k] - polygon[(i + 1) % k]);
-    if (std::abs(turn) <= area_tolerance) continue;
-    const int s = turn > 0.0 ? 1 : -1;
-    if (sign != 0 && s != sign) return false;
-    sign = s;
-  }
-  return std::abs(signedArea(polygon)) > area_tolerance;
-}
-
-// Interiors of two convex polygons overlap by more than tol (separating axis test over both edge sets).
-bool convexPolygonsOverlap(const std::vector<Vec2>& a, const std::vector<Vec2>& b, double tol) {
-  for (const auto* polygon : {&a, &b})
-    for (size_t k = 0; k < polygon->size(); ++k) {
-      const Vec2 edge = (*polygon)[(k + 1) % polygon->size()] - (*polygon)[k];
-      if (!(edge.norm() > 0.0)) continue;
-      const Vec2 axis = Vec2(-edge.y(), edge.x()).normalized();
-      double lo_a = INFINITY, hi_a = -INFINITY, lo_b = INFINITY, hi_b = -INFINITY;
-      for (const auto& p : a) {
-        lo_a = std::min(lo_a, axis.dot(p));
-        hi_a = std::max(hi_a, axis.dot(p));
-      }
-      for (const auto& p : b) {
-        lo_b = std::min(lo_b, axis.dot(p));
-        hi_b = std::max(hi_b, axis.dot(p));
-      }
-      if (std::min(hi_a, hi_b) - std::max(lo_a, lo_b) <= tol) return false;
-    }
-  return true;
-}
-
-// Fan triangulation from the apex that maximises the smallest fan triangle (as PolyhedralMesh does).
-std::vector<std::array<int, 3>> bestFan(const std::vector<Vec3>& nodes, const Face& face) {
-  const int k = static_cast<int>(face.size());
-  Vec3 normal = Vec3::Zero();
-  for (int j = 1; j + 1 < k; ++j)
-    normal += (nodes[face[j]] - nodes[face[0]]).cross(nodes[face[j + 1]] - nodes[face[0]]);
-  int best_apex = 0;
-  double best_min_area = -INFINITY;
-  for (int apex = 0; apex < k; ++apex) {
-    double min_area = INFINITY;
-    for (int j = 1; j + 1 < k; ++j) {
-      const Vec3& a = nodes[face[apex]];
-      min_area = std::min(
-          min_area, normal.dot((nodes[face[(apex + j) % k]] - a).cross(nodes[face[(apex + j + 1) % k]] - a)));
-    }
-    if (min_area > best_min_area) {
-      best_min_area = min_area;
-      best_apex = apex;
-    }
-  }
-  std::vector<std::array<int, 3>> fan;
-  for (int j = 1; j + 1 < k; ++j)
-    fan.push_back({face[best_apex], face[(best_apex + j) % k], face[(best_apex + j + 1) % k]});
-  return fan;
-}
-
 // The interpolant at x on a face: the mean value interpolant is linear on the face's boundary triangles.
 Vec3 interpolateOnFace(const std::vector<Vec3>& nodes, const std::vector<Vec3>& u, const Face& face,
                        const Vec3& x) {
   double best = -INFINITY;
   Vec3 value = Vec3::Zero();
-  for (const auto& t : bestFan(nodes, face)) {
+  for (const auto& t : bestFanTriangulation(nodes, face)) {
     const Vec3 v0 = nodes[t[1]] - nodes[t[0]], v1 = nodes[t[2]] - nodes[t[0]], v2 = x - nodes[t[0]];
     const double d00 = v0.dot(v0), d01 = v0.dot(v1), d11 = v1.dot(v1), d20 = v2.dot(v0), d21 = v2.dot(v1);
     const double denom = d00 * d11 - d01 * d01;
@@ -154,7 +69,7 @@ FaceUsers faceUsers(const std::vector<ElementFaces>& elements) {
   FaceUsers users;
   for (size_t e = 0; e < elements.size(); ++e)
     for (size_t f = 0; f < elements[e].size(); ++f)
-      users[sortedKey(elements[e][f])].emplace_back(int(e), int(f));
+      users[sortedFaceKey(elements[e][f])].emplace_back(int(e), int(f));
   return users;
 }
 
@@ -210,9 +125,11 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
       fail("cut polygon point " + std::to_string(k) + " is not in the polygon's plane");
   const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
   auto planar = [&](const Vec3& x) { return Vec2(e1.dot(x - center), e2.dot(x - center)); };
+  auto alreadyPlanar = [](const Vec2& offset) { return offset; };
   std::vector<Vec2> shape;
   for (const Vec3& p : polygon) shape.push_back(planar(p));
-  if (!isConvexPolygon(shape, 1e-12 * polygon_scale * polygon_scale)) fail("the cut polygon is not convex");
+  const double area_tolerance = 1e-12 * polygon_scale * polygon_scale;
+  if (!isConvexPolygon(shape, area_tolerance, area_tolerance)) fail("the cut polygon is not convex");
   if (signedArea(shape) < 0.0) std::reverse(shape.begin(), shape.end());
   const int num_lines = static_cast<int>(shape.size());
   // Signed distance to polygon edge line k, positive inside.
@@ -236,54 +153,36 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
   const int num_elements = numElements();
   std::vector<char> crossed(num_elements, 0), selected(num_elements, 0);
   for (int e = 0; e < num_elements; ++e) {
-    bool has_positive = false, has_negative = false;
-    for (const Face& face : elements_[e])
-      for (int v : face) {
-        has_positive = has_positive || side[v] > 0;
-        has_negative = has_negative || side[v] < 0;
-      }
-    if (!has_positive && !has_negative)
+    const ElementSides sides = elementSides(elements_[e], side);
+    if (!sides.positive && !sides.negative)
       throw std::runtime_error("ProgressiveCutMesh: element " + std::to_string(e) +
                                " lies within the snap distance of the cutting plane");
-    crossed[e] = has_positive && has_negative;
+    crossed[e] = sides.crossed();
     if (!crossed[e]) continue;
     std::vector<Vec2> points;  // element section
-    for (const Face& face : elements_[e])
-      for (size_t k = 0; k < face.size(); ++k) {
-        const int a = face[k], b = face[(k + 1) % face.size()];
-        if (side[a] == 0) points.push_back(planar(nodes_[a]));
-        if (side[a] * side[b] < 0) {
-          const double t = distance[a] / (distance[a] - distance[b]);
-          points.push_back(planar((1.0 - t) * nodes_[a] + t * nodes_[b]));
-        }
-      }
-    Vec2 mean = Vec2::Zero();
-    for (const Vec2& p : points) mean += p;
-    mean /= static_cast<double>(points.size());
-    std::sort(points.begin(), points.end(), [&](const Vec2& a, const Vec2& b) {
-      return std::atan2(a.y() - mean.y(), a.x() - mean.x()) < std::atan2(b.y() - mean.y(), b.x() - mean.x());
-    });
-    selected[e] = convexPolygonsOverlap(points, shape, snap);
+    for (const Vec3& x : planeSectionPoints(elements_[e], side, distance, nodes_))
+      points.push_back(planar(x));
+    std::vector<Vec2> section;
+    for (int k : counterClockwiseOrder(points, alreadyPlanar)) section.push_back(points[k]);
+    selected[e] = convexPolygonsOverlap(section, shape, snap);
   }
 
   // New nodes on mesh edges (plane crossings and polygon edges in the plane), inserted into every face
   // using the edge (T-junctions, 9.3.1).
   std::map<std::pair<int, int>, std::vector<int>> edge_refinement;
-  std::map<std::pair<int, int>, int> edge_node;
-  auto planeCrossingNode = [&](int a, int b) {
-    const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-    auto it = edge_node.find(key);
-    if (it != edge_node.end()) return it->second;
-    const double t = distance[key.first] / (distance[key.first] - distance[key.second]);
-    const int id = addNode(
-        (1.0 - t) * nodes_[key.first] + t * nodes_[key.second],
-        has_disp ? Vec3((1.0 - t) * displacements_[key.first] + t * displacements_[key.second]) : zero);
+  EdgeCrossingNodes plane_crossing(distance, [&](int a, int b, double t) {
+    const int id = addNode((1.0 - t) * nodes_[a] + t * nodes_[b],
+                           has_disp ? Vec3((1.0 - t) * displacements_[a] + t * displacements_[b]) : zero);
     distance.push_back(0.0);
     side.push_back(0);
-    edge_node.emplace(key, id);
-    edge_refinement[key].push_back(id);
+    edge_refinement[{a, b}].push_back(id);
     ++stats.num_new_nodes;
     return id;
+  });
+  auto sectionOrder = [&](const std::vector<int>& section_nodes) {
+    std::vector<Vec2> points;
+    for (int v : section_nodes) points.push_back(planar(nodes_[v]));
+    return counterClockwiseOrder(points, alreadyPlanar);
   };
 
   std::set<std::vector<int>> split_faces;
@@ -300,67 +199,30 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
     }
     ++stats.num_split_elements;
     const ElementFaces& faces = elements_[e];
-    ElementFaces positive, negative;
-    std::vector<char> positive_crack, negative_crack;
-    std::vector<int> section;
-    auto addSection = [&section](int v) {
-      if (std::find(section.begin(), section.end(), v) == section.end()) section.push_back(v);
+    ElementSplit split = splitElement(faces, side, plane_crossing, sectionOrder);
+    if (split.face_in_plane >= 0)
+      throw std::runtime_error("ProgressiveCutMesh: face " + std::to_string(split.face_in_plane) +
+                               " of element " + std::to_string(e) +
+                               " lies in the cutting plane but the element is crossed");
+    for (int v : split.section) max_snapped_distance = std::max(max_snapped_distance, std::abs(distance[v]));
+    for (int f : split.split_faces) split_faces.insert(sortedFaceKey(faces[f]));
+    // Crack flags follow the faces; the section is no crack face.
+    auto crackFlags = [&](const std::vector<int>& source) {
+      std::vector<char> flags;
+      for (int f : source) flags.push_back(f >= 0 ? crack_[e][f] : 0);
+      return flags;
     };
-    for (size_t f = 0; f < faces.size(); ++f) {
-      const Face& face = faces[f];
-      Face pos, neg;
-      bool face_positive = false, face_negative = false;
-      for (size_t k = 0; k < face.size(); ++k) {
-        const int a = face[k], b = face[(k + 1) % face.size()];
-        if (side[a] >= 0) pos.push_back(a);
-        if (side[a] <= 0) neg.push_back(a);
-        face_positive = face_positive || side[a] > 0;
-        face_negative = face_negative || side[a] < 0;
-        if (side[a] == 0) {
-          addSection(a);
-          max_snapped_distance = std::max(max_snapped_distance, std::abs(distance[a]));
-        }
-        if (side[a] * side[b] < 0) {
-          const int m = planeCrossingNode(a, b);
-          pos.push_back(m);
-          neg.push_back(m);
-          addSection(m);
-        }
-      }
-      if (!face_positive && !face_negative)
-        throw std::runtime_error("ProgressiveCutMesh: face " + std::to_string(f) + " of element " +
-                                 std::to_string(e) + " lies in the cutting plane but the element is crossed");
-      if (face_positive) {
-        positive.push_back(pos);
-        positive_crack.push_back(crack_[e][f]);
-      }
-      if (face_negative) {
-        negative.push_back(neg);
-        negative_crack.push_back(crack_[e][f]);
-      }
-      if (face_positive && face_negative) split_faces.insert(sortedKey(face));
-    }
-    // Section polygon counter-clockwise around the normal: outward for the negative part.
-    Vec2 mean = Vec2::Zero();
-    for (int v : section) mean += planar(nodes_[v]);
-    mean /= static_cast<double>(section.size());
-    std::sort(section.begin(), section.end(), [&](int a, int b) {
-      const Vec2 pa = planar(nodes_[a]) - mean, pb = planar(nodes_[b]) - mean;
-      return std::atan2(pa.y(), pa.x()) < std::atan2(pb.y(), pb.x());
-    });
-    negative.push_back(section);
-    negative_crack.push_back(0);
-    positive.push_back(Face(section.rbegin(), section.rend()));
-    positive_crack.push_back(0);
-    for (const ElementFaces* part : {&negative, &positive}) {
+    std::vector<char> negative_crack = crackFlags(split.negative_source),
+                      positive_crack = crackFlags(split.positive_source);
+    for (const ElementFaces* part : {&split.negative, &split.positive}) {
       std::vector<Vec3> points;
       for (const Face& face : *part)
         for (int v : face) points.push_back(nodes_[v]);
       min_part_scale = std::min(min_part_scale, boundingDiagonal(points));
     }
-    elements.push_back(std::move(negative));
+    elements.push_back(std::move(split.negative));
     crack.push_back(std::move(negative_crack));
-    elements.push_back(std::move(positive));
+    elements.push_back(std::move(split.positive));
     crack.push_back(std::move(positive_crack));
     parent.push_back(e);
     parent.push_back(e);
@@ -372,24 +234,14 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
     std::vector<char> flags;
     for (size_t f = 0; f < elements[e].size(); ++f) {
       const Face& face = elements[e][f];
-      if (!split_faces.count(sortedKey(face))) {
+      if (!split_faces.count(sortedFaceKey(face))) {
         faces.push_back(face);
         flags.push_back(crack[e][f]);
         continue;
       }
-      Face pos, neg;
-      for (size_t k = 0; k < face.size(); ++k) {
-        const int a = face[k], b = face[(k + 1) % face.size()];
-        if (side[a] >= 0) pos.push_back(a);
-        if (side[a] <= 0) neg.push_back(a);
-        if (side[a] * side[b] < 0) {
-          const int m = planeCrossingNode(a, b);
-          pos.push_back(m);
-          neg.push_back(m);
-        }
-      }
-      faces.push_back(pos);
-      faces.push_back(neg);
+      FaceSplit halves = splitFace(face, side, plane_crossing);
+      faces.push_back(std::move(halves.positive));
+      faces.push_back(std::move(halves.negative));
       flags.push_back(crack[e][f]);
       flags.push_back(crack[e][f]);
     }

@@ -11,39 +11,14 @@
 #include <string>
 #include <utility>
 
+#include "fem/element_split.h"
+#include "fem/polygon_geometry.h"
+
 namespace rc {
 namespace {
 
 [[noreturn]] void fail(const std::string& what) {
   throw std::invalid_argument("PolyhedralMesh: " + what);
-}
-
-// Fan triangulation (global ids) from the apex that maximises the smallest fan triangle area.
-std::vector<PolyhedralMesh::Triangle> bestFan(const std::vector<Vec3>& nodes,
-                                              const PolyhedralMesh::Face& face) {
-  const int k = static_cast<int>(face.size());
-  Vec3 normal = Vec3::Zero();
-  for (int j = 1; j + 1 < k; ++j)
-    normal += (nodes[face[j]] - nodes[face[0]]).cross(nodes[face[j + 1]] - nodes[face[0]]);
-  int best_apex = 0;
-  double best_min_area = -INFINITY;
-  for (int apex = 0; apex < k; ++apex) {
-    double min_area = INFINITY;
-    for (int j = 1; j + 1 < k; ++j) {
-      const Vec3& a = nodes[face[apex]];
-      const Vec3& b = nodes[face[(apex + j) % k]];
-      const Vec3& c = nodes[face[(apex + j + 1) % k]];
-      min_area = std::min(min_area, normal.dot((b - a).cross(c - a)));
-    }
-    if (min_area > best_min_area) {
-      best_min_area = min_area;
-      best_apex = apex;
-    }
-  }
-  std::vector<PolyhedralMesh::Triangle> fan;
-  for (int j = 1; j + 1 < k; ++j)
-    fan.push_back({face[best_apex], face[(best_apex + j) % k], face[(best_apex + j + 1) % k]});
-  return fan;
 }
 
 // +1: b is the same cycle as a, -1: b is a reversed, 0: neither.
@@ -178,11 +153,10 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
     const ElementFaces& faces = element_faces_[e];
     std::vector<std::vector<Triangle>> triangulation(faces.size());
     for (size_t f = 0; f < faces.size(); ++f) {
-      std::vector<int> key = faces[f];
-      std::sort(key.begin(), key.end());
+      const std::vector<int> key = sortedFaceKey(faces[f]);
       auto it = face_map.find(key);
       if (it == face_map.end()) {
-        triangulation[f] = bestFan(nodes_, faces[f]);
+        triangulation[f] = bestFanTriangulation(nodes_, faces[f]);
         face_map.emplace(key, SharedFace{int(e), int(f), 1, triangulation[f]});
         continue;
       }
@@ -241,8 +215,7 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
   std::map<std::pair<int, int>, int> boundary_edges;  // directed boundary polygon edges
   for (size_t e = 0; e < element_faces_.size(); ++e)
     for (size_t f = 0; f < element_faces_[e].size(); ++f) {
-      std::vector<int> key = element_faces_[e][f];
-      std::sort(key.begin(), key.end());
+      const std::vector<int> key = sortedFaceKey(element_faces_[e][f]);
       const SharedFace& shared = face_map.at(key);
       if (shared.uses == 2) {
         auto inserted = first_user.emplace(key, std::make_pair(int(e), int(f)));
@@ -397,56 +370,30 @@ PolyhedralMesh PolyhedralMesh::randomPlaneCut(const Vec3& lo, const Vec3& hi, in
       }
       if (ok) break;
     }
-    std::map<std::pair<int, int>, int> edge_node;
-    auto cutNode = [&](int a, int b) {
-      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      auto it = edge_node.find(key);
-      if (it != edge_node.end()) return it->second;
-      const double t = distance[key.first] / (distance[key.first] - distance[key.second]);
-      nodes.push_back((1.0 - t) * nodes[key.first] + t * nodes[key.second]);
+    std::vector<int> side(nodes.size());
+    for (size_t i = 0; i < nodes.size(); ++i) side[i] = distance[i] > 0.0 ? 1 : -1;
+    EdgeCrossingNodes crossing(distance, [&](int a, int b, double t) {
+      nodes.push_back((1.0 - t) * nodes[a] + t * nodes[b]);
       distance.push_back(0.0);
-      edge_node.emplace(key, static_cast<int>(nodes.size()) - 1);
+      side.push_back(0);
       return static_cast<int>(nodes.size()) - 1;
-    };
+    });
     const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
+    auto sectionOrder = [&](const std::vector<int>& section_nodes) {
+      std::vector<Vec3> points;
+      for (int v : section_nodes) points.push_back(nodes[v]);
+      return counterClockwiseOrder(points,
+                                   [&](const Vec3& d) { return Eigen::Vector2d(e1.dot(d), e2.dot(d)); });
+    };
     std::vector<ElementFaces> next;
     for (const ElementFaces& cell : cells) {
-      bool has_positive = false, has_negative = false;
-      for (const Face& face : cell)
-        for (int v : face) (distance[v] > 0.0 ? has_positive : has_negative) = true;
-      if (!(has_positive && has_negative)) {
+      if (!elementSides(cell, side).crossed()) {
         next.push_back(cell);
         continue;
       }
-      ElementFaces positive, negative;
-      std::vector<int> cut;
-      for (const Face& face : cell) {
-        Face pos, neg;
-        for (size_t k = 0; k < face.size(); ++k) {
-          const int a = face[k], b = face[(k + 1) % face.size()];
-          (distance[a] > 0.0 ? pos : neg).push_back(a);
-          if ((distance[a] > 0.0) != (distance[b] > 0.0)) {
-            const int m = cutNode(a, b);
-            pos.push_back(m);
-            neg.push_back(m);
-            if (std::find(cut.begin(), cut.end(), m) == cut.end()) cut.push_back(m);
-          }
-        }
-        if (pos.size() >= 3) positive.push_back(pos);
-        if (neg.size() >= 3) negative.push_back(neg);
-      }
-      // Cut polygon ordered counter-clockwise around the normal: outward for the negative part.
-      Vec3 center = Vec3::Zero();
-      for (int m : cut) center += nodes[m];
-      center /= static_cast<double>(cut.size());
-      std::sort(cut.begin(), cut.end(), [&](int a, int b) {
-        const Vec3 da = nodes[a] - center, db = nodes[b] - center;
-        return std::atan2(e2.dot(da), e1.dot(da)) < std::atan2(e2.dot(db), e1.dot(db));
-      });
-      negative.push_back(cut);
-      positive.push_back(Face(cut.rbegin(), cut.rend()));
-      next.push_back(positive);
-      next.push_back(negative);
+      ElementSplit split = splitElement(cell, side, crossing, sectionOrder);
+      next.push_back(std::move(split.positive));
+      next.push_back(std::move(split.negative));
     }
     cells = std::move(next);
   }
