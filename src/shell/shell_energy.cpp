@@ -1,0 +1,258 @@
+#include "shell/shell_energy.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rc {
+namespace {
+// Below this node count a parallel loop costs more than it saves.
+constexpr size_t kParallelNodes = 2048;
+}  // namespace
+
+ShellEnergy::ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, const ShellMaterial& material)
+    : nodes_(&nodes), fibers_(&fibers), material_(material) {
+  const size_t n = nodes.size();
+  if (fibers.node_offsets.size() != n + 1) {
+    throw std::invalid_argument("ShellEnergy: the fibers were built for another node set");
+  }
+  if (!(material.stretch_stiffness >= 0.0) || !(material.bending_stiffness >= 0.0) ||
+      !(material.areal_density > 0.0) || !(material.damping >= 0.0)) {
+    throw std::invalid_argument("ShellMaterial: stiffnesses and damping must be >= 0, areal_density > 0");
+  }
+  masses_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (!(nodes.rest_areas[i] > 0.0)) {
+      throw std::invalid_argument("ShellEnergy: node " + std::to_string(i) + " has no rest area");
+    }
+    masses_[i] = material.areal_density * nodes.rest_areas[i];
+  }
+  slot_offsets_.assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) slot_offsets_[i + 1] = slot_offsets_[i] + 1 + nodes.neighborCount(i);
+  std::vector<size_t> count(n + 1, 0);
+  auto target = [&](size_t i, size_t s) { return s == 0 ? i : nodes.neighborsOf(i)[s - 1]; };
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t s = 0; s <= nodes.neighborCount(i); ++s) ++count[target(i, s) + 1];
+  }
+  gather_offsets_.assign(n + 1, 0);
+  for (size_t p = 0; p < n; ++p) gather_offsets_[p + 1] = gather_offsets_[p] + count[p + 1];
+  gather_slots_.resize(gather_offsets_[n]);
+  std::vector<size_t> fill(gather_offsets_.begin(), gather_offsets_.end() - 1);
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t s = 0; s <= nodes.neighborCount(i); ++s)
+      gather_slots_[fill[target(i, s)]++] = slot_offsets_[i] + s;
+  }
+  slot_values_.resize(slot_offsets_[n]);
+}
+
+double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slots, double* membrane,
+                                 double* bending) const {
+  const ShellNodes& nodes = *nodes_;
+  const uint32_t* nb = nodes.neighborsOf(i);
+  const size_t k = nodes.neighborCount(i);
+  const size_t f0 = fibers_->node_offsets[i], f1 = fibers_->node_offsets[i + 1];
+  const double area = nodes.rest_areas[i];
+  const double ks = material_.stretch_stiffness, kb = material_.bending_stiffness;
+  constexpr double beta = kSplineAngleScale;
+  double normal_length = 0.0;
+  const Vec3 normal = fanNormal(nodes, i, x, &normal_length);
+
+  thread_local std::vector<double> len, angle, dkappa;
+  thread_local std::vector<std::array<Vec3, 3>> grad_len, grad_angle;
+  thread_local std::vector<Vec3> grad_normal;
+  const size_t m = f1 - f0;
+  len.resize(m), angle.resize(m), dkappa.resize(m), grad_len.resize(m), grad_angle.resize(m),
+      grad_normal.resize(m);
+
+  double s = 0.0, s0 = 0.0, fiber_stretch = 0.0, mean_dk = 0.0, sq_dk = 0.0;
+  for (size_t q = 0; q < m; ++q) {
+    const Fiber& f = fibers_->fibers[f0 + q];
+    const Vec3 &x1 = x[f.end1], &xc = x[i], &x2 = x[f.end2];
+    len[q] = fiberArcLength(x1, xc, x2, slots ? &grad_len[q] : nullptr);
+    angle[q] = fiberNormalAngle(x1, xc, x2, normal, slots ? &grad_angle[q] : nullptr,
+                                slots ? &grad_normal[q] : nullptr);
+    dkappa[q] = angle[q] / (beta * len[q]) - f.rest_angle / (beta * f.rest_length);  // (7.9), calibrated
+    const double l0sq = f.rest_length * f.rest_length;
+    s += f.weight * len[q] * len[q];
+    s0 += f.weight * l0sq;
+    const double e = len[q] * len[q] / l0sq - 1.0;  // A_k / A_k^0 - 1 (7.5)
+    fiber_stretch += f.weight * e * e;
+    mean_dk += f.weight * dkappa[q];
+    sq_dk += f.weight * dkappa[q] * dkappa[q];
+  }
+  const double r = s / s0 - 1.0;                                                    // A_i / A_i^0 - 1 (7.6)
+  const double e_mem = 0.5 * area * ks * (r * r + fiber_stretch);                   // (7.7)
+  const double e_bend = 0.5 * area * kb * (4.0 * sq_dk - 2.0 * mean_dk * mean_dk);  // (7.3), (7.11)
+  if (membrane) *membrane = e_mem;
+  if (bending) *bending = e_bend;
+  if (!slots) return e_mem + e_bend;
+
+  for (size_t q = 0; q <= k; ++q) slots[q].setZero();
+  Vec3 dn = Vec3::Zero();
+  for (size_t q = 0; q < m; ++q) {  // (7.16), (7.17)
+    const Fiber& f = fibers_->fibers[f0 + q];
+    const double l0sq = f.rest_length * f.rest_length;
+    const double de_dkappa = area * kb * f.weight * (4.0 * dkappa[q] - 2.0 * mean_dk);
+    const double de_dtheta = de_dkappa / (beta * len[q]);
+    const double de_dl =
+        area * ks * f.weight * len[q] * 2.0 * (r / s0 + (len[q] * len[q] / l0sq - 1.0) / l0sq) -
+        de_dtheta * angle[q] / len[q];
+    slots[1 + f.local1] += de_dl * grad_len[q][0] + de_dtheta * grad_angle[q][0];
+    slots[0] += de_dl * grad_len[q][1] + de_dtheta * grad_angle[q][1];
+    slots[1 + f.local2] += de_dl * grad_len[q][2] + de_dtheta * grad_angle[q][2];
+    dn += de_dtheta * grad_normal[q];
+  }
+  if (normal_length > 0.0) {  // through N = n / |n|, n = sum (x_a - x_i) x (x_b - x_i)
+    const Vec3 g = (dn - normal * normal.dot(dn)) / normal_length;
+    for (size_t p = nodes.fan_offsets[i]; p < nodes.fan_offsets[i + 1]; ++p) {
+      const auto& pr = nodes.fan_pairs[p];
+      const Vec3 ea = x[nb[pr.first]] - x[i], eb = x[nb[pr.second]] - x[i];
+      const Vec3 ga = eb.cross(g), gb = g.cross(ea);
+      slots[1 + pr.first] += ga;
+      slots[1 + pr.second] += gb;
+      slots[0] -= ga + gb;
+    }
+  }
+  return e_mem + e_bend;
+}
+
+void ShellEnergy::gatherSlots(const std::vector<Vec3>& slot_values, std::vector<Vec3>& out) const {
+  const size_t n = nodes_->size();
+  out.resize(n);
+#pragma omp parallel for schedule(static) if (n >= kParallelNodes)
+  for (size_t p = 0; p < n; ++p) {
+    Vec3 sum = Vec3::Zero();
+    for (size_t g = gather_offsets_[p]; g < gather_offsets_[p + 1]; ++g) sum += slot_values[gather_slots_[g]];
+    out[p] = sum;
+  }
+}
+
+ShellEnergyValue ShellEnergy::evaluate(const std::vector<Vec3>& x, std::vector<Vec3>* gradient) const {
+  const size_t n = nodes_->size();
+  if (x.size() != n)
+    throw std::invalid_argument("ShellEnergy::evaluate: position count differs from node count");
+  std::vector<double> mem(n), bend(n);
+#pragma omp parallel for schedule(static) if (n >= kParallelNodes)
+  for (size_t i = 0; i < n; ++i) {
+    evaluateNode(i, x, gradient ? slot_values_.data() + slot_offsets_[i] : nullptr, &mem[i], &bend[i]);
+  }
+  if (gradient) gatherSlots(slot_values_, *gradient);
+  ShellEnergyValue value;
+  for (size_t i = 0; i < n; ++i) value.membrane += mem[i], value.bending += bend[i];  // fixed order
+  return value;
+}
+
+void ShellEnergy::nodeEnergies(const std::vector<Vec3>& x, std::vector<double>* membrane,
+                               std::vector<double>* bending) const {
+  const size_t n = nodes_->size();
+  std::vector<double> mem(n), bend(n);
+#pragma omp parallel for schedule(static) if (n >= kParallelNodes)
+  for (size_t i = 0; i < n; ++i) evaluateNode(i, x, nullptr, &mem[i], &bend[i]);
+  if (membrane) *membrane = std::move(mem);
+  if (bending) *bending = std::move(bend);
+}
+
+std::vector<double> ShellEnergy::fiberCurvatures(const std::vector<Vec3>& x) const {
+  std::vector<double> kappa(fibers_->size());
+  const size_t n = nodes_->size();
+#pragma omp parallel for schedule(static) if (n >= kParallelNodes)
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 normal = fanNormal(*nodes_, i, x);
+    for (size_t q = fibers_->node_offsets[i]; q < fibers_->node_offsets[i + 1]; ++q) {
+      const Fiber& f = fibers_->fibers[q];
+      kappa[q] = fiberNormalAngle(x[f.end1], x[i], x[f.end2], normal) /
+                 (kSplineAngleScale * fiberArcLength(x[f.end1], x[i], x[f.end2]));
+    }
+  }
+  return kappa;
+}
+
+std::vector<double> ShellEnergy::nodeMeanCurvature(const std::vector<Vec3>& x) const {
+  const std::vector<double> kappa = fiberCurvatures(x);
+  std::vector<double> h(nodes_->size(), 0.0);
+  for (size_t i = 0; i < h.size(); ++i) {
+    for (size_t q = fibers_->node_offsets[i]; q < fibers_->node_offsets[i + 1]; ++q) {
+      h[i] += fibers_->fibers[q].weight * kappa[q];
+    }
+  }
+  return h;
+}
+
+ShellStableStep ShellEnergy::stableStep(const std::vector<Vec3>& x) const {
+  const ShellNodes& nodes = *nodes_;
+  const size_t n = nodes.size();
+  const double ks = material_.stretch_stiffness, kb = material_.bending_stiffness;
+  constexpr double beta = kSplineAngleScale;
+  std::vector<double> row_mem(slot_offsets_[n], 0.0), row_bend(slot_offsets_[n], 0.0);
+#pragma omp parallel for schedule(static) if (n >= kParallelNodes)
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t* nb = nodes.neighborsOf(i);
+    const size_t k = nodes.neighborCount(i);
+    const double area = nodes.rest_areas[i];
+    double normal_length = 0.0;
+    const Vec3 normal = fanNormal(nodes, i, x, &normal_length);
+    double* rm = row_mem.data() + slot_offsets_[i];
+    double* rb = row_bend.data() + slot_offsets_[i];
+    std::vector<Vec3> g_area(k + 1, Vec3::Zero()), g(k + 1);
+    double s0 = 0.0;
+    for (size_t q = fibers_->node_offsets[i]; q < fibers_->node_offsets[i + 1]; ++q) {
+      s0 += fibers_->fibers[q].weight * fibers_->fibers[q].rest_length * fibers_->fibers[q].rest_length;
+    }
+    // Adds c |g_p| sum_q |g_q| to row p for a Gauss-Newton term c g g^T.
+    auto add_term = [&](double c, const std::vector<Vec3>& gv, double* rows) {
+      double sum = 0.0;
+      for (const Vec3& v : gv) sum += v.norm();
+      for (size_t p = 0; p <= k; ++p) rows[p] += c * gv[p].norm() * sum;
+    };
+    for (size_t q = fibers_->node_offsets[i]; q < fibers_->node_offsets[i + 1]; ++q) {
+      const Fiber& f = fibers_->fibers[q];
+      std::array<Vec3, 3> gl, gt;
+      Vec3 gn;
+      const double l = fiberArcLength(x[f.end1], x[i], x[f.end2], &gl);
+      const double theta = fiberNormalAngle(x[f.end1], x[i], x[f.end2], normal, &gt, &gn);
+      const double l0sq = f.rest_length * f.rest_length;
+      std::fill(g.begin(), g.end(), Vec3::Zero());
+      g[1 + f.local1] = gl[0] * (2.0 * l / l0sq), g[0] = gl[1] * (2.0 * l / l0sq),
+            g[1 + f.local2] = gl[2] * (2.0 * l / l0sq);
+      add_term(area * ks * f.weight, g, rm);
+      g_area[1 + f.local1] += gl[0] * (2.0 * f.weight * l / s0);
+      g_area[0] += gl[1] * (2.0 * f.weight * l / s0);
+      g_area[1 + f.local2] += gl[2] * (2.0 * f.weight * l / s0);
+      const double scale = 1.0 / (beta * l), scale_l = -theta / (beta * l * l);  // d kappa / d theta, d l
+      std::fill(g.begin(), g.end(), Vec3::Zero());
+      g[1 + f.local1] = gt[0] * scale + gl[0] * scale_l, g[0] = gt[1] * scale + gl[1] * scale_l;
+      g[1 + f.local2] = gt[2] * scale + gl[2] * scale_l;
+      if (normal_length > 0.0) {
+        const Vec3 gamma = (gn - normal * normal.dot(gn)) * (scale / normal_length);
+        for (size_t p = nodes.fan_offsets[i]; p < nodes.fan_offsets[i + 1]; ++p) {
+          const auto& pr = nodes.fan_pairs[p];
+          const Vec3 ea = x[nb[pr.first]] - x[i], eb = x[nb[pr.second]] - x[i];
+          const Vec3 ga = eb.cross(gamma), gb = gamma.cross(ea);
+          g[1 + pr.first] += ga, g[1 + pr.second] += gb, g[0] -= ga + gb;
+        }
+      }
+      add_term(4.0 * area * kb * f.weight, g, rb);
+    }
+    add_term(area * ks, g_area, rm);
+  }
+  double lambda_mem = 0.0, lambda_bend = 0.0, lambda_sum = 0.0;
+  for (size_t p = 0; p < n; ++p) {
+    double sm = 0.0, sb = 0.0;
+    for (size_t g = gather_offsets_[p]; g < gather_offsets_[p + 1]; ++g) {
+      sm += row_mem[gather_slots_[g]], sb += row_bend[gather_slots_[g]];
+    }
+    lambda_mem = std::max(lambda_mem, sm / masses_[p]);
+    lambda_bend = std::max(lambda_bend, sb / masses_[p]);
+    lambda_sum = std::max(lambda_sum, (sm + sb) / masses_[p]);
+  }
+  ShellStableStep step;
+  step.membrane = lambda_mem > 0.0 ? 2.0 / std::sqrt(lambda_mem) : INFINITY;
+  step.bending = lambda_bend > 0.0 ? 2.0 / std::sqrt(lambda_bend) : INFINITY;
+  step.combined = lambda_sum > 0.0 ? 2.0 / std::sqrt(lambda_sum) : INFINITY;
+  return step;
+}
+
+}  // namespace rc

@@ -1,0 +1,95 @@
+// Elastic energy of a point-sampled thin shell (thesis 7.2.1-7.2.2): membrane energy from fiber area
+// estimates (7.5-7.7) and bending energy from calibrated fiber curvatures (7.9-7.11, B.9), with analytic
+// gradients (7.14-7.17, B.5-B.12) and a stable explicit time step.
+//
+// Units and deviations from the thesis, chosen so that the discrete energy converges to a
+// sampling-independent continuum energy:
+//  * Each node's energy is an energy density times its rest area a_i^0 (tangent-plane Voronoi area,
+//  ShellNodes),
+//    so K_s is a 2D stretching modulus (energy / area) and K_b a bending modulus (energy).
+//  * Membrane (7.7) uses relative area changes: U_s = K_s/2 [(A_i/A_i^0 - 1)^2 + sum_k w_k (A_k/A_k^0 -
+//  1)^2],
+//    A_k = pi/4 l_k^2 (7.5), A_i = sum_k w_k A_k (7.6). Uniform stretch by s stores K_s (s^2 - 1)^2 per area.
+//  * Fiber curvature kappa_k = theta_k / (3/4 l_k): theta_k is the signed normal turning angle of the end
+//    tangents (fiberNormalAngle); a natural spline through three points of a circle turns its end tangents by
+//    3/4 of the true arc angle, hence the 3/4.
+//  * Bending uses (7.3) with the Frobenius norm, U_b = K_b/2 |S - S^0|_F^2 = K_b/2 (dk1^2 + dk2^2), written
+//  with
+//    the fiber curvature changes d_k as U_b = K_b/2 [4 sum_k w_k d_k^2 - 2 (sum_k w_k d_k)^2] (exact for
+//    isotropic fiber directions; sum_k w_k d_k is the mean-curvature change of (7.9)). Unlike (7.8) it also
+//    resists twist (saddle) modes, which have no mean-curvature change.
+#pragma once
+
+#include <vector>
+
+#include "shell/shell_fibers.h"
+#include "shell/shell_nodes.h"
+
+namespace rc {
+
+struct ShellMaterial {
+  double stretch_stiffness = 25.0;  ///< K_s (energy / area)
+  double bending_stiffness = 25.0;  ///< K_b (energy)
+  double areal_density = 1.0;       ///< rho (mass / area); node mass m_i = rho a_i^0
+  double damping = 0.0;             ///< D (1/s): damping force -D m_i v_i (7.18)
+};
+
+struct ShellEnergyValue {
+  double membrane = 0.0;
+  double bending = 0.0;
+  double total() const { return membrane + bending; }
+};
+
+/// Verlet stability limits 2 / omega_max, omega_max^2 bounded by Gershgorin row sums of M^-1 times the
+/// Gauss-Newton Hessian of each energy (an upper bound, so the steps are safe).
+struct ShellStableStep {
+  double membrane = 0.0;
+  double bending = 0.0;
+  double combined = 0.0;  ///< 2 / sqrt(lambda_membrane + lambda_bending)
+};
+
+/// Energy over fixed nodes and fibers (both must outlive the object). evaluate() is not thread-safe (it uses
+/// internal scratch); it parallelises internally and is deterministic for any thread count.
+class ShellEnergy {
+ public:
+  static constexpr double kSplineAngleScale = 0.75;
+
+  ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, const ShellMaterial& material);
+
+  /// Total energies at positions x; if `gradient` is given it receives dE/dx (size nodes).
+  ShellEnergyValue evaluate(const std::vector<Vec3>& x, std::vector<Vec3>* gradient = nullptr) const;
+
+  /// Per-node membrane and bending energies (either output may be null).
+  void nodeEnergies(const std::vector<Vec3>& x, std::vector<double>* membrane,
+                    std::vector<double>* bending) const;
+
+  /// Mean curvature estimate H_i = sum_k w_k kappa_k (7.9) per node.
+  std::vector<double> nodeMeanCurvature(const std::vector<Vec3>& x) const;
+
+  /// Fiber curvature kappa_k = theta_k / (3/4 l_k) of every fiber (l_k the current arc length).
+  std::vector<double> fiberCurvatures(const std::vector<Vec3>& x) const;
+
+  ShellStableStep stableStep(const std::vector<Vec3>& x) const;
+
+  const std::vector<double>& masses() const { return masses_; }
+  const ShellNodes& nodes() const { return *nodes_; }
+  const ShellFibers& fibers() const { return *fibers_; }
+  const ShellMaterial& material() const { return material_; }
+
+ private:
+  struct Scratch;
+  double evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slots, double* membrane,
+                      double* bending) const;
+  void gatherSlots(const std::vector<Vec3>& slot_values, std::vector<Vec3>& out) const;
+
+  const ShellNodes* nodes_;
+  const ShellFibers* fibers_;
+  ShellMaterial material_;
+  std::vector<double> masses_;
+  std::vector<size_t> slot_offsets_;  ///< node i owns slots [slot_offsets_[i], +1+k): itself, then neighbours
+  std::vector<size_t> gather_offsets_;
+  std::vector<size_t> gather_slots_;  ///< slots referring to node p, in ascending owner order
+  mutable std::vector<Vec3> slot_values_;
+};
+
+}  // namespace rc

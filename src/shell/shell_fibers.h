@@ -1,0 +1,56 @@
+// Fibers of a point-sampled thin shell (thesis 7.2.1, appendix B): natural cubic splines through a node and
+// two of its neighbours, their arc length (B.4) and signed tangent angle with analytic gradients.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "shell/shell_nodes.h"
+
+namespace rc {
+
+/// One fiber x1 -> x -> x2 centred on node `center`; `local1`/`local2` index the centre's neighbour list.
+struct Fiber {
+  uint32_t center = 0, end1 = 0, end2 = 0;
+  uint8_t local1 = 0, local2 = 0;
+  double rest_length = 0.0;  ///< l^0 (B.4)
+  double rest_angle = 0.0;   ///< theta^0 (signed normal turning angle, see fiberNormalAngle)
+  double weight = 0.0;       ///< directional weight at the centre; the weights of one node sum to 1
+};
+
+/// Fibers grouped by centre node: node i owns fibers[node_offsets[i] .. node_offsets[i+1]).
+struct ShellFibers {
+  std::vector<Fiber> fibers;
+  std::vector<size_t> node_offsets;
+  size_t size() const { return fibers.size(); }
+};
+
+/// Builds one fiber per neighbour j with j' the most opposite neighbour (7.4; measured by the direction
+/// cosine (x_j' - x_i)^ . (x_j - x_i)^ rather than the dot product of (7.4)), drops duplicates, sets the rest
+/// length and angle, and gives each node's fibers weights that make their directions isotropic (second and
+/// fourth angular moments of an even distribution, as far as the fibers allow; weights stay >= 0.2 of the
+/// mean). Throws std::invalid_argument if a node ends with fewer than 3 fibers.
+ShellFibers buildShellFibers(const ShellNodes& nodes);
+
+/// Natural cubic spline coefficients (B.2, B.3) of the two segments, knots at x1, x, x2 (uniform).
+struct FiberSpline {
+  Vec3 a1, b1, c1, d1, a2, b2, c2, d2;
+};
+FiberSpline fiberSpline(const Vec3& x1, const Vec3& x, const Vec3& x2);
+
+/// Arc length of the fiber, 3-point Gauss-Legendre per segment (B.4 with Gauss points in place of i/n);
+/// `grad` (optional) receives d l / d(x1, x, x2) (B.6).
+double fiberArcLength(const Vec3& x1, const Vec3& x, const Vec3& x2, std::array<Vec3, 3>* grad = nullptr);
+
+/// The raw tangent angle of (B.9): arccos of the end tangents' cosine, unsigned.
+double fiberTangentAngle(const Vec3& x1, const Vec3& x, const Vec3& x2);
+
+/// Signed normal turning angle theta = asin(N . t0^) - asin(N . t1^) of the end tangents t0, t1 (B.9 with the
+/// angle measured in the normal direction, so in-plane kinks of a fiber do not count and the sign follows
+/// (7.10): positive when the fiber bends away from N). `grad` receives d theta / d(x1, x, x2) at fixed N,
+/// `grad_normal` d theta / d N.
+double fiberNormalAngle(const Vec3& x1, const Vec3& x, const Vec3& x2, const Vec3& normal,
+                        std::array<Vec3, 3>* grad = nullptr, Vec3* grad_normal = nullptr);
+
+}  // namespace rc

@@ -1,0 +1,59 @@
+// Simulation nodes of a point-sampled thin shell (thesis 7.2): nodes chosen from a surfel cloud by
+// clustering, with rest normals, rest neighbourhoods (fan-ordered around the normal) and rest areas.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/surfel_cloud.h"
+
+namespace rc {
+
+struct ShellNodeOptions {
+  /// Target node spacing (> 0), or 0 to derive it from `target_count`.
+  double spacing = 0.0;
+  /// Wanted number of nodes when `spacing` is 0 (the spacing is bisected until the count is within 2 %).
+  size_t target_count = 0;
+  /// Lloyd-type relaxation sweeps after the greedy pick: every surfel joins its nearest node, each node moves
+  /// to the surfel of its cluster nearest to the cluster centroid.
+  int relax_iterations = 3;
+  /// Size of the rest neighbourhood N_i (nearest nodes, 7.2.1).
+  size_t neighbor_count = 8;
+};
+
+/// Nodes in their rest state. Neighbourhoods are CSR lists sorted counter-clockwise around the rest normal;
+/// `fan_pairs` are consecutive (a, b) neighbour pairs, as local indices into the node's list, spanning less
+/// than 120 degrees (at a boundary the fan stays open). They define the deformed node normal (fanNormal).
+struct ShellNodes {
+  std::vector<Vec3> rest_positions;
+  std::vector<Vec3> rest_normals;  ///< unit, from the surfel normals
+  std::vector<double>
+      rest_areas;  ///< tangent-plane Voronoi area a_i^0 of the node (sums to the surface area)
+  std::vector<uint32_t> source_surfel;   ///< surfel the node sits on (empty if built from plain points)
+  std::vector<uint32_t> surfel_cluster;  ///< node each input surfel belongs to (empty if built from points)
+  std::vector<size_t> neighbor_offsets;  ///< size() + 1 entries
+  std::vector<uint32_t> neighbors;
+  std::vector<size_t> fan_offsets;  ///< size() + 1 entries
+  std::vector<std::pair<uint8_t, uint8_t>> fan_pairs;
+  double spacing = 0.0;  ///< mean distance to the nearest neighbour
+
+  size_t size() const { return rest_positions.size(); }
+  size_t neighborCount(size_t i) const { return neighbor_offsets[i + 1] - neighbor_offsets[i]; }
+  const uint32_t* neighborsOf(size_t i) const { return neighbors.data() + neighbor_offsets[i]; }
+};
+
+/// Chooses nodes from `cloud` (positions and normals required) by greedy Poisson-disc picking in index order
+/// followed by Lloyd relaxation (deterministic), then builds neighbourhoods and areas. Throws
+/// std::invalid_argument naming the problem for an empty cloud, missing normals or bad options.
+ShellNodes selectShellNodes(const SurfelCloud& cloud, const ShellNodeOptions& options);
+
+/// Uses the given points as nodes directly (unit normals required, one per point).
+ShellNodes shellNodesFromPoints(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
+                                size_t neighbor_count = 8);
+
+/// Deformed node normal: the normalised sum of (x_a - x_i) x (x_b - x_i) over the node's fan pairs. Returns
+/// the unnormalised length in `*length` (for gradients). Equals the rest normal up to sign convention at
+/// rest.
+Vec3 fanNormal(const ShellNodes& nodes, size_t i, const std::vector<Vec3>& x, double* length = nullptr);
+
+}  // namespace rc

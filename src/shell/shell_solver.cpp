@@ -1,0 +1,148 @@
+#include "shell/shell_solver.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace rc {
+namespace {
+// Below this node count a parallel loop costs more than it saves.
+constexpr size_t kParallelNodes = 2048;
+}  // namespace
+
+ShellSolver::ShellSolver(ShellNodes nodes, const ShellMaterial& material, const ShellSolverOptions& options)
+    : nodes_(std::move(nodes)),
+      fibers_(buildShellFibers(nodes_)),
+      energy_(nodes_, fibers_, material),
+      options_(options),
+      x_(nodes_.rest_positions),
+      v_(nodes_.size(), Vec3::Zero()),
+      pinned_(nodes_.size(), 0) {
+  if (!(options.time_step >= 0.0) || !(options.step_safety > 0.0 && options.step_safety <= 1.0) ||
+      options.step_update_interval < 1 || !(options.blowup_factor > 1.0) || !options.gravity.allFinite()) {
+    throw std::invalid_argument(
+        "ShellSolverOptions: need time_step >= 0, step_safety in (0, 1], step_update_interval >= 1, "
+        "blowup_factor > 1 and finite gravity");
+  }
+  if (options.ground && !(options.ground_normal.norm() > 0.0)) {
+    throw std::invalid_argument("ShellSolverOptions: ground_normal must be non-zero");
+  }
+  options_.ground_normal.normalize();
+  double area = 0.0;
+  for (double a : nodes_.rest_areas) area += a;
+  energy_floor_ = 1e-9 * (material.stretch_stiffness * area + material.bending_stiffness);
+  resetReference();
+}
+
+void ShellSolver::pin(size_t node) {
+  pinned_.at(node) = 1;
+  v_[node].setZero();
+}
+
+void ShellSolver::setPositions(const std::vector<Vec3>& x) {
+  if (x.size() != x_.size())
+    throw std::invalid_argument("ShellSolver::setPositions: wrong number of positions");
+  x_ = x;
+  resetReference();
+}
+
+void ShellSolver::setVelocities(const std::vector<Vec3>& v) {
+  if (v.size() != v_.size())
+    throw std::invalid_argument("ShellSolver::setVelocities: wrong number of velocities");
+  v_ = v;
+  for (size_t i = 0; i < v_.size(); ++i) {
+    if (pinned_[i]) v_[i].setZero();
+  }
+  resetReference();
+}
+
+void ShellSolver::resetReference() {
+  elastic_ = energy_.evaluate(x_, &gradient_);
+  reference_energy_ = kineticEnergy() + elastic_.total();
+  reference_gravity_ = gravityPotential();
+}
+
+double ShellSolver::kineticEnergy() const {
+  double k = 0.0;
+  for (size_t i = 0; i < v_.size(); ++i) k += 0.5 * energy_.masses()[i] * v_[i].squaredNorm();
+  return k;
+}
+
+double ShellSolver::gravityPotential() const {
+  double u = 0.0;
+  for (size_t i = 0; i < x_.size(); ++i) u -= energy_.masses()[i] * options_.gravity.dot(x_[i]);
+  return u;
+}
+
+void ShellSolver::applyGround() {
+  if (!options_.ground) return;
+  const Vec3& n = options_.ground_normal;
+  for (size_t i = 0; i < x_.size(); ++i) {
+    const double depth = (x_[i] - options_.ground_point).dot(n);
+    if (depth >= 0.0 || pinned_[i]) continue;
+    x_[i] -= depth * n;
+    const double vn = v_[i].dot(n);
+    if (vn < 0.0) {
+      const Vec3 vt = v_[i] - vn * n;
+      v_[i] = (1.0 - options_.ground_friction) * vt - options_.ground_restitution * vn * n;
+    }
+  }
+}
+
+ShellStepReport ShellSolver::step() {
+  const size_t n = x_.size();
+  const size_t index = step_count_ + 1;
+  if (step_count_ % options_.step_update_interval == 0) stable_ = energy_.stableStep(x_);
+  const double dt = options_.time_step > 0.0 ? options_.time_step : options_.step_safety * stable_.combined;
+  if (!std::isfinite(dt) || dt <= 0.0) {
+    throw ShellInstabilityError(index, "no finite stable time step (zero stiffness?); set time_step");
+  }
+  const double damping = energy_.material().damping;
+  const std::vector<double>& m = energy_.masses();
+#pragma omp parallel for schedule(static) if (n >= kParallelNodes)
+  for (size_t i = 0; i < n; ++i) {  // (7.18): first half kick, drift
+    if (pinned_[i]) continue;
+    const Vec3 a = -gradient_[i] / m[i] + options_.gravity - damping * v_[i];
+    v_[i] += 0.5 * dt * a;
+    x_[i] += dt * v_[i];
+  }
+  applyGround();
+  elastic_ = energy_.evaluate(x_, &gradient_);
+#pragma omp parallel for schedule(static) if (n >= kParallelNodes)
+  for (size_t i = 0; i < n; ++i) {  // second half kick, damping implicit
+    if (pinned_[i]) continue;
+    v_[i] = (v_[i] + 0.5 * dt * (-gradient_[i] / m[i] + options_.gravity)) / (1.0 + 0.5 * dt * damping);
+  }
+  applyGround();
+  ++step_count_;
+  time_ += dt;
+
+  ShellStepReport report;
+  report.step = index;
+  report.time = time_;
+  report.dt = dt;
+  report.stable = stable_;
+  report.elastic = elastic_;
+  report.kinetic = kineticEnergy();
+  report.gravity_potential = gravityPotential();
+  for (size_t i = 0; i < n; ++i) {
+    if (!x_[i].allFinite() || !v_[i].allFinite()) {
+      std::ostringstream os;
+      os << "non-finite position or velocity at node " << i << " (dt " << dt << ", stable bound "
+         << stable_.combined << ")";
+      throw ShellInstabilityError(index, os.str());
+    }
+  }
+  const double available =
+      reference_energy_ + std::max(0.0, reference_gravity_ - report.gravity_potential) + energy_floor_;
+  const double held = report.kinetic + elastic_.total();
+  if (!std::isfinite(held) || held > options_.blowup_factor * available) {
+    std::ostringstream os;
+    os << "energy blow-up: kinetic + elastic energy " << held << " exceeds " << options_.blowup_factor
+       << " x the available " << available << " (dt " << dt << ", stable bound " << stable_.combined
+       << ": membrane " << stable_.membrane << ", bending " << stable_.bending << ")";
+    throw ShellInstabilityError(index, os.str());
+  }
+  return report;
+}
+
+}  // namespace rc
