@@ -96,6 +96,8 @@ WarpedDynamics::WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOpt
   diagonal_index_.resize(dofs);
   for (int d = 0; d < dofs; ++d) diagonal_index_[d] = valueIndex(warped_stiffness_, d, d);
   system_matrix_ = warped_stiffness_;
+  if (options_.solver == WarpedDynamicsOptions::Solver::kCholmod)
+    cholmod_ = std::make_unique<CholmodSolver>();
 }
 
 void WarpedDynamics::setPositions(const Eigen::VectorXd& positions) {
@@ -195,6 +197,16 @@ Eigen::VectorXd WarpedDynamics::solveSystem(const Eigen::SparseMatrix<double>& a
     if (ldlt_.info() != Eigen::Success)
       throw std::runtime_error("WarpedDynamics::step: LDLT factorisation of M + dt C + dt^2 K failed");
     x = ldlt_.solve(b);
+    stats.solver_iterations += 1;
+  } else if (options_.solver == WarpedDynamicsOptions::Solver::kCholmod) {
+    try {
+      cholmod_->factorize(a);  // analyses when the pattern differs from the last one
+    } catch (const std::runtime_error& error) {
+      throw std::runtime_error(std::string("WarpedDynamics::step: CHOLMOD factorisation of M + dt C + dt^2 K "
+                                           "failed: ") +
+                               error.what());
+    }
+    cholmod_->solve(b, x);
     stats.solver_iterations += 1;
   } else if (options_.preconditioner == WarpedDynamicsOptions::Preconditioner::kJacobi) {
     jacobi_cg_.setTolerance(options_.cg_tolerance);

@@ -20,8 +20,10 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include <memory>
 #include <vector>
 
+#include "fem/cholmod_solver.h"
 #include "fem/linear_elasticity.h"
 
 namespace rc {
@@ -34,7 +36,8 @@ struct GroundPlane {
 };
 
 struct WarpedDynamicsOptions {
-  enum class Solver { kConjugateGradient, kSimplicialLDLT };
+  /// kCholmod: supernodal Cholesky (CholmodSolver), analysed once per pattern; needs a build with CHOLMOD.
+  enum class Solver { kConjugateGradient, kSimplicialLDLT, kCholmod };
   enum class Preconditioner { kJacobi, kIncompleteCholesky };
   enum class RotationWeights { kLumpedMasses, kNodeVolumeFractions };
 
@@ -67,7 +70,8 @@ struct StepStatistics {
 class WarpedDynamics {
  public:
   /// Starts at rest (x = X, v = 0). Throws std::invalid_argument for a non-positive or non-finite time step,
-  /// negative damping, a zero ground normal or non-positive CG settings.
+  /// negative damping, a zero ground normal or non-positive CG settings, std::runtime_error for kCholmod in a
+  /// build without CHOLMOD.
   WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOptions& options = WarpedDynamicsOptions());
 
   const LinearElasticModel& model() const { return model_; }
@@ -141,6 +145,7 @@ class WarpedDynamics {
       ichol_cg_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   bool ldlt_analyzed_ = false;
+  std::unique_ptr<CholmodSolver> cholmod_;  // kCholmod only; re-analyses when the pattern changes
 };
 
 }  // namespace rc
