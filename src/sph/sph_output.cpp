@@ -1,118 +1,57 @@
 #include "sph/sph_output.h"
 
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
-#include <fstream>
-#include <sstream>
+#include <utility>
 
-#include "io/io_error.h"
 #include "io/ply_io.h"
+#include "io/vtk_xml_writer.h"
 
 namespace rc {
 
 namespace {
 
-bool hostIsLittleEndian() {
-  const uint16_t one = 1;
-  uint8_t first;
-  std::memcpy(&first, &one, 1);
-  return first == 1;
-}
-
-/// One PointData / Points array of the .vtp file as raw host-order bytes.
-struct VtpArray {
-  std::string name;
-  const char* type;  ///< VTK type name
-  int components;
-  std::vector<uint8_t> bytes;
-  size_t count() const;
+/// The PointData arrays, then Points and the vertex cells (connectivity, offsets).
+struct VtpArrays {
+  std::vector<VtkXmlArray> point_data;
+  VtkXmlArray points{"Points", VtkXmlType::kFloat64, 3, {}};
+  VtkXmlArray connectivity{"connectivity", VtkXmlType::kInt64, 1, {}};
+  VtkXmlArray offsets{"offsets", VtkXmlType::kInt64, 1, {}};
 };
 
-size_t vtkTypeSize(const char* type) {
-  const std::string t = type;
-  if (t == "Float64" || t == "Int64") return 8;
-  if (t == "Float32" || t == "UInt32") return 4;
-  return 1;  // UInt8
-}
-
-size_t VtpArray::count() const {
-  return bytes.size() / vtkTypeSize(type);
-}
-
-template <typename T>
-void put(std::vector<uint8_t>& out, T value) {
-  const size_t at = out.size();
-  out.resize(at + sizeof(T));
-  std::memcpy(out.data() + at, &value, sizeof(T));
-}
-
-/// Points, connectivity, offsets, then the PointData arrays.
-std::vector<VtpArray> vtpArrays(const SphParticles& p, const std::vector<double>* temperatures,
-                                const std::vector<uint32_t>* docked_points) {
+VtpArrays vtpArrays(const SphParticles& p, const std::vector<double>* temperatures,
+                    const std::vector<uint32_t>* docked_points) {
   const size_t n = p.size();
-  VtpArray points{"Points", "Float64", 3, {}}, velocity{"velocity", "Float32", 3, {}};
-  VtpArray density{"density", "Float32", 1, {}}, pressure{"pressure", "Float32", 1, {}};
-  VtpArray kind{"kind", "UInt8", 1, {}};
-  VtpArray temperature{"temperature", "Float32", 1, {}}, phase{"phase", "UInt8", 1, {}};
-  VtpArray docked{"docked_points", "UInt32", 1, {}};
-  VtpArray connectivity{"connectivity", "Int64", 1, {}}, offsets{"offsets", "Int64", 1, {}};
+  VtpArrays arrays;
+  VtkXmlArray velocity{"velocity", VtkXmlType::kFloat32, 3, {}};
+  VtkXmlArray density{"density", VtkXmlType::kFloat32, 1, {}},
+      pressure{"pressure", VtkXmlType::kFloat32, 1, {}};
+  VtkXmlArray kind{"kind", VtkXmlType::kUInt8, 1, {}};
+  VtkXmlArray temperature{"temperature", VtkXmlType::kFloat32, 1, {}},
+      phase{"phase", VtkXmlType::kUInt8, 1, {}};
+  VtkXmlArray docked{"docked_points", VtkXmlType::kUInt32, 1, {}};
   for (size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) {
-      put<double>(points.bytes, p.positions[i][k]);
-      put<float>(velocity.bytes, float(p.velocities[i][k]));
+      arrays.points.put<double>(p.positions[i][k]);
+      velocity.put<float>(float(p.velocities[i][k]));
     }
-    put<float>(density.bytes, float(p.densities[i]));
-    put<float>(pressure.bytes, float(p.pressures[i]));
-    put<uint8_t>(kind.bytes, uint8_t(p.kinds[i]));
+    density.put<float>(float(p.densities[i]));
+    pressure.put<float>(float(p.pressures[i]));
+    kind.put<uint8_t>(uint8_t(p.kinds[i]));
     if (temperatures) {
-      put<float>(temperature.bytes, float(i < temperatures->size() ? (*temperatures)[i] : 0.0));
-      put<uint8_t>(phase.bytes, p.phases[i]);
+      temperature.put<float>(float(i < temperatures->size() ? (*temperatures)[i] : 0.0));
+      phase.put<uint8_t>(p.phases[i]);
     }
-    if (docked_points) put<uint32_t>(docked.bytes, i < docked_points->size() ? (*docked_points)[i] : 0u);
-    put<int64_t>(connectivity.bytes, int64_t(i));
-    put<int64_t>(offsets.bytes, int64_t(i + 1));
+    if (docked_points) docked.put<uint32_t>(i < docked_points->size() ? (*docked_points)[i] : 0u);
+    arrays.connectivity.put<int64_t>(int64_t(i));
+    arrays.offsets.put<int64_t>(int64_t(i + 1));
   }
-  std::vector<VtpArray> arrays = {points, connectivity, offsets, velocity, density, pressure, kind};
+  arrays.point_data = {std::move(velocity), std::move(density), std::move(pressure), std::move(kind)};
   if (temperatures) {
-    arrays.push_back(temperature);
-    arrays.push_back(phase);
+    arrays.point_data.push_back(std::move(temperature));
+    arrays.point_data.push_back(std::move(phase));
   }
-  if (docked_points) arrays.push_back(docked);
+  if (docked_points) arrays.point_data.push_back(std::move(docked));
   return arrays;
-}
-
-/// The values of an array as ascii text (floats with round-trip precision).
-std::string asciiValues(const VtpArray& a) {
-  std::string out;
-  char buf[32];
-  const size_t size = vtkTypeSize(a.type), n = a.count();
-  const std::string type = a.type;
-  for (size_t i = 0; i < n; ++i) {
-    const uint8_t* v = a.bytes.data() + i * size;
-    if (type == "Float64") {
-      double d;
-      std::memcpy(&d, v, 8);
-      std::snprintf(buf, sizeof(buf), "%.17g", d);
-    } else if (type == "Float32") {
-      float f;
-      std::memcpy(&f, v, 4);
-      std::snprintf(buf, sizeof(buf), "%.9g", double(f));
-    } else if (type == "UInt32") {
-      uint32_t k;
-      std::memcpy(&k, v, 4);
-      std::snprintf(buf, sizeof(buf), "%u", unsigned(k));
-    } else if (type == "Int64") {
-      int64_t k;
-      std::memcpy(&k, v, 8);
-      std::snprintf(buf, sizeof(buf), "%lld", (long long)k);
-    } else {
-      std::snprintf(buf, sizeof(buf), "%u", unsigned(*v));
-    }
-    out += buf;
-    out += (i + 1) % 12 == 0 || i + 1 == n ? '\n' : ' ';
-  }
-  return out;
 }
 
 }  // namespace
@@ -157,54 +96,19 @@ void writeSphPly(const std::string& path, const SphParticles& particles,
 
 void writeSphVtp(const std::string& path, const SphParticles& particles, VtpEncoding encoding,
                  const std::vector<double>* temperatures, const std::vector<uint32_t>* docked_points) {
-  const std::vector<VtpArray> arrays = vtpArrays(particles, temperatures, docked_points);
-  const bool appended = encoding == VtpEncoding::kAppendedRaw;
-  const size_t n = particles.size();
-  std::ostringstream xml;
-  uint64_t offset = 0;
-  auto array = [&](const VtpArray& a) {
-    xml << "        <DataArray type=\"" << a.type << "\" Name=\"" << a.name << "\"";
-    if (a.components > 1) xml << " NumberOfComponents=\"" << a.components << "\"";
-    if (appended) {
-      xml << " format=\"appended\" offset=\"" << offset << "\"/>\n";
-      offset += sizeof(uint64_t) + a.bytes.size();
-    } else {
-      xml << " format=\"ascii\">\n" << asciiValues(a) << "        </DataArray>\n";
-    }
-  };
-  xml << "<?xml version=\"1.0\"?>\n"
-      << "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\""
-      << (hostIsLittleEndian() ? "LittleEndian" : "BigEndian") << "\" header_type=\"UInt64\">\n"
-      << "  <PolyData>\n"
-      << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfVerts=\"" << n
-      << "\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n"
-      << "      <PointData Scalars=\"density\" Vectors=\"velocity\">\n";
-  // Written (and appended) in the order point data, points, connectivity, offsets.
-  std::vector<size_t> order;
-  for (size_t k = 3; k < arrays.size(); ++k) order.push_back(k);
-  order.insert(order.end(), {0, 1, 2});
-  for (size_t k = 3; k < arrays.size(); ++k) array(arrays[k]);
-  xml << "      </PointData>\n      <Points>\n";
-  array(arrays[0]);
-  xml << "      </Points>\n      <Verts>\n";
-  array(arrays[1]);
-  array(arrays[2]);
-  xml << "      </Verts>\n    </Piece>\n  </PolyData>\n";
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw IoError(path, "cannot open for writing");
-  const std::string text = xml.str();
-  out.write(text.data(), std::streamsize(text.size()));
-  if (appended) {
-    out << "  <AppendedData encoding=\"raw\">\n   _";
-    for (const size_t k : order) {  // the order of the offsets above
-      const uint64_t bytes = arrays[k].bytes.size();
-      out.write(reinterpret_cast<const char*>(&bytes), sizeof(bytes));
-      out.write(reinterpret_cast<const char*>(arrays[k].bytes.data()), std::streamsize(bytes));
-    }
-    out << "\n  </AppendedData>\n";
-  }
-  out << "</VTKFile>\n";
-  if (!out) throw IoError(path, "write failed");
+  const VtpArrays arrays = vtpArrays(particles, temperatures, docked_points);
+  const std::string n = std::to_string(particles.size());
+  VtkXmlSection point_data{"PointData", {{"Scalars", "density"}, {"Vectors", "velocity"}}, {}};
+  for (const VtkXmlArray& a : arrays.point_data) point_data.arrays.push_back(&a);
+  writeVtkXml(
+      path, "PolyData",
+      {{"NumberOfPoints", n},
+       {"NumberOfVerts", n},
+       {"NumberOfLines", "0"},
+       {"NumberOfStrips", "0"},
+       {"NumberOfPolys", "0"}},
+      {point_data, {"Points", {}, {&arrays.points}}, {"Verts", {}, {&arrays.connectivity, &arrays.offsets}}},
+      encoding == VtpEncoding::kAscii ? VtkXmlEncoding::kAscii : VtkXmlEncoding::kAppendedRaw);
 }
 
 }  // namespace rc
