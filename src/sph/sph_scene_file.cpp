@@ -1,9 +1,11 @@
 #include "sph/sph_scene_file.h"
+#include "io/cloud_io.h"
 #include "io/yaml_reader.h"
 
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -97,6 +99,7 @@ class SceneReader {
     readFrames(src_.require(root, "frames", "scene"));
     if (root["output"]) readOutput(root["output"]);
     if (enabled("surface")) finishSurface();
+    if (enabled("skin")) finishSkins();
   }
 
  private:
@@ -114,9 +117,10 @@ class SceneReader {
       scene_.enabled_physics.push_back(what);
       enable_nodes_[what] = node[i];
     }
-    if (enabled("collisions") && !enabled("elasticity"))
-      src_.fail(enable_nodes_.at("collisions"),
-                "enable: 'collisions' needs 'elasticity' in the 'enable' list");
+    for (const char* physics : {"collisions", "skin"})
+      if (enabled(physics) && !enabled("elasticity"))
+        src_.fail(enable_nodes_.at(physics),
+                  std::string("enable: '") + physics + "' needs 'elasticity' in the 'enable' list");
     if (enabled("phase_transition"))
       for (const char* needed : {"temperature", "elasticity"})
         if (!enabled(needed))
@@ -435,7 +439,7 @@ class SceneReader {
                                   "velocity",       "phase",
                                   "rotation",       "temperature",
                                   "fracture",       "plasticity",
-                                  "anchor"};
+                                  "anchor",         "skin"};
     if (shape == "box") {
       keys.insert({"lo", "hi"});
     } else if (shape == "sphere") {
@@ -524,6 +528,102 @@ class SceneReader {
     }
     scene_.solids.push_back(solid);
     readBlockTemperature(node, where, solid.first);
+    if (node["skin"]) readSkin(node["skin"], where + ".skin", shape, center, half);
+  }
+
+  /// Solid key `skin` (8.2.7): {mesh: file | resolution: n, transforms, orphans, every, obj, ply}. The rest
+  /// mesh is read or made here; it is bound once all particles exist (finishSkins).
+  void readSkin(const YAML::Node& node, const std::string& where, const std::string& shape,
+                const Vec3& center, const Vec3& half) {
+    if (!enabled("skin")) src_.fail(node, where + ": needs 'skin' in the scene's 'enable' list");
+    src_.allowKeys(node, {"mesh", "resolution", "transforms", "orphans", "every", "obj", "ply"}, where);
+    const YAML::Node mesh = node["mesh"], resolution = node["resolution"];
+    if (mesh && resolution) src_.fail(resolution, where + ": give mesh or resolution, not both");
+    if (!mesh && !resolution)
+      src_.fail(node, where + ": give 'mesh' (an OBJ, PLY or OFF file) or 'resolution' (the solid's shape)");
+    const SphSceneSolid& solid = scene_.solids.back();
+    PendingSkin pending;
+    pending.node = mesh ? mesh : resolution;
+    pending.where = where;
+    SphSceneSkin& skin = pending.skin;
+    skin.solid = scene_.solids.size() - 1;
+    if (mesh) {
+      const std::string file = src_.string(mesh, where + ".mesh");
+      std::filesystem::path path(file);
+      if (path.is_relative()) path = std::filesystem::path(src_.sourceName()).parent_path() / path;
+      std::string ext = path.extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(),
+                     [](unsigned char c) { return char(std::tolower(c)); });
+      if (ext != ".obj" && ext != ".ply" && ext != ".off")
+        src_.fail(mesh, where + ".mesh: '" + file + "' is not an OBJ, PLY or OFF file");
+      try {
+        skin.rest = readMesh(path.string());
+      } catch (const std::exception& e) {
+        src_.fail(mesh, where + ".mesh: " + e.what());
+      }
+      if (skin.rest.triangles.empty())
+        src_.fail(mesh, where + ".mesh: '" + path.string() + "' has no triangles");
+    } else {
+      const int n = int(src_.integer(resolution, where + ".resolution", 1, 1000));
+      if (dimension_ != 3)
+        src_.fail(resolution, where + ".resolution: the solid's own surface needs a 3D scene (a 2D solid " +
+                                  "has no surface mesh; give a 'mesh' instead)");
+      skin.rest = shape == "box" ? sphBoxSkinMesh(half, n) : sphSphereSkinMesh(half.x(), n);
+      for (Vec3& x : skin.rest.vertices.positions) x = center + solid.orientation * x;
+      for (Vec3& normal : skin.rest.vertices.normals) normal = solid.orientation * normal;
+    }
+    if (const YAML::Node t = node["transforms"]) {
+      const std::string s = src_.string(t, where + ".transforms");
+      if (s == "lattice")
+        skin.lattice_transforms = true;
+      else if (s != "fitted")
+        src_.fail(t, where + ".transforms: unknown choice '" + s + "' (fitted, lattice)");
+    }
+    if (const YAML::Node o = node["orphans"]) {
+      const std::string s = src_.string(o, where + ".orphans");
+      if (s == "nearest")
+        pending.orphans = SphSkinOrphanPolicy::kNearestParticle;
+      else if (s != "error")
+        src_.fail(o, where + ".orphans: unknown choice '" + s + "' (error, nearest)");
+    }
+    if (node["every"]) {
+      skin.every = int(src_.integer(node["every"], where + ".every", 1, 100000000));
+      pending.every_given = true;
+    }
+    if (node["obj"]) skin.obj = src_.boolean(node["obj"], where + ".obj");
+    if (node["ply"]) skin.ply = src_.boolean(node["ply"], where + ".ply");
+    if (!skin.obj && !skin.ply)
+      src_.fail(node["obj"] ? node["obj"] : node["ply"],
+                where + ": obj and ply are both false (nothing to write)");
+    pending_skins_.push_back(std::move(pending));
+  }
+
+  /// `enable: [skin]`: binds every skin to the rest particles of its solid (8.38); the output follows the
+  /// particle output's every unless the skin gives its own.
+  void finishSkins() {
+    if (pending_skins_.empty())
+      src_.fail(enable_nodes_.at("skin"), "enable: 'skin' but no solid has a 'skin' key");
+    for (PendingSkin& pending : pending_skins_) {
+      SphSceneSkin& skin = pending.skin;
+      const SphSceneSolid& solid = scene_.solids[skin.solid];
+      if (!pending.every_given && scene_.output.every > 0) skin.every = scene_.output.every;
+      SphSkinRest rest;
+      rest.positions = scene_.particles.positions;
+      rest.solid.resize(solid.count);
+      for (size_t i = 0; i < solid.count; ++i) rest.solid[i] = uint32_t(solid.first + i);
+      rest.uniform_transform = solid.orientation;  // A_i^0 of SphElasticSolid::latticeTransforms()
+      SphSkinConfig config;
+      config.support_radius = scene_.config.smoothing_length;
+      config.orphans = pending.orphans;
+      config.dimension = dimension_;
+      try {
+        skin.skin = SphSkin(rest, skin.rest.vertices.positions, config);
+      } catch (const std::invalid_argument& e) {
+        src_.fail(pending.node, pending.where + ": " + e.what());
+      }
+      scene_.skins.push_back(std::move(skin));
+    }
+    pending_skins_.clear();
   }
 
   void readSolver(const YAML::Node& node) {
@@ -810,8 +910,18 @@ class SceneReader {
     out.config.validate();
   }
 
+  /// A solid's skin until all particles exist; `node`: where binding errors point.
+  struct PendingSkin {
+    SphSceneSkin skin;
+    YAML::Node node;
+    std::string where;
+    SphSkinOrphanPolicy orphans = SphSkinOrphanPolicy::kThrow;
+    bool every_given = false;
+  };
+
   const Source& src_;
   SphScene& scene_;
+  std::vector<PendingSkin> pending_skins_;
   std::map<std::string, YAML::Node> enable_nodes_;
   std::vector<YAML::Node> held_nodes_;
   std::set<uint8_t> phases_;
@@ -827,9 +937,9 @@ class SceneReader {
 
 const std::vector<std::string>& sphOptionalPhysics() {
   // elasticity (8.2), phase_transition (8.2.4), temperature (heat conduction driving 8.2.4), surface (8.2.7).
-  // collisions: the penalty (8.37) between solids (8.2.6).
-  static const std::vector<std::string> names = {"elasticity", "collisions", "phase_transition",
-                                                 "temperature", "surface"};
+  // collisions: the penalty (8.37) between solids (8.2.6). skin: surfaces bound to solids (8.38).
+  static const std::vector<std::string> names = {"elasticity",  "collisions", "phase_transition",
+                                                 "temperature", "surface",    "skin"};
   return names;
 }
 

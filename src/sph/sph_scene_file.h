@@ -7,10 +7,12 @@
 #include <string>
 #include <vector>
 
+#include "core/triangle_mesh.h"
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_object_penalty.h"
 #include "sph/sph_particles.h"
+#include "sph/sph_skinning.h"
 #include "sph/sph_surface.h"
 #include "sph/sph_thermal.h"
 
@@ -89,6 +91,20 @@ struct SphSceneCollisions {
   SphObjectPenaltyConfig config;
 };
 
+/// A surface skinned to a solid (`enable: [skin]`, solid key `skin`; thesis 8.2.7, (8.38)): the rest mesh in
+/// world coordinates (a mesh file, or the solid's own box / sphere at `resolution`), bound to the solid's
+/// rest particles with support h (the solver's smoothing length). Written as <name>_skin<k>_NNNN.obj / .ply
+/// (k: the solid's index) at frame 0 and every `every`-th frame, deformed by (8.38) with the transforms
+/// fitted to the particles or the solid's lattice transforms A_i (8.23).
+struct SphSceneSkin {
+  size_t solid = 0;  ///< index into SphScene::solids
+  TriangleMesh rest;
+  SphSkin skin;
+  bool lattice_transforms = false;  ///< transforms: lattice | fitted (default)
+  int every = 1;                    ///< default: the particle output's every (else 1)
+  bool obj = true, ply = false;
+};
+
 /// A loaded scene, ready for the solver: config is validated, particles are filled, planes collected.
 struct SphScene {
   std::string name;  ///< `name:` or the file name without extension
@@ -104,12 +120,13 @@ struct SphScene {
   std::vector<SphSceneSolid> solids;
   SphSceneCollisions collisions;
   SphSceneThermal thermal;
+  std::vector<SphSceneSkin> skins;  ///< in solid order, at most one per solid
 };
 
 /// Optional physics a scene may list under `enable:`: elasticity (key solids), collisions (key collisions;
-/// needs elasticity and two or more solids), surface (key output.surface), temperature (key temperature)
-/// and phase_transition (key phase_transition; needs temperature and elasticity). An unknown name is
-/// rejected. The keys of a physics not enabled are rejected.
+/// needs elasticity and two or more solids), surface (key output.surface), temperature (key temperature),
+/// phase_transition (key phase_transition; needs temperature and elasticity) and skin (key skin of a solid;
+/// needs elasticity). An unknown name is rejected. The keys of a physics not enabled are rejected.
 const std::vector<std::string>& sphOptionalPhysics();
 
 /// Reads a scene file. Throws SphSceneError naming the file, line and problem (syntax, unknown key, wrong

@@ -15,6 +15,7 @@
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_object_penalty.h"
 #include "sph/sph_output.h"
+#include "sph/sph_skinning.h"
 #include "sph/sph_surface.h"
 
 namespace rc {
@@ -52,11 +53,14 @@ class FrameWriter {
       : scene_(scene), dir_(out_dir), stats_(*stats), thermal_(thermal) {
     active_ = !out_dir.empty() && scene.output.enabled();
     surface_ = !out_dir.empty() && scene.surface.enabled && (scene.surface.obj || scene.surface.ply);
-    if (active_ || surface_) std::filesystem::create_directories(dir_);
+    if (!out_dir.empty())
+      for (const SphSceneSkin& skin : scene.skins) skins_.push_back(skin.skin);
+    if (active_ || surface_ || !skins_.empty()) std::filesystem::create_directories(dir_);
   }
 
   void maybeWrite(int frame, const SphFluidSolver& solver) {
     maybeWriteSurface(frame, solver);
+    maybeWriteSkins(frame, solver);
     if (!active_ || frame % scene_.output.every != 0) return;
     const auto t0 = std::chrono::steady_clock::now();
     char stem[64];
@@ -117,10 +121,57 @@ class FrameWriter {
     stats_.output_seconds += secondsSince(t0);
   }
 
+  /// Skinned surfaces of the frame (8.38): <name>_skin<k>_NNNN.obj / .ply for solid k.
+  void maybeWriteSkins(int frame, const SphFluidSolver& solver) {
+    for (size_t s = 0; s < skins_.size(); ++s) {
+      const SphSceneSkin& entry = scene_.skins[s];
+      if (frame % entry.every != 0) continue;
+      const auto t0 = std::chrono::steady_clock::now();
+      SphSkin& skin = skins_[s];
+      const std::vector<Vec3>& positions = solver.particles().positions;
+      if (entry.lattice_transforms)
+        skin.deform(positions, latticeTransforms(solver, scene_.solids[entry.solid]));
+      else
+        skin.deform(positions);
+      skin.deformMesh(entry.rest, skin_mesh_);
+      char stem[64];
+      std::snprintf(stem, sizeof(stem), "_skin%zu_%04d", entry.solid, frame);
+      const std::string base = scene_.name + stem;
+      if (entry.obj) {
+        const std::string path = (dir_ / (base + ".obj")).string();
+        writeObjMesh(path, skin_mesh_);
+        stats_.files.push_back(path);
+      }
+      if (entry.ply) {
+        const std::string path = (dir_ / (base + ".ply")).string();
+        writePlyMesh(path, skin_mesh_);
+        stats_.files.push_back(path);
+      }
+      stats_.output_seconds += secondsSince(t0);
+    }
+  }
+
+  /// The lattice transforms A_i of the solver's SphElasticSolid of `solid`; before its first evaluation
+  /// the rest transforms (its orientation), which leave the skin at rest.
+  const std::vector<Eigen::Matrix3d>& latticeTransforms(const SphFluidSolver& solver,
+                                                        const SphSceneSolid& solid) {
+    const size_t n = solver.particles().size();
+    for (const auto& term : solver.forceTerms()) {
+      const auto* elastic = dynamic_cast<const SphElasticSolid*>(term.get());
+      if (elastic && elastic->phase() == solid.phase && elastic->latticeTransforms().size() == n)
+        return elastic->latticeTransforms();
+    }
+    rest_transforms_.assign(n, solid.orientation);
+    return rest_transforms_;
+  }
+
   const SphScene& scene_;
   std::filesystem::path dir_;
   SphRunStats& stats_;
   bool active_ = false, surface_ = false;
+  std::vector<SphSkin> skins_;  // copies of the scene's bound skins (deform() keeps state)
+  TriangleMesh skin_mesh_;
+  std::vector<Eigen::Matrix3d> rest_transforms_;
   const SphThermalModel* thermal_;
   std::vector<double> temperatures_;
   std::vector<uint32_t> docked_;

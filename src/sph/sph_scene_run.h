@@ -72,7 +72,8 @@ struct SphRunStats {
   double heat_start = 0.0, heat_end = 0.0;
   double min_temperature = 0.0, max_temperature = 0.0;
   uint64_t melted = 0, frozen = 0;
-  std::vector<std::string> files;  ///< written particle files (and the .pvd) and surface meshes
+  /// Written particle files (and the .pvd), surface meshes and skins (<name>_skin<k>_NNNN.obj / .ply).
+  std::vector<std::string> files;
 };
 
 /// A solver for the scene (its config, particles and planes) with an SphElasticSolid force term per solid
@@ -90,10 +91,11 @@ bool sphDockedPoints(const SphFluidSolver& solver, std::vector<uint32_t>& docked
 std::shared_ptr<SphThermalModel> makeSphThermal(const SphScene& scene, SphFluidSolver& solver);
 
 /// Runs scene.frame_count frames of scene.frame_time on `solver` (made by makeSphSolver, possibly with
-/// changed threads). Frames end exactly on multiples of frame_time, like SphFluidSolver::advance(frame_time)
-/// per frame, and give the same state bitwise. An unstable step stops the run (it is reported in
-/// SphRunStats::instability, nothing is thrown); I/O errors throw. With temperature, the thermal model
-/// steps after every solver step with that step's dt, and particle files get temperature and phase.
+/// changed threads). Outputs (options.out_dir): particle files, surface meshes and the solids' skins. Frames
+/// end exactly on multiples of frame_time, like SphFluidSolver::advance(frame_time) per frame, and give the
+/// same state bitwise. An unstable step stops the run (it is reported in SphRunStats::instability, nothing is
+/// thrown); I/O errors throw. With temperature, the thermal model steps after every solver step with that
+/// step's dt, and particle files get temperature and phase.
 SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options = {});
 
 /// The statistics as one line of JSON (no newline); non-finite numbers become null. Scenes with solids

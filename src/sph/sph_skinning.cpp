@@ -1,9 +1,13 @@
 #include "sph/sph_skinning.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
+#include <map>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 #include <Eigen/Eigenvalues>
 
@@ -308,6 +312,112 @@ void SphSkin::deformSurfels(const SurfelCloud& rest, SurfelCloud& out) const {
 void SphSkin::deformMesh(const TriangleMesh& rest, TriangleMesh& out) const {
   deformSurfels(rest.vertices, out.vertices);
   out.triangles = rest.triangles;
+}
+
+namespace {
+
+void checkResolution(int resolution, const char* what) {
+  if (resolution < 1 || resolution > 1000)
+    throw std::invalid_argument(std::string(what) + ": resolution must be in [1, 1000], got " +
+                                std::to_string(resolution));
+}
+
+}  // namespace
+
+TriangleMesh sphBoxSkinMesh(const Vec3& half_extent, int resolution) {
+  checkResolution(resolution, "sphBoxSkinMesh");
+  if (!(half_extent.minCoeff() > 0.0) || !finite(half_extent))
+    throw std::invalid_argument("sphBoxSkinMesh: half extents must be finite and > 0");
+  const int64_t n = resolution, side = n + 1;
+  TriangleMesh mesh;
+  std::unordered_map<int64_t, uint32_t> index_of;  // grid point (a, b, c) in [0, n]^3 on the boundary
+  auto vertex = [&](std::array<int64_t, 3> g) {
+    const int64_t key = (g[0] * side + g[1]) * side + g[2];
+    const auto found = index_of.find(key);
+    if (found != index_of.end()) return found->second;
+    Vec3 x;
+    for (int k = 0; k < 3; ++k)  // exact at the faces: -h + 2h = h
+      x[k] = g[k] == n ? half_extent[k] : -half_extent[k] + 2.0 * half_extent[k] * double(g[k]) / double(n);
+    const uint32_t i = static_cast<uint32_t>(mesh.vertices.positions.size());
+    mesh.vertices.positions.push_back(x);
+    index_of.emplace(key, i);
+    return i;
+  };
+  for (int k = 0; k < 3; ++k) {
+    const int u = (k + 1) % 3, v = (k + 2) % 3;  // e_u x e_v = e_k
+    for (const int64_t level : {int64_t(0), n}) {
+      for (int64_t a = 0; a < n; ++a)
+        for (int64_t b = 0; b < n; ++b) {
+          std::array<uint32_t, 4> q;
+          const int64_t corner[4][2] = {{a, b}, {a + 1, b}, {a + 1, b + 1}, {a, b + 1}};
+          for (int c = 0; c < 4; ++c) {
+            std::array<int64_t, 3> g;
+            g[k] = level;
+            g[u] = corner[c][0];
+            g[v] = corner[c][1];
+            q[c] = vertex(g);
+          }
+          if (level == n) {  // counter-clockwise seen from +e_k
+            mesh.triangles.push_back({q[0], q[1], q[2]});
+            mesh.triangles.push_back({q[0], q[2], q[3]});
+          } else {
+            mesh.triangles.push_back({q[0], q[2], q[1]});
+            mesh.triangles.push_back({q[0], q[3], q[2]});
+          }
+        }
+    }
+  }
+  return mesh;
+}
+
+TriangleMesh sphSphereSkinMesh(double radius, int resolution) {
+  checkResolution(resolution, "sphSphereSkinMesh");
+  if (!(std::isfinite(radius) && radius > 0.0))
+    throw std::invalid_argument("sphSphereSkinMesh: radius must be finite and > 0, got " +
+                                std::to_string(radius));
+  const double t = 0.5 * (1.0 + std::sqrt(5.0));
+  const Vec3 corners[12] = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                            {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  const int faces[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                            {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                            {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                            {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  const int n = resolution;
+  TriangleMesh mesh;
+  // A grid point is sum_c w_c corner_c / n; keyed by its (corner, weight) pairs in corner order, so points
+  // on shared edges and corners are one vertex with bitwise the same position.
+  std::map<std::array<int, 6>, uint32_t> index_of;
+  auto vertex = [&](const int face[3], int i, int j) {
+    std::array<std::pair<int, int>, 3> terms = {{{face[0], n - i - j}, {face[1], i}, {face[2], j}}};
+    std::sort(terms.begin(), terms.end());
+    std::array<int, 6> key;
+    key.fill(-1);
+    int used = 0;
+    for (const auto& term : terms)
+      if (term.second > 0) {
+        key[2 * used] = term.first;
+        key[2 * used + 1] = term.second;
+        ++used;
+      }
+    const auto found = index_of.find(key);
+    if (found != index_of.end()) return found->second;
+    Vec3 x = Vec3::Zero();
+    for (int c = 0; c < used; ++c) x += double(key[2 * c + 1]) * corners[key[2 * c]];
+    const Vec3 normal = x.normalized();
+    const uint32_t index = static_cast<uint32_t>(mesh.vertices.positions.size());
+    mesh.vertices.positions.push_back(radius * normal);
+    mesh.vertices.normals.push_back(normal);
+    index_of.emplace(key, index);
+    return index;
+  };
+  for (const auto& face : faces)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; i + j < n; ++j) {
+        const uint32_t v00 = vertex(face, i, j), v10 = vertex(face, i + 1, j), v01 = vertex(face, i, j + 1);
+        mesh.triangles.push_back({v00, v10, v01});
+        if (i + j + 2 <= n) mesh.triangles.push_back({v10, vertex(face, i + 1, j + 1), v01});
+      }
+  return mesh;
 }
 
 }  // namespace rc

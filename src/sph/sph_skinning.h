@@ -146,4 +146,14 @@ class SphSkin {
   std::vector<Eigen::Matrix3d> jacobians_;
 };
 
+/// Skin meshes of the solid shapes of scene files (`skin: {resolution: n}`), closed, outward oriented and
+/// centred at the origin (rotate and move them with the solid). Throws std::invalid_argument for a
+/// resolution outside [1, 1000] or a non-positive size.
+/// Box [-half_extent, half_extent]: each face an n x n grid of quads split into two triangles; vertices are
+/// shared between faces: 6 n^2 + 2 vertices, 12 n^2 triangles.
+TriangleMesh sphBoxSkinMesh(const Vec3& half_extent, int resolution);
+/// Sphere of `radius`: the icosahedron with every face split into n x n triangles, projected onto the
+/// sphere (geodesic frequency n): 10 n^2 + 2 vertices, 20 n^2 triangles, unit outward vertex normals.
+TriangleMesh sphSphereSkinMesh(double radius, int resolution);
+
 }  // namespace rc

@@ -3,8 +3,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
 #include <string>
+#include <utility>
 
+#include "core/triangle_mesh.h"
 #include "sph/sph_scene_file.h"
 
 namespace rc {
@@ -30,6 +34,19 @@ inline void expectErrorAt(const std::string& yaml, int line, const std::string& 
   const std::string message = parseError(yaml);
   EXPECT_EQ(message.rfind("bad.yaml:" + std::to_string(line) + ":", 0), 0u) << message;
   EXPECT_NE(message.find(words), std::string::npos) << message;
+}
+
+/// Edges used by other than exactly two triangles (0 for a closed manifold mesh).
+inline size_t openEdges(const TriangleMesh& mesh) {
+  std::map<std::pair<uint32_t, uint32_t>, int> edges;
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = t[k], b = t[(k + 1) % 3];
+      ++edges[{std::min(a, b), std::max(a, b)}];
+    }
+  size_t open = 0;
+  for (const auto& e : edges) open += e.second != 2;
+  return open;
 }
 
 }  // namespace rc

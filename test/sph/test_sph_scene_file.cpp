@@ -656,19 +656,21 @@ TEST(SphSceneFile, DiceAreNineSeparateStiffSolidsAndWriteSurfaces) {
   EXPECT_FALSE(fs::exists(dir / "dice_3d_surface_0001.obj"));
   EXPECT_TRUE(fs::exists(dir / "dice_3d_surface_0002.obj"));
   EXPECT_TRUE(fs::exists(dir / "dice_3d_0001.vtp"));
-  EXPECT_EQ(stats.files.size(), 3u + 1u + 2u);  // 3 vtp, the pvd, 2 surfaces
+  // Each die's cube skin (8.38), 4 x 4 quads per face, every second frame like the surface.
+  ASSERT_EQ(scene.skins.size(), 9u);
+  for (size_t k = 0; k < 9; ++k) {
+    EXPECT_EQ(scene.skins[k].solid, k);
+    EXPECT_EQ(scene.skins[k].every, 2);
+    EXPECT_EQ(scene.skins[k].rest.vertices.size(), 6u * 16u + 2u);
+    EXPECT_EQ(scene.skins[k].skin.orphanCount(), 0u);
+    EXPECT_TRUE(fs::exists(dir / ("dice_3d_skin" + std::to_string(k) + "_0002.obj")));
+  }
+  EXPECT_FALSE(fs::exists(dir / "dice_3d_skin0_0001.obj"));
+  EXPECT_EQ(stats.files.size(), 3u + 1u + 2u + 2u * 9u);  // 3 vtp, the pvd, 2 surfaces, 2 x 9 skins
   // The surface is closed (every edge in two triangles) and encloses the dice.
   const TriangleMesh mesh = readObjMesh((dir / "dice_3d_surface_0002.obj").string());
   ASSERT_GT(mesh.triangles.size(), 1000u);
-  std::map<std::pair<uint32_t, uint32_t>, int> edges;
-  for (const Triangle& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = t[k], b = t[(k + 1) % 3];
-      ++edges[{std::min(a, b), std::max(a, b)}];
-    }
-  size_t open = 0;
-  for (const auto& e : edges) open += e.second != 2;
-  EXPECT_EQ(open, 0u);
+  EXPECT_EQ(openEdges(mesh), 0u);
   double lowest = 1e9;
   for (const Vec3& x : mesh.vertices.positions) lowest = std::min(lowest, x.y());
   EXPECT_LT(lowest, 0.11);
