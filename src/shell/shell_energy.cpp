@@ -64,27 +64,38 @@ double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slo
   thread_local std::vector<std::array<Vec3, 3>> grad_len, grad_angle;
   thread_local std::vector<Vec3> grad_normal;
   const size_t m = f1 - f0;
+  if (m == 0) {  // cut off by cracks: no fibers, no energy
+    if (membrane) *membrane = 0.0;
+    if (bending) *bending = 0.0;
+    if (slots)
+      for (size_t q = 0; q <= k; ++q) slots[q].setZero();
+    return 0.0;
+  }
   len.resize(m), angle.resize(m), dkappa.resize(m), grad_len.resize(m), grad_angle.resize(m),
       grad_normal.resize(m);
 
-  double s = 0.0, s0 = 0.0, fiber_stretch = 0.0, mean_dk = 0.0, sq_dk = 0.0;
+  // Per-fiber factors (7.3.4): the fiber term of fiber k is scaled by stretch_scale, the area term by their
+  // weighted mean; bending uses g_k = sqrt(bend_scale) d_k in place of d_k (stays >= 0 by Cauchy-Schwarz).
+  double s = 0.0, s0 = 0.0, fiber_stretch = 0.0, mean_dk = 0.0, sq_dk = 0.0, mean_scale = 0.0;
   for (size_t q = 0; q < m; ++q) {
     const Fiber& f = fibers_->fibers[f0 + q];
     const Vec3 &x1 = x[f.end1], &xc = x[i], &x2 = x[f.end2];
     len[q] = fiberArcLength(x1, xc, x2, slots ? &grad_len[q] : nullptr);
     angle[q] = fiberNormalAngle(x1, xc, x2, normal, slots ? &grad_angle[q] : nullptr,
                                 slots ? &grad_normal[q] : nullptr);
-    dkappa[q] = angle[q] / (beta * len[q]) - f.rest_angle / (beta * f.rest_length);  // (7.9), calibrated
+    dkappa[q] = std::sqrt(f.bend_scale) *
+                (angle[q] / (beta * len[q]) - f.rest_angle / (beta * f.rest_length));  // (7.9), calibrated
     const double l0sq = f.rest_length * f.rest_length;
     s += f.weight * len[q] * len[q];
     s0 += f.weight * l0sq;
     const double e = len[q] * len[q] / l0sq - 1.0;  // A_k / A_k^0 - 1 (7.5)
-    fiber_stretch += f.weight * e * e;
+    fiber_stretch += f.weight * f.stretch_scale * e * e;
+    mean_scale += f.weight * f.stretch_scale;
     mean_dk += f.weight * dkappa[q];
     sq_dk += f.weight * dkappa[q] * dkappa[q];
   }
   const double r = s / s0 - 1.0;                                                    // A_i / A_i^0 - 1 (7.6)
-  const double e_mem = 0.5 * area * ks * (r * r + fiber_stretch);                   // (7.7)
+  const double e_mem = 0.5 * area * ks * (mean_scale * r * r + fiber_stretch);      // (7.7)
   const double e_bend = 0.5 * area * kb * (4.0 * sq_dk - 2.0 * mean_dk * mean_dk);  // (7.3), (7.11)
   if (membrane) *membrane = e_mem;
   if (bending) *bending = e_bend;
@@ -95,11 +106,12 @@ double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slo
   for (size_t q = 0; q < m; ++q) {  // (7.16), (7.17)
     const Fiber& f = fibers_->fibers[f0 + q];
     const double l0sq = f.rest_length * f.rest_length;
-    const double de_dkappa = area * kb * f.weight * (4.0 * dkappa[q] - 2.0 * mean_dk);
+    const double de_dkappa =
+        area * kb * f.weight * (4.0 * dkappa[q] - 2.0 * mean_dk) * std::sqrt(f.bend_scale);
     const double de_dtheta = de_dkappa / (beta * len[q]);
-    const double de_dl =
-        area * ks * f.weight * len[q] * 2.0 * (r / s0 + (len[q] * len[q] / l0sq - 1.0) / l0sq) -
-        de_dtheta * angle[q] / len[q];
+    const double de_dl = area * ks * f.weight * len[q] * 2.0 *
+                             (mean_scale * r / s0 + f.stretch_scale * (len[q] * len[q] / l0sq - 1.0) / l0sq) -
+                         de_dtheta * angle[q] / len[q];
     slots[1 + f.local1] += de_dl * grad_len[q][0] + de_dtheta * grad_angle[q][0];
     slots[0] += de_dl * grad_len[q][1] + de_dtheta * grad_angle[q][1];
     slots[1 + f.local2] += de_dl * grad_len[q][2] + de_dtheta * grad_angle[q][2];
@@ -197,10 +209,13 @@ ShellStableStep ShellEnergy::stableStep(const std::vector<Vec3>& x) const {
     double* rm = row_mem.data() + slot_offsets_[i];
     double* rb = row_bend.data() + slot_offsets_[i];
     std::vector<Vec3> g_area(k + 1, Vec3::Zero()), g(k + 1);
-    double s0 = 0.0;
+    double s0 = 0.0, mean_scale = 0.0;
     for (size_t q = fibers_->node_offsets[i]; q < fibers_->node_offsets[i + 1]; ++q) {
-      s0 += fibers_->fibers[q].weight * fibers_->fibers[q].rest_length * fibers_->fibers[q].rest_length;
+      const Fiber& f = fibers_->fibers[q];
+      s0 += f.weight * f.rest_length * f.rest_length;
+      mean_scale += f.weight * f.stretch_scale;
     }
+    if (s0 <= 0.0) continue;  // no fibers
     // Adds c |g_p| sum_q |g_q| to row p for a Gauss-Newton term c g g^T.
     auto add_term = [&](double c, const std::vector<Vec3>& gv, double* rows) {
       double sum = 0.0;
@@ -217,7 +232,7 @@ ShellStableStep ShellEnergy::stableStep(const std::vector<Vec3>& x) const {
       std::fill(g.begin(), g.end(), Vec3::Zero());
       g[1 + f.local1] = gl[0] * (2.0 * l / l0sq), g[0] = gl[1] * (2.0 * l / l0sq),
             g[1 + f.local2] = gl[2] * (2.0 * l / l0sq);
-      add_term(area * ks * f.weight, g, rm);
+      add_term(area * ks * f.weight * f.stretch_scale, g, rm);
       g_area[1 + f.local1] += gl[0] * (2.0 * f.weight * l / s0);
       g_area[0] += gl[1] * (2.0 * f.weight * l / s0);
       g_area[1 + f.local2] += gl[2] * (2.0 * f.weight * l / s0);
@@ -234,9 +249,9 @@ ShellStableStep ShellEnergy::stableStep(const std::vector<Vec3>& x) const {
           g[1 + pr.first] += ga, g[1 + pr.second] += gb, g[0] -= ga + gb;
         }
       }
-      add_term(4.0 * area * kb * f.weight, g, rb);
+      add_term(4.0 * area * kb * f.weight * f.bend_scale, g, rb);
     }
-    add_term(area * ks, g_area, rm);
+    add_term(area * ks * mean_scale, g_area, rm);
   }
   double lambda_mem = 0.0, lambda_bend = 0.0, lambda_sum = 0.0;
   for (size_t p = 0; p < n; ++p) {

@@ -18,6 +18,9 @@
 //    the fiber curvature changes d_k as U_b = K_b/2 [4 sum_k w_k d_k^2 - 2 (sum_k w_k d_k)^2] (exact for
 //    isotropic fiber directions; sum_k w_k d_k is the mean-curvature change of (7.9)). Unlike (7.8) it also
 //    resists twist (saddle) modes, which have no mean-curvature change.
+//  * Per-fiber stiffness factors (Fiber::stretch_scale, bend_scale; 7.3.4) scale each fiber's stretch term by
+//    s_k and the node's area term by sum_k w_k s_k; bending uses sqrt(b_k) d_k in place of d_k. Nodes left
+//    without fibers (cut off by cracks) store no energy.
 #pragma once
 
 #include <vector>

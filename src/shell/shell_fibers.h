@@ -17,6 +17,10 @@ struct Fiber {
   double rest_length = 0.0;  ///< l^0 (B.4)
   double rest_angle = 0.0;   ///< theta^0 (signed normal turning angle, see fiberNormalAngle)
   double weight = 0.0;       ///< directional weight at the centre; the weights of one node sum to 1
+  /// Per-fiber stiffness factors (7.3.4, anisotropic / inhomogeneous material): K_s and K_b of this fiber are
+  /// the material's times these (see ShellEnergy).
+  double stretch_scale = 1.0;
+  double bend_scale = 1.0;
 };
 
 /// Fibers grouped by centre node: node i owns fibers[node_offsets[i] .. node_offsets[i+1]).
@@ -32,6 +36,11 @@ struct ShellFibers {
 /// fourth angular moments of an even distribution, as far as the fibers allow; weights stay >= 0.2 of the
 /// mean). Throws std::invalid_argument if a node ends with fewer than 3 fibers.
 ShellFibers buildShellFibers(const ShellNodes& nodes);
+
+/// The fibers of node i alone, as buildShellFibers makes them (rest state from nodes.rest_positions), but
+/// without the minimum count: a node cut off by cracks may get fewer than 3 fibers (or none). Fibers whose
+/// rest length is below `min_rest_length` are left out before the weights are computed.
+std::vector<Fiber> buildNodeFibers(const ShellNodes& nodes, size_t i, double min_rest_length = 0.0);
 
 /// Natural cubic spline coefficients (B.2, B.3) of the two segments, knots at x1, x, x2 (uniform).
 struct FiberSpline {

@@ -1,5 +1,6 @@
 #include "shell/shell_solver.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -55,8 +56,33 @@ void ShellSolver::setVelocities(const std::vector<Vec3>& v) {
   resetReference();
 }
 
+void ShellSolver::setExternalForce(ShellExternalForce force) {
+  external_force_ = std::move(force);
+  resetReference();
+}
+
+void ShellSolver::refreshForces() {
+  const double before = elastic_.total();
+  elastic_ = energy_.evaluate(x_, &gradient_);
+  reference_energy_ += std::max(0.0, elastic_.total() - before);
+}
+
+void ShellSolver::setTopology(ShellNodes nodes, ShellFibers fibers) {
+  if (nodes.size() != nodes_.size() || fibers.node_offsets.size() != nodes.size() + 1) {
+    throw std::invalid_argument("ShellSolver::setTopology: node count changed or fibers do not match nodes");
+  }
+  const ShellMaterial material = energy_.material();
+  nodes_ = std::move(nodes);
+  fibers_ = std::move(fibers);
+  energy_ = ShellEnergy(nodes_, fibers_, material);
+  refreshForces();
+}
+
 void ShellSolver::resetReference() {
   elastic_ = energy_.evaluate(x_, &gradient_);
+  external_.assign(x_.size(), Vec3::Zero());
+  if (external_force_) external_force_(x_, external_);
+  external_work_ = 0.0;
   reference_energy_ = kineticEnergy() + elastic_.total();
   reference_gravity_ = gravityPotential();
 }
@@ -98,19 +124,28 @@ ShellStepReport ShellSolver::step() {
   }
   const double damping = energy_.material().damping;
   const std::vector<double>& m = energy_.masses();
+  if (external_force_) x_before_ = x_;
 #pragma omp parallel for schedule(static) if (n >= kParallelNodes)
   for (size_t i = 0; i < n; ++i) {  // (7.18): first half kick, drift
     if (pinned_[i]) continue;
-    const Vec3 a = -gradient_[i] / m[i] + options_.gravity - damping * v_[i];
+    const Vec3 a = (external_[i] - gradient_[i]) / m[i] + options_.gravity - damping * v_[i];
     v_[i] += 0.5 * dt * a;
     x_[i] += dt * v_[i];
   }
   applyGround();
   elastic_ = energy_.evaluate(x_, &gradient_);
+  if (external_force_) {  // trapezoidal work of the external force over the drift
+    external_next_.assign(n, Vec3::Zero());
+    external_force_(x_, external_next_);
+    for (size_t i = 0; i < n; ++i)
+      external_work_ += 0.5 * (external_[i] + external_next_[i]).dot(x_[i] - x_before_[i]);
+    external_.swap(external_next_);
+  }
 #pragma omp parallel for schedule(static) if (n >= kParallelNodes)
   for (size_t i = 0; i < n; ++i) {  // second half kick, damping implicit
     if (pinned_[i]) continue;
-    v_[i] = (v_[i] + 0.5 * dt * (-gradient_[i] / m[i] + options_.gravity)) / (1.0 + 0.5 * dt * damping);
+    v_[i] = (v_[i] + 0.5 * dt * ((external_[i] - gradient_[i]) / m[i] + options_.gravity)) /
+            (1.0 + 0.5 * dt * damping);
   }
   applyGround();
   ++step_count_;
@@ -124,6 +159,7 @@ ShellStepReport ShellSolver::step() {
   report.elastic = elastic_;
   report.kinetic = kineticEnergy();
   report.gravity_potential = gravityPotential();
+  report.external_work = external_work_;
   for (size_t i = 0; i < n; ++i) {
     if (!x_[i].allFinite() || !v_[i].allFinite()) {
       std::ostringstream os;
@@ -132,8 +168,8 @@ ShellStepReport ShellSolver::step() {
       throw ShellInstabilityError(index, os.str());
     }
   }
-  const double available =
-      reference_energy_ + std::max(0.0, reference_gravity_ - report.gravity_potential) + energy_floor_;
+  const double available = reference_energy_ + std::max(0.0, reference_gravity_ - report.gravity_potential) +
+                           std::max(0.0, external_work_) + energy_floor_;
   const double held = report.kinetic + elastic_.total();
   if (!std::isfinite(held) || held > options_.blowup_factor * available) {
     std::ostringstream os;

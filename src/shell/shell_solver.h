@@ -3,6 +3,7 @@
 // detection.
 #pragma once
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -38,7 +39,11 @@ struct ShellStepReport {
   ShellEnergyValue elastic;
   double kinetic = 0.0;
   double gravity_potential = 0.0;  ///< -sum m g . x
+  double external_work = 0.0;      ///< work done by the external force since the start (trapezoidal)
 };
+
+/// Extra force on the nodes at positions x (e.g. balloon pressure): fills `force` (size of x).
+using ShellExternalForce = std::function<void(const std::vector<Vec3>& x, std::vector<Vec3>& force)>;
 
 /// Thrown when a step produces non-finite values or the energy blows up; names the step and the cause.
 class ShellInstabilityError : public std::runtime_error {
@@ -64,6 +69,18 @@ class ShellSolver {
   bool pinned(size_t node) const { return pinned_.at(node) != 0; }
   void setPositions(const std::vector<Vec3>& x);
   void setVelocities(const std::vector<Vec3>& v);
+  /// Adds a position-dependent external force (evaluated after every drift); its work is counted as
+  /// available energy by the instability check. An empty function removes it.
+  void setExternalForce(ShellExternalForce force);
+
+  /// Rest state of the fibers, for material models (plasticity, 7.3.1) that change rest lengths and angles;
+  /// call refreshForces() after changing it.
+  ShellFibers& mutableFibers() { return fibers_; }
+  /// Recomputes elastic energy and forces at the current positions (after the rest state changed).
+  void refreshForces();
+  /// Replaces neighbourhoods and fibers (fracture, 7.3.2); node count, rest positions and areas must be
+  /// unchanged. Positions, velocities and pins are kept; an energy increase counts as available energy.
+  void setTopology(ShellNodes nodes, ShellFibers fibers);
 
   /// One velocity Verlet step; throws ShellInstabilityError.
   ShellStepReport step();
@@ -86,7 +103,9 @@ class ShellSolver {
   ShellFibers fibers_;
   ShellEnergy energy_;
   ShellSolverOptions options_;
-  std::vector<Vec3> x_, v_, gradient_;
+  std::vector<Vec3> x_, v_, gradient_, external_, external_next_, x_before_;
+  ShellExternalForce external_force_;
+  double external_work_ = 0.0;
   std::vector<char> pinned_;
   ShellEnergyValue elastic_;
   ShellStableStep stable_;
