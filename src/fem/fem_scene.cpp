@@ -14,6 +14,9 @@
 
 #include <Eigen/Geometry>
 
+#include "fem/polygon_cut.h"
+#include "fem/surface_closing.h"
+#include "fem/surface_decimation.h"
 #include "fem/tetgen_mesh.h"
 #include "io/obj_io.h"
 #include "io/off_io.h"
@@ -167,25 +170,65 @@ class SceneReader {
   }
 
   void readCuts(const YAML::Node& node) {
-    if (!node.IsSequence()) src_.fail(node, "cuts: expected a list of plane cuts");
+    if (!node.IsSequence()) src_.fail(node, "cuts: expected a list of plane or polygon cuts");
     for (size_t i = 0; i < node.size(); ++i) {
       const std::string where = "cuts[" + std::to_string(i) + "]";
       const YAML::Node c = node[i];
-      src_.allowKeys(c, {"time", "point", "normal", "region", "separate", "snap_relative_distance"}, where);
       FemSceneCut cut;
-      cut.time = src_.nonNegative(src_.require(c, "time", where), where + ".time");
-      cut.point = src_.vec3(src_.require(c, "point", where), where + ".point");
-      const YAML::Node n = src_.require(c, "normal", where);
-      cut.normal = src_.vec3(n, where + ".normal");
-      if (!(cut.normal.norm() > 0)) src_.fail(n, where + ".normal must be non-zero");
-      cut.normal.normalize();
-      if (const YAML::Node r = c["region"]) {
-        cut.region = src_.points(r, where + ".region", 3);
-        for (size_t k = 0; k < cut.region.size(); ++k)
-          if (std::abs(cut.normal.dot(cut.region[k] - cut.point)) > 1e-9 * (1.0 + cut.region[k].norm()))
-            src_.fail(r[k], where + ".region[" + std::to_string(k) + "] does not lie in the cut plane");
+      if (c.IsMap() && (c["polygons"] || c["blade"])) {
+        src_.allowKeys(c, {"time", "duration", "polygons", "blade", "path", "snap_relative_distance"}, where);
+        cut.time = src_.nonNegative(src_.require(c, "time", where), where + ".time");
+        if (c["duration"]) cut.duration = src_.nonNegative(c["duration"], where + ".duration");
+        if (const YAML::Node polygons = c["polygons"]) {
+          if (c["blade"] || c["path"]) src_.fail(c, where + ": give either polygons or blade + path");
+          if (!polygons.IsSequence() || polygons.size() == 0)
+            src_.fail(polygons, where + ".polygons: expected a list of polygons (lists of points)");
+          for (size_t k = 0; k < polygons.size(); ++k)
+            cut.polygons.push_back(
+                src_.points(polygons[k], where + ".polygons[" + std::to_string(k) + "]", 3));
+        } else {
+          const std::vector<Vec3> blade = src_.points(c["blade"], where + ".blade", 2);
+          if (blade.size() != 2)
+            src_.fail(c["blade"], where + ".blade: expected two points (the cutting edge)");
+          const YAML::Node path = src_.require(c, "path", where);
+          try {
+            cut.polygons = bladeSweepPolygons(blade[0], blade[1], src_.points(path, where + ".path", 2));
+          } catch (const std::invalid_argument& e) {
+            src_.fail(path, where + ": " + e.what());
+          }
+        }
+        for (size_t k = 0; k < cut.polygons.size(); ++k) {
+          const std::vector<Vec3>& poly = cut.polygons[k];
+          Vec3 normal = Vec3::Zero(), center = Vec3::Zero();
+          double scale = 0.0;
+          for (size_t j = 0; j < poly.size(); ++j) {
+            normal += poly[j].cross(poly[(j + 1) % poly.size()]);
+            center += poly[j] / double(poly.size());
+            scale = std::max(scale, (poly[j] - poly[0]).norm());
+          }
+          if (!(normal.norm() > 1e-12 * scale * scale))
+            src_.fail(c, where + ": polygon " + std::to_string(k) + " has zero area");
+          normal.normalize();
+          for (const Vec3& p : poly)
+            if (std::abs(normal.dot(p - center)) > 1e-9 * scale)
+              src_.fail(c, where + ": polygon " + std::to_string(k) + " is not planar");
+        }
+      } else {
+        src_.allowKeys(c, {"time", "point", "normal", "region", "separate", "snap_relative_distance"}, where);
+        cut.time = src_.nonNegative(src_.require(c, "time", where), where + ".time");
+        cut.point = src_.vec3(src_.require(c, "point", where), where + ".point");
+        const YAML::Node n = src_.require(c, "normal", where);
+        cut.normal = src_.vec3(n, where + ".normal");
+        if (!(cut.normal.norm() > 0)) src_.fail(n, where + ".normal must be non-zero");
+        cut.normal.normalize();
+        if (const YAML::Node r = c["region"]) {
+          cut.region = src_.points(r, where + ".region", 3);
+          for (size_t k = 0; k < cut.region.size(); ++k)
+            if (std::abs(cut.normal.dot(cut.region[k] - cut.point)) > 1e-9 * (1.0 + cut.region[k].norm()))
+              src_.fail(r[k], where + ".region[" + std::to_string(k) + "] does not lie in the cut plane");
+        }
+        if (c["separate"]) cut.separate = src_.boolean(c["separate"], where + ".separate");
       }
-      if (c["separate"]) cut.separate = src_.boolean(c["separate"], where + ".separate");
       if (c["snap_relative_distance"])
         cut.snap_relative_distance =
             src_.nonNegative(c["snap_relative_distance"], where + ".snap_relative_distance");
@@ -256,7 +299,10 @@ class SceneReader {
           src_.fail(node["min_relative_gap"], "mesh.min_relative_gap must be < 0.5");
       }
     } else if (type == "tetgen_surface") {
-      src_.allowKeys(node, {"type", "surface", "size", "max_volume", "max_radius_edge_ratio"}, "mesh");
+      src_.allowKeys(node,
+                     {"type", "surface", "size", "max_volume", "max_radius_edge_ratio",
+                      "min_dihedral_degrees", "close_holes", "decimate_vertices"},
+                     "mesh");
       s.type = FemMeshType::kTetgenSurface;
       s.surface = resolvePath(base_dir_, src_.string(src_.require(node, "surface", "mesh"), "mesh.surface"));
       if (node["size"]) s.size = src_.positive(node["size"], "mesh.size");
@@ -264,6 +310,12 @@ class SceneReader {
       if (node["max_radius_edge_ratio"])
         s.max_radius_edge_ratio =
             src_.nonNegative(node["max_radius_edge_ratio"], "mesh.max_radius_edge_ratio");
+      if (node["min_dihedral_degrees"])
+        s.min_dihedral_degrees = src_.nonNegative(node["min_dihedral_degrees"], "mesh.min_dihedral_degrees");
+      if (node["close_holes"]) s.close_holes = src_.boolean(node["close_holes"], "mesh.close_holes");
+      if (node["decimate_vertices"])
+        s.decimate_vertices =
+            int(src_.integer(node["decimate_vertices"], "mesh.decimate_vertices", 4, 100000000));
     } else if (type == "tetgen_files") {
       src_.allowKeys(node, {"type", "node", "ele"}, "mesh");
       s.type = FemMeshType::kTetgenFiles;
@@ -435,6 +487,12 @@ PolyhedralMesh buildFemMesh(const FemMeshSource& s) {
                                  s.min_relative_gap);
     case FemMeshType::kTetgenSurface: {
       TriangleMesh surface = readSurface(s.surface);
+      if (s.close_holes) surface = closeSurfaceHoles(surface);
+      if (s.decimate_vertices > 0) {
+        DecimationOptions decimation;
+        decimation.target_vertices = s.decimate_vertices;
+        surface = decimateSurface(surface, decimation);
+      }
       std::vector<Vec3>& x = surface.vertices.positions;
       if (s.size > 0 && !x.empty()) {  // centre the bounding box at the origin, scale its diagonal to size
         Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
@@ -448,6 +506,7 @@ PolyhedralMesh buildFemMesh(const FemMeshSource& s) {
       TetgenOptions options;
       options.max_volume = s.max_volume;
       options.max_radius_edge_ratio = s.max_radius_edge_ratio;
+      options.min_dihedral_degrees = s.min_dihedral_degrees;
       return toPolyhedralMesh(tetrahedralizeSurface(surface, options));
     }
     case FemMeshType::kTetgenFiles:
@@ -480,6 +539,26 @@ FemScene loadFemScene(const std::string& path) {
   std::stringstream text;
   text << in.rdbuf();
   return parseFemScene(text.str(), path, std::filesystem::path(path).parent_path().string());
+}
+
+std::vector<std::vector<Vec3>> bladeSweepPolygons(const Vec3& blade_start, const Vec3& blade_end,
+                                                  const std::vector<Vec3>& path) {
+  if (path.size() < 2)
+    throw std::invalid_argument("blade sweep: the path needs at least 2 points, got " +
+                                std::to_string(path.size()));
+  const Vec3 blade = blade_end - blade_start;
+  if (!(blade.norm() > 0.0) || !blade.allFinite())
+    throw std::invalid_argument("blade sweep: the blade has zero length");
+  std::vector<std::vector<Vec3>> polygons;
+  for (size_t k = 0; k + 1 < path.size(); ++k) {
+    const Vec3 step = path[k + 1] - path[k];
+    if (!(blade.cross(step).norm() > 1e-9 * blade.norm() * step.norm()) || !(step.norm() > 0.0))
+      throw std::invalid_argument("blade sweep: path step " + std::to_string(k) +
+                                  " is zero or parallel to the blade");
+    polygons.push_back(
+        {blade_start + path[k], blade_end + path[k], blade_end + path[k + 1], blade_start + path[k + 1]});
+  }
+  return polygons;
 }
 
 std::vector<Vec3> interpolateCutValues(const PolyhedralMesh& mesh, const PlaneCutResult& cut,
@@ -577,7 +656,92 @@ double FemSimulation::minGroundDistance() const {
   return d;
 }
 
+FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>>& polygons,
+                                             double snap_relative_distance) {
+  FemCutReport report;
+  report.polygons = static_cast<int>(polygons.size());
+  polygons_applied_ += report.polygons;
+  std::vector<std::pair<Vec3, Vec3>> boxes;  // per polygon
+  for (const auto& polygon : polygons) {
+    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    for (const Vec3& p : polygon) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    boxes.emplace_back(lo, hi);
+  }
+  PolygonCutOptions options;
+  options.snap_relative_distance = snap_relative_distance;
+  std::vector<std::unique_ptr<WarpedDynamics>> next;
+  for (auto& body : bodies_) {
+    Clock::time_point start = Clock::now();
+    const PolyhedralMesh& mesh = body->model().mesh();
+    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    for (const Vec3& x : mesh.nodes()) {
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+    const double margin = 1e-9 * (hi - lo).norm();
+    std::vector<int> hits;
+    for (size_t k = 0; k < boxes.size(); ++k)
+      if ((boxes[k].first.array() <= hi.array() + margin).all() &&
+          (boxes[k].second.array() >= lo.array() - margin).all())
+        hits.push_back(static_cast<int>(k));
+    if (hits.empty()) {
+      times_.topology += secondsSince(start);
+      next.push_back(std::move(body));
+      continue;
+    }
+    const int n = mesh.numNodes();
+    std::vector<Vec3> u(n), v(n);
+    for (int i = 0; i < n; ++i) {
+      u[i] = body->positions().segment<3>(3 * i) - mesh.node(i);
+      v[i] = body->velocities().segment<3>(3 * i);
+    }
+    ProgressiveCutMesh cut_mesh(mesh, u, options);
+    PolygonCutStats total;
+    for (int k : hits) {
+      const PolygonCutStats s = cut_mesh.cut(polygons[k]);
+      total.num_split_elements += s.num_split_elements;
+      total.num_new_nodes += s.num_new_nodes + s.num_pocket_nodes;
+      total.num_duplicated_nodes += s.num_duplicated_nodes;
+      total.num_new_crack_faces += s.num_new_crack_faces;
+    }
+    if (total.num_split_elements == 0 && total.num_new_nodes == 0 && total.num_new_crack_faces == 0) {
+      times_.topology += secondsSince(start);
+      next.push_back(std::move(body));
+      continue;
+    }
+    ++report.bodies_cut;
+    report.split_elements += total.num_split_elements;
+    report.new_nodes += total.num_new_nodes;
+    report.duplicated_nodes += total.num_duplicated_nodes;
+    report.crack_faces += total.num_new_crack_faces;
+    const std::vector<Vec3> cut_velocities = cut_mesh.interpolateNodeValues(v);
+    int num_components = 0;
+    cut_mesh.elementComponents(&num_components);
+    if (num_components > 1) ++report.bodies_separated;
+    std::vector<PolyhedralMesh> meshes;
+    std::vector<std::vector<Vec3>> side_u, side_v;
+    for (int c = 0; c < num_components; ++c) {
+      std::vector<int> ids;
+      meshes.push_back(cut_mesh.componentMesh(c, &ids));
+      side_u.emplace_back();
+      side_v.emplace_back();
+      for (int id : ids) {
+        side_u.back().push_back(cut_mesh.displacements()[id]);
+        side_v.back().push_back(cut_velocities[id]);
+      }
+    }
+    times_.topology += secondsSince(start);
+    for (int c = 0; c < num_components; ++c) next.push_back(makeBody(meshes[c], side_u[c], side_v[c]));
+  }
+  bodies_ = std::move(next);
+  return report;
+}
+
 FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
+  if (cut.isPolygonCut()) return applyPolygonCuts(cut.polygons, cut.snap_relative_distance);
   FemCutReport report;
   std::vector<std::unique_ptr<WarpedDynamics>> next;
   PlaneCutOptions options;
@@ -648,20 +812,55 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
 
 void FemSimulation::step() {
   const double dt = scene_.dynamics.time_step;
-  while (next_cut_ < static_cast<int>(scene_.cuts.size()) &&
-         scene_.cuts[next_cut_].time <= time_ + 1e-9 * dt) {
+  const double now = time_ + 1e-9 * dt;
+  // Polygons due now are applied together (one ProgressiveCutMesh per body and step).
+  std::vector<std::vector<Vec3>> batch;
+  double batch_snap = 0.0;
+  int batch_cut = -1;
+  auto flush = [&]() {
+    if (batch.empty()) return;
     try {
-      applyCut(scene_.cuts[next_cut_]);
+      applyPolygonCuts(batch, batch_snap);
     } catch (const std::exception& e) {
-      throw std::runtime_error("cut " + std::to_string(next_cut_) +
-                               " (t = " + formatNumber(scene_.cuts[next_cut_].time) + "): " + e.what());
+      throw std::runtime_error("cut " + std::to_string(batch_cut) +
+                               " (polygons due at t = " + formatNumber(time_) + "): " + e.what());
     }
+    batch.clear();
+  };
+  while (next_cut_ < static_cast<int>(scene_.cuts.size())) {
+    const FemSceneCut& cut = scene_.cuts[next_cut_];
+    if (!cut.isPolygonCut()) {
+      if (cut.time > now) break;
+      flush();
+      try {
+        applyCut(cut);
+      } catch (const std::exception& e) {
+        throw std::runtime_error("cut " + std::to_string(next_cut_) + " (t = " + formatNumber(cut.time) +
+                                 "): " + e.what());
+      }
+      ++next_cut_;
+      continue;
+    }
+    if (!batch.empty() && batch_snap != cut.snap_relative_distance) flush();
+    while (next_polygon_ < static_cast<int>(cut.polygons.size()) && cut.polygonTime(next_polygon_) <= now) {
+      if (batch.empty()) {
+        batch_snap = cut.snap_relative_distance;
+        batch_cut = next_cut_;
+      }
+      batch.push_back(cut.polygons[next_polygon_++]);
+    }
+    if (next_polygon_ < static_cast<int>(cut.polygons.size())) break;
+    next_polygon_ = 0;
     ++next_cut_;
   }
+  flush();
   const Clock::time_point start = Clock::now();
   int iterations = 0;
   for (auto& body : bodies_) {
     const StepStatistics stats = body->step();
+    times_.rotations += 1e-3 * stats.warping_ms;
+    times_.assembly += 1e-3 * stats.assembly_ms;
+    times_.solve += 1e-3 * stats.solve_ms;
     iterations += stats.solver_iterations;
     if (!stats.converged) ++unconverged_;
     if (!body->positions().allFinite() || !body->velocities().allFinite())
@@ -746,6 +945,7 @@ FemRunStats runFemScene(const FemScene& scene, const FemRunOptions& options) {
   stats.elements = sim.numElements();
   stats.bodies = sim.numBodies();
   stats.cuts = sim.cutsApplied();
+  for (int b = 0; b < sim.numBodies(); ++b) stats.crack_faces += sim.body(b).model().mesh().numCrackFaces();
   stats.steps = sim.steps();
   stats.simulated_time = sim.time();
   stats.times = sim.phaseTimes();
@@ -761,17 +961,29 @@ FemRunStats runFemScene(const FemScene& scene, const FemRunOptions& options) {
 std::string femRunStatsJson(const FemRunStats& s) {
   std::ostringstream j;
   const double ms_per_frame = s.frames > 0 ? 1e3 * s.wall_seconds / s.frames : NAN;
+  auto perFrame = [&](double seconds) { return s.frames > 0 ? 1e3 * seconds / s.frames : NAN; };
   j << "{\"scene\":" << jsonString(s.scene) << ",\"nodes_start\":" << s.nodes_start
     << ",\"elements_start\":" << s.elements_start << ",\"nodes\":" << s.nodes
     << ",\"elements\":" << s.elements << ",\"bodies\":" << s.bodies << ",\"cuts\":" << s.cuts
-    << ",\"frames\":" << s.frames << ",\"frame_count\":" << s.frame_count << ",\"steps\":" << s.steps
+    << ",\"crack_faces\":" << s.crack_faces << ",\"frames\":" << s.frames
+    << ",\"frame_count\":" << s.frame_count << ",\"steps\":" << s.steps
     << ",\"simulated_time\":" << formatNumber(s.simulated_time)
     << ",\"ms\":{\"integration\":" << formatNumber(1e3 * s.times.integration)
+    << ",\"bases\":" << formatNumber(1e3 * s.times.integration)
+    << ",\"rotations\":" << formatNumber(1e3 * s.times.rotations)
+    << ",\"assembly\":" << formatNumber(1e3 * s.times.assembly)
+    << ",\"solve\":" << formatNumber(1e3 * s.times.solve)
     << ",\"dynamics\":" << formatNumber(1e3 * s.times.dynamics)
     << ",\"topology\":" << formatNumber(1e3 * s.times.topology)
     << ",\"output\":" << formatNumber(1e3 * s.times.output)
     << ",\"total\":" << formatNumber(1e3 * s.wall_seconds)
     << "},\"ms_per_frame\":" << formatNumber(ms_per_frame)
+    << ",\"ms_per_frame_phases\":{\"bases\":" << formatNumber(perFrame(s.times.integration))
+    << ",\"rotations\":" << formatNumber(perFrame(s.times.rotations))
+    << ",\"assembly\":" << formatNumber(perFrame(s.times.assembly))
+    << ",\"solve\":" << formatNumber(perFrame(s.times.solve)) << ",\"other_dynamics\":"
+    << formatNumber(perFrame(s.times.dynamics - s.times.rotations - s.times.assembly - s.times.solve))
+    << ",\"topology\":" << formatNumber(perFrame(s.times.topology)) << "}"
     << ",\"ms_per_step\":" << formatNumber(s.steps > 0 ? 1e3 * s.times.dynamics / double(s.steps) : NAN)
     << ",\"solver_iterations\":" << s.solver_iterations
     << ",\"max_step_iterations\":" << s.max_step_iterations

@@ -47,6 +47,9 @@ struct FemMeshSource {
   std::string surface, node_file, ele_file;  ///< resolved against the scene file's folder
   double size = 0.0;  ///< tetgen_surface: bounding-box diagonal after scaling (0: as is)
   double max_volume = 0.0, max_radius_edge_ratio = 2.0;
+  double min_dihedral_degrees = 0.0;  ///< tetgen_surface: TetgenOptions::min_dihedral_degrees
+  bool close_holes = false;           ///< tetgen_surface: closeSurfaceHoles before meshing (open scans)
+  int decimate_vertices = 0;          ///< tetgen_surface: decimateSurface to this many vertices (0: no)
 };
 
 /// A plane cut applied at `time` (before the first step starting at or after it). The plane is given in the
@@ -54,13 +57,31 @@ struct FemMeshSource {
 /// (PlaneCutOptions::region). A cut that splits every crossed element of a body (no element left whole
 /// across the plane) separates the body into two when `separate` is set; otherwise the elements are only
 /// split (the cut stays closed).
+///
+/// Progressive polygon cut (thesis 9.3.2) when `polygons` is non-empty: a cut surface as a sequence of convex
+/// polygons (rest frame; a blade sweep, non-planar when consecutive polygons are not coplanar) applied with
+/// ProgressiveCutMesh, polygon k (of n) at time + duration * k / n. Partial cuts leave internal cracks (the
+/// body stays one mesh with crack faces); a body falling apart becomes several bodies. point, normal, region
+/// and separate are unused then.
 struct FemSceneCut {
   double time = 0.0;
   Vec3 point = Vec3::Zero(), normal = Vec3::UnitX();
   std::vector<Vec3> region;
   bool separate = true;
   double snap_relative_distance = 1e-6;
+  std::vector<std::vector<Vec3>> polygons;
+  double duration = 0.0;
+  bool isPolygonCut() const { return !polygons.empty(); }
+  double polygonTime(int k) const {
+    return time + (polygons.empty() ? 0.0 : duration * k / static_cast<double>(polygons.size()));
+  }
 };
+
+/// The polygons of a blade sweep: the blade segment (blade[0], blade[1]) translated by path[k] and path[k +
+/// 1] spans quad k (path.size() - 1 quads, planar by construction). Throws std::invalid_argument for fewer
+/// than 2 path points, a zero-length blade or a path step parallel to the blade.
+std::vector<std::vector<Vec3>> bladeSweepPolygons(const Vec3& blade_start, const Vec3& blade_end,
+                                                  const std::vector<Vec3>& path);
 
 /// Files written while a scene runs: the initial state (frame 0) and every `every`-th frame.
 struct FemSceneOutput {
@@ -113,6 +134,9 @@ std::vector<Vec3> interpolateCutValues(const PolyhedralMesh& mesh, const PlaneCu
 struct FemPhaseTimes {
   double integration = 0.0;  ///< element integration and solver setup (LinearElasticModel, WarpedDynamics)
   double dynamics = 0.0;     ///< WarpedDynamics::step: warping, assembly, solve, contact
+  double rotations = 0.0;    ///< of dynamics: R_e, element forces, R_e K_e R_e^T (StepStatistics::warping_ms)
+  double assembly = 0.0;     ///< of dynamics: K_w scatter, system matrix, right-hand side
+  double solve = 0.0;        ///< of dynamics: linear solves
   double topology = 0.0;     ///< cutMeshByPlane, separateAlongPlane, state transfer
   double output = 0.0;
 };
@@ -122,6 +146,8 @@ struct FemCutReport {
   int bodies_cut = 0;        ///< bodies whose elements were split or separated
   int bodies_separated = 0;  ///< of these, the ones separated into two
   int split_elements = 0, new_nodes = 0, duplicated_nodes = 0;
+  int crack_faces = 0;  ///< polygon cuts: element faces that became crack faces
+  int polygons = 0;     ///< polygon cuts: polygons applied
 };
 
 /// The running simulation of a scene: bodies (one WarpedDynamics each), time, scheduled cuts.
@@ -143,8 +169,15 @@ class FemSimulation {
   /// Applies the cuts that are due, then steps every body once. Throws std::runtime_error when a cut fails
   /// (naming it) or the state becomes non-finite (naming the step).
   void step();
-  /// Cuts every body by the plane (also used by step() for the scheduled cuts).
+  /// Cuts every body by the plane, or by all of cut.polygons at once for a polygon cut (also used by step()
+  /// for the scheduled cuts, which applies a polygon cut's polygons at their times).
   FemCutReport applyCut(const FemSceneCut& cut);
+  /// Progressive polygon cuts (ProgressiveCutMesh, rest frame) on every body whose rest bounding box meets a
+  /// polygon's; each cut body is replaced by one body per connected component (crack faces kept).
+  FemCutReport applyPolygonCuts(const std::vector<std::vector<Vec3>>& polygons,
+                                double snap_relative_distance = 1e-6);
+  /// Polygons of polygon cuts applied so far (all cuts).
+  long polygonsApplied() const { return polygons_applied_; }
 
   const FemPhaseTimes& phaseTimes() const { return times_; }
   FemPhaseTimes& phaseTimes() { return times_; }
@@ -162,7 +195,8 @@ class FemSimulation {
   std::vector<std::unique_ptr<WarpedDynamics>> bodies_;
   double time_ = 0.0;
   long steps_ = 0;
-  int next_cut_ = 0;
+  int next_cut_ = 0, next_polygon_ = 0;  // next_polygon_: of cut next_cut_
+  long polygons_applied_ = 0;
   FemPhaseTimes times_;
   long solver_iterations_ = 0, unconverged_ = 0;
   int max_step_iterations_ = 0;
@@ -188,6 +222,7 @@ struct FemRunStats {
   std::string scene;
   int nodes_start = 0, elements_start = 0;
   int nodes = 0, elements = 0, bodies = 0, cuts = 0;
+  int crack_faces = 0;  ///< at the end, all bodies
   int frames = 0, frame_count = 0;
   long steps = 0;
   double simulated_time = 0.0;

@@ -27,11 +27,11 @@ using Vec2 = Eigen::Vector2d;
   throw std::invalid_argument("ProgressiveCutMesh: " + what);
 }
 
-// The interpolant at x on a face: the mean value interpolant is linear on the face's boundary triangles.
-Vec3 interpolateOnFace(const std::vector<Vec3>& nodes, const std::vector<Vec3>& u, const Face& face,
-                       const Vec3& x) {
+// Weights of the interpolant at x on a face: the mean value interpolant is linear on the face's boundary
+// triangles (barycentric weights in the triangle containing x best).
+NodeStencil faceStencil(const std::vector<Vec3>& nodes, const Face& face, const Vec3& x) {
   double best = -INFINITY;
-  Vec3 value = Vec3::Zero();
+  NodeStencil stencil;
   for (const auto& t : bestFanTriangulation(nodes, face)) {
     const Vec3 v0 = nodes[t[1]] - nodes[t[0]], v1 = nodes[t[2]] - nodes[t[0]], v2 = x - nodes[t[0]];
     const double d00 = v0.dot(v0), d01 = v0.dot(v1), d11 = v1.dot(v1), d20 = v2.dot(v0), d21 = v2.dot(v1);
@@ -42,10 +42,10 @@ Vec3 interpolateOnFace(const std::vector<Vec3>& nodes, const std::vector<Vec3>& 
     const double worst = std::min({b0, b1, b2});
     if (worst > best) {
       best = worst;
-      value = b0 * u[t[0]] + b1 * u[t[1]] + b2 * u[t[2]];
+      stencil = {{t[0], b0}, {t[1], b1}, {t[2], b2}};
     }
   }
-  return value;
+  return stencil;
 }
 
 // Union-find over 0..n-1.
@@ -77,7 +77,7 @@ FaceUsers faceUsers(const std::vector<ElementFaces>& elements) {
 
 ProgressiveCutMesh::ProgressiveCutMesh(const PolyhedralMesh& mesh, std::vector<Vec3> displacements,
                                        const PolygonCutOptions& options)
-    : nodes_(mesh.nodes()), displacements_(std::move(displacements)) {
+    : nodes_(mesh.nodes()), displacements_(std::move(displacements)), num_initial_nodes_(mesh.numNodes()) {
   if (!displacements_.empty() && static_cast<int>(displacements_.size()) != mesh.numNodes())
     fail("displacements has " + std::to_string(displacements_.size()) + " entries, the mesh has " +
          std::to_string(mesh.numNodes()) + " nodes");
@@ -86,6 +86,8 @@ ProgressiveCutMesh::ProgressiveCutMesh(const PolyhedralMesh& mesh, std::vector<V
   for (int e = 0; e < mesh.numElements(); ++e) {
     elements_.push_back(mesh.elementFaces(e));
     crack_.emplace_back(elements_.back().size(), 0);
+    for (size_t f = 0; f < elements_.back().size(); ++f)
+      crack_.back()[f] = mesh.isCrackFace(e, int(f)) ? 1 : 0;
     const ConvexPolyhedron& element = mesh.element(e);
     relative_tolerance_ = std::max(relative_tolerance_, element.tolerance() / element.scale());
   }
@@ -93,11 +95,30 @@ ProgressiveCutMesh::ProgressiveCutMesh(const PolyhedralMesh& mesh, std::vector<V
   snap_distance_ = options.snap_relative_distance * boundingDiagonal(nodes_);
 }
 
-int ProgressiveCutMesh::addNode(const Vec3& x, const Vec3& u) {
+int ProgressiveCutMesh::addNode(const Vec3& x, NodeStencil stencil) {
   nodes_.push_back(x);
-  if (!displacements_.empty()) displacements_.push_back(u);
+  if (!displacements_.empty()) {
+    Vec3 u = Vec3::Zero();
+    for (const auto& [v, w] : stencil) u += w * displacements_[v];
+    displacements_.push_back(u);
+  }
+  stencils_.push_back(std::move(stencil));
   duplicate_of_.push_back(-1);
   return static_cast<int>(nodes_.size()) - 1;
+}
+
+std::vector<Vec3> ProgressiveCutMesh::interpolateNodeValues(const std::vector<Vec3>& initial_values) const {
+  if (static_cast<int>(initial_values.size()) != num_initial_nodes_)
+    fail("interpolateNodeValues: " + std::to_string(initial_values.size()) + " values for " +
+         std::to_string(num_initial_nodes_) + " initial nodes");
+  std::vector<Vec3> values(initial_values);
+  values.reserve(nodes_.size());
+  for (const NodeStencil& stencil : stencils_) {
+    Vec3 x = Vec3::Zero();
+    for (const auto& [v, w] : stencil) x += w * values[v];
+    values.push_back(x);
+  }
+  return values;
 }
 
 std::vector<PolygonCutStats> ProgressiveCutMesh::cutSurface(const std::vector<std::vector<Vec3>>& polygons) {
@@ -140,8 +161,6 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
 
   PolygonCutStats stats;
   const double snap = snap_distance_;
-  const bool has_disp = !displacements_.empty();
-  const Vec3 zero = Vec3::Zero();
 
   // 9.3.1 split of every element crossed by the plane whose section overlaps the cut shape.
   std::vector<double> distance(nodes_.size());
@@ -171,8 +190,7 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
   // using the edge (T-junctions, 9.3.1).
   std::map<std::pair<int, int>, std::vector<int>> edge_refinement;
   EdgeCrossingNodes plane_crossing(distance, [&](int a, int b, double t) {
-    const int id = addNode((1.0 - t) * nodes_[a] + t * nodes_[b],
-                           has_disp ? Vec3((1.0 - t) * displacements_[a] + t * displacements_[b]) : zero);
+    const int id = addNode((1.0 - t) * nodes_[a] + t * nodes_[b], {{a, 1.0 - t}, {b, t}});
     distance.push_back(0.0);
     side.push_back(0);
     edge_refinement[{a, b}].push_back(id);
@@ -313,11 +331,7 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
         } else {
           const double t = d[j] / (d[j] - d[jn]);
           const Vec3 x = (1.0 - t) * nodes_[a] + t * nodes_[b];
-          Vec3 u = zero;
-          if (has_disp)
-            u = edges.empty() ? interpolateOnFace(nodes_, displacements_, face, x)
-                              : Vec3((1.0 - t) * displacements_[a] + t * displacements_[b]);
-          m = addNode(x, u);
+          m = addNode(x, edges.empty() ? faceStencil(nodes_, face, x) : NodeStencil{{a, 1.0 - t}, {b, t}});
           distance.push_back(0.0);
           side.push_back(0);
           clip_node.emplace(key, m);
@@ -447,8 +461,7 @@ void ProgressiveCutMesh::duplicateSeparatedNodes(PolygonCutStats& stats) {
       if (root == 0) continue;  // the group of the first element keeps v
       auto it = copy_of_group.find(root);
       if (it == copy_of_group.end()) {
-        const int copy =
-            addNode(Vec3(nodes_[v]), displacements_.empty() ? Vec3(Vec3::Zero()) : Vec3(displacements_[v]));
+        const int copy = addNode(Vec3(nodes_[v]), {{v, 1.0}});
         duplicate_of_[copy] = duplicate_of_[v] >= 0 ? duplicate_of_[v] : v;
         ++stats.num_duplicated_nodes;
         it = copy_of_group.emplace(root, copy).first;
@@ -471,9 +484,7 @@ int ProgressiveCutMesh::openClosedCracks() {
     Vec3 centroid = Vec3::Zero();
     for (int v : face) centroid += nodes_[v];
     centroid /= static_cast<double>(face.size());
-    const Vec3 u = displacements_.empty() ? Vec3(Vec3::Zero())
-                                          : interpolateOnFace(nodes_, displacements_, face, centroid);
-    const int c = addNode(centroid, u);
+    const int c = addNode(centroid, faceStencil(nodes_, face, centroid));
     ++num_pockets;
     for (const auto& [e, f] : entry.second) {
       const Face polygon = elements_[e][f];
@@ -611,8 +622,11 @@ PolyhedralMesh ProgressiveCutMesh::componentMesh(int c, std::vector<int>* node_i
                                 " out of range (" + std::to_string(count) + " components)");
   std::vector<int> local(nodes_.size(), -1), ids;
   std::vector<ElementFaces> elements;
+  std::vector<PolyhedralMesh::FaceRef> crack_faces;
   for (int e = 0; e < numElements(); ++e) {
     if (component[e] != c) continue;
+    for (size_t f = 0; f < crack_[e].size(); ++f)
+      if (crack_[e][f]) crack_faces.emplace_back(static_cast<int>(elements.size()), static_cast<int>(f));
     ElementFaces faces = elements_[e];
     for (Face& face : faces)
       for (int& v : face) {
@@ -628,12 +642,11 @@ PolyhedralMesh ProgressiveCutMesh::componentMesh(int c, std::vector<int>* node_i
   for (int v : ids) points.push_back(nodes_[v]);
   if (node_ids) *node_ids = ids;
   try {
-    return PolyhedralMesh(std::move(points), std::move(elements), relative_tolerance_);
+    return PolyhedralMesh(std::move(points), std::move(elements), relative_tolerance_,
+                          std::move(crack_faces));
   } catch (const std::invalid_argument& problem) {
     throw std::invalid_argument("ProgressiveCutMesh::componentMesh: component " + std::to_string(c) +
-                                " is not a valid PolyhedralMesh (an internal crack of a partial cut has "
-                                "coincident faces): " +
-                                problem.what());
+                                " is not a valid PolyhedralMesh: " + problem.what());
   }
 }
 

@@ -6,6 +6,7 @@
 // a crack face without a node that can open gets a node at its centroid (pocket).
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "fem/polyhedral_mesh.h"
@@ -27,11 +28,16 @@ struct PolygonCutStats {
   int num_new_crack_faces = 0;   // element faces that became crack faces
 };
 
+/// Weights (node, weight) that give a derived node's value from earlier nodes' values.
+using NodeStencil = std::vector<std::pair<int, double>>;
+
 /// A polyhedral mesh with internal cracks. Elements are closed polygon surfaces over node ids (outward,
 /// counter-clockwise); two elements are connected through a face when both use the same node set and
 /// neither marks it as a crack face. Crack faces come in coincident pairs with opposite orientation (one per
-/// side) and share at least one node pair only through duplicates, so PolyhedralMesh (which rejects
-/// coincident boundary faces) cannot hold a component with an internal crack; validate() checks the mesh.
+/// side) and share at least one node pair only through duplicates; PolyhedralMesh holds a component with an
+/// internal crack when its crack faces are listed (componentMesh does); validate() checks the mesh. Crack
+/// faces of the input mesh (PolyhedralMesh::crackFaces) stay crack faces, so cuts continue across bodies
+/// rebuilt from componentMesh.
 class ProgressiveCutMesh {
  public:
   /// displacements: empty or one per node (rest displacements carried through the cuts). Throws
@@ -52,6 +58,10 @@ class ProgressiveCutMesh {
   /// Empty if none were given; new nodes get the interpolant u (linear on edges and on the face triangles
   /// of the mean value interpolant), duplicates copy their original.
   const std::vector<Vec3>& displacements() const { return displacements_; }
+  /// Any other per-node field (e.g. velocities) carried the same way: values of the input mesh's nodes in,
+  /// values of every node out. Throws std::invalid_argument for a wrong count.
+  std::vector<Vec3> interpolateNodeValues(const std::vector<Vec3>& initial_values) const;
+  int numInitialNodes() const { return num_initial_nodes_; }
   const PolyhedralMesh::ElementFaces& elementFaces(int e) const { return elements_[e]; }
   bool isCrackFace(int e, int f) const { return crack_[e][f] != 0; }
   int numCrackFaces() const;
@@ -71,13 +81,13 @@ class ProgressiveCutMesh {
   std::vector<int> elementComponents(int* num_components = nullptr) const;
   int numComponents() const;
   /// A validated PolyhedralMesh for component c (its nodes renumbered in order of first use; node_ids
-  /// receives the mesh node of each). Throws std::invalid_argument if the component contains a crack face
-  /// pair (partial cut), which PolyhedralMesh rejects as non-conforming.
+  /// receives the mesh node of each) whose crack faces are listed (PolyhedralMesh::crackFaces), so a
+  /// partially cut component is one mesh. Throws std::invalid_argument naming the problem otherwise.
   PolyhedralMesh componentMesh(int c, std::vector<int>* node_ids = nullptr) const;
 
  private:
   struct Frame;
-  int addNode(const Vec3& x, const Vec3& u);
+  int addNode(const Vec3& x, NodeStencil stencil);
   void duplicateSeparatedNodes(PolygonCutStats& stats);
   int openClosedCracks();
 
@@ -85,6 +95,8 @@ class ProgressiveCutMesh {
   std::vector<PolyhedralMesh::ElementFaces> elements_;
   std::vector<std::vector<char>> crack_;  // per element face
   std::vector<int> duplicate_of_;
+  std::vector<NodeStencil> stencils_;  // per node created after the input mesh's
+  int num_initial_nodes_ = 0;
   double snap_distance_ = 0.0, relative_tolerance_ = ConvexPolyhedron::kDefaultRelativeTolerance;
 };
 

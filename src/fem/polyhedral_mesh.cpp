@@ -119,8 +119,8 @@ bool trianglesOverlap(const std::array<Eigen::Vector2d, 3>& a, const std::array<
 }  // namespace
 
 PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
-                               double relative_tolerance)
-    : nodes_(std::move(nodes)), element_faces_(std::move(elements)) {
+                               double relative_tolerance, std::vector<FaceRef> crack_faces)
+    : nodes_(std::move(nodes)), element_faces_(std::move(elements)), crack_faces_(std::move(crack_faces)) {
   const int n = numNodes();
   if (element_faces_.empty()) fail("the mesh has no elements");
   for (int i = 0; i < n; ++i)
@@ -139,6 +139,15 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
     }
   for (int i = 0; i < n; ++i)
     if (!used[i]) fail("node " + std::to_string(i) + " is used by no element");
+  std::sort(crack_faces_.begin(), crack_faces_.end());
+  for (size_t c = 0; c < crack_faces_.size(); ++c) {
+    const auto [e, f] = crack_faces_[c];
+    if (e < 0 || e >= static_cast<int>(element_faces_.size()) || f < 0 ||
+        f >= static_cast<int>(element_faces_[e].size()))
+      fail("crack face (element " + std::to_string(e) + ", face " + std::to_string(f) + ") does not exist");
+    if (c > 0 && crack_faces_[c - 1] == crack_faces_[c])
+      fail(faceName(e, f) + " is listed twice as crack face");
+  }
 
   // Faces by node set: first user, its triangulation (global ids, in the first user's orientation), use
   // count.
@@ -213,11 +222,14 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
   std::map<std::vector<int>, std::pair<int, int>> first_user;
   is_boundary_node_.assign(n, 0);
   std::map<std::pair<int, int>, int> boundary_edges;  // directed boundary polygon edges
+  std::vector<char> boundary_triangle_is_crack;
   for (size_t e = 0; e < element_faces_.size(); ++e)
     for (size_t f = 0; f < element_faces_[e].size(); ++f) {
       const std::vector<int> key = sortedFaceKey(element_faces_[e][f]);
       const SharedFace& shared = face_map.at(key);
       if (shared.uses == 2) {
+        if (isCrackFace(int(e), int(f)))
+          fail(faceName(int(e), int(f)) + " is listed as crack face but still connects two elements");
         auto inserted = first_user.emplace(key, std::make_pair(int(e), int(f)));
         if (!inserted.second) {
           const auto& other = inserted.first->second;
@@ -239,7 +251,11 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
                faceName(int(e), int(f)) +
                "): hanging node, non-conforming faces or elements touching at an edge");
       }
-      for (const Triangle& t : elementFaceTriangles(int(e), int(f))) boundary_triangles_.push_back(t);
+      const char crack = isCrackFace(int(e), int(f)) ? 1 : 0;
+      for (const Triangle& t : elementFaceTriangles(int(e), int(f))) {
+        boundary_triangles_.push_back(t);
+        boundary_triangle_is_crack.push_back(crack);
+      }
     }
   for (const auto& entry : boundary_edges)
     if (!boundary_edges.count({entry.first.second, entry.first.first}))
@@ -274,6 +290,9 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
     for (size_t i = 0; i < planes.size(); ++i)
       for (size_t j = i + 1; j < planes.size() && planes[j].offset - planes[i].offset <= tol; ++j) {
         if (planes[i].sign == planes[j].sign || planes[i].normal.dot(planes[j].normal) < 1.0 - 1e-9) continue;
+        // The two sides of an internal crack coincide by design.
+        if (boundary_triangle_is_crack[planes[i].index] && boundary_triangle_is_crack[planes[j].index])
+          continue;
         const Vec3 e1 = planes[i].normal.unitOrthogonal(), e2 = planes[i].normal.cross(e1);
         std::array<Eigen::Vector2d, 3> a, b;
         for (int k = 0; k < 3; ++k) {
@@ -302,6 +321,10 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
     fail("element volumes sum to " + std::to_string(element_volume) + " but the boundary encloses " +
          std::to_string(enclosed) + " (overlapping elements)");
   volume_ = element_volume;
+}
+
+bool PolyhedralMesh::isCrackFace(int e, int f) const {
+  return std::binary_search(crack_faces_.begin(), crack_faces_.end(), FaceRef(e, f));
 }
 
 PolyhedralMesh PolyhedralMesh::hexahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz) {

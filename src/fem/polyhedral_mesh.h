@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <utility>
 #include <vector>
 
 #include "core/surfel_cloud.h"
@@ -18,15 +19,23 @@ namespace rc {
 /// used by more than two elements or twice with the same orientation, two faces with the same nodes in a
 /// different cyclic order, a boundary surface that is not closed (hanging nodes, non-conforming faces), and
 /// element volumes that do not add up to the volume enclosed by the boundary (overlapping elements).
+///
+/// Crack faces (thesis 9.3.2, partial cuts): faces listed in `crack_faces` as (element, face) are boundary
+/// faces that may coincide with other listed crack faces of opposite orientation (the two sides of an
+/// internal crack, ProgressiveCutMesh). Only pairs of listed faces are exempt from the non-conforming-face
+/// check; a listed face must be used by one element (else std::invalid_argument: it still connects two
+/// elements).
 class PolyhedralMesh {
  public:
   using Face = std::vector<int>;                // global node ids, counter-clockwise seen from outside
   using ElementFaces = std::vector<Face>;       // closed surface of one element
   using Triangle = std::array<int, 3>;          // global node ids
   enum class TetrahedronSplit { kFive, kSix };  // 5 tets (alternating by cell parity) or 6 (Kuhn)
+  using FaceRef = std::pair<int, int>;          // (element, face of the element)
 
   PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
-                 double relative_tolerance = ConvexPolyhedron::kDefaultRelativeTolerance);
+                 double relative_tolerance = ConvexPolyhedron::kDefaultRelativeTolerance,
+                 std::vector<FaceRef> crack_faces = {});
 
   /// nx x ny x nz boxes of the axis-aligned box [lo, hi] as hexahedra.
   static PolyhedralMesh hexahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz);
@@ -56,12 +65,18 @@ class PolyhedralMesh {
   const std::vector<char>& isBoundaryNode() const { return is_boundary_node_; }
   double volume() const { return volume_; }
 
+  /// Listed crack faces, sorted.
+  const std::vector<FaceRef>& crackFaces() const { return crack_faces_; }
+  int numCrackFaces() const { return static_cast<int>(crack_faces_.size()); }
+  bool isCrackFace(int e, int f) const;
+
  private:
   std::vector<Vec3> nodes_;
   std::vector<ElementFaces> element_faces_;
   std::vector<ConvexPolyhedron> elements_;
   std::vector<Triangle> boundary_triangles_;
   std::vector<char> is_boundary_node_;
+  std::vector<FaceRef> crack_faces_;
   int num_interior_faces_ = 0;
   double volume_ = 0.0;
 };

@@ -4,6 +4,7 @@
 #include <Eigen/OrderingMethods>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -13,6 +14,12 @@
 
 namespace rc {
 namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
 
 // Below this many elements the per-step loops run serially (thread start-up dominates).
 constexpr int kParallelElements = 512;
@@ -149,6 +156,7 @@ Eigen::VectorXd WarpedDynamics::elementDisplacement(int e, const ElementFrame& f
 }
 
 void WarpedDynamics::updateWarping() {
+  const Clock::time_point warping_start = Clock::now();
   const int num_elements = model_.mesh().numElements();
   int degenerate = 0;
 #pragma omp parallel for schedule(dynamic, 16) reduction(+ : degenerate) if (num_elements >= kParallelElements)
@@ -172,6 +180,8 @@ void WarpedDynamics::updateWarping() {
         rk.block<3, 3>(3 * a, 3 * b).noalias() = r * k.block<3, 3>(3 * a, 3 * b) * r.transpose();
   }
   degenerate_rotations_ = degenerate;
+  last_warping_ms_ = millisecondsSince(warping_start);
+  const Clock::time_point scatter_start = Clock::now();
   elastic_forces_.setZero();
   Eigen::Map<Eigen::VectorXd> values(warped_stiffness_.valuePtr(), warped_stiffness_.nonZeros());
   values.setZero();
@@ -183,6 +193,7 @@ void WarpedDynamics::updateWarping() {
     const std::vector<int>& scatter = scatter_[e];
     for (size_t k = 0; k < scatter.size(); ++k) values[scatter[k]] += rk[k];
   }
+  last_scatter_ms_ = millisecondsSince(scatter_start);
 }
 
 Eigen::VectorXd WarpedDynamics::solveSystem(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
@@ -259,6 +270,9 @@ void WarpedDynamics::buildConstrainedMatrix(const std::vector<char>& active) {
 StepStatistics WarpedDynamics::step() {
   StepStatistics stats;
   updateWarping();
+  stats.warping_ms = last_warping_ms_;
+  stats.assembly_ms = last_scatter_ms_;
+  Clock::time_point phase_start = Clock::now();
   stats.degenerate_rotations = degenerate_rotations_;
   const double dt = options_.time_step, alpha = options_.mass_damping, beta = options_.stiffness_damping;
 
@@ -291,7 +305,11 @@ StepStatistics WarpedDynamics::step() {
   for (int round = 0;; ++round) {
     ++stats.contact_rounds;
     if (num_active == 0) {
+      stats.assembly_ms += millisecondsSince(phase_start);
+      phase_start = Clock::now();
       dv = solveSystem(system_matrix_, rhs, guess, stats);
+      stats.solve_ms += millisecondsSince(phase_start);
+      phase_start = Clock::now();
       break;
     }
     Eigen::VectorXd z = Eigen::VectorXd::Zero(numDofs());  // prescribed part: dv . n = -v . n
@@ -304,7 +322,11 @@ StepStatistics WarpedDynamics::step() {
         y0.segment<3>(3 * i) -= g.normal.dot(y0.segment<3>(3 * i)) * g.normal;
       }
     buildConstrainedMatrix(active);
+    stats.assembly_ms += millisecondsSince(phase_start);
+    phase_start = Clock::now();
     dv = solveSystem(constrained_matrix_, b, y0, stats) + z;
+    stats.solve_ms += millisecondsSince(phase_start);
+    phase_start = Clock::now();
     reaction = system_matrix_ * dv - rhs;       // ground impulse on each node (M dv = dt f + J)
     if (round + 1 >= kMaxContactRounds) break;  // keep the last solve's contact set
     int released = 0;

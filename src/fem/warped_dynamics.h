@@ -65,6 +65,9 @@ struct StepStatistics {
   int projected_nodes = 0;       // nodes that crossed the ground during the step and were projected back
   int contact_rounds = 0;        // linear solves (contact set releases + 1)
   int degenerate_rotations = 0;  // elements that kept their previous rotation
+  // Wall time of the step's phases, milliseconds: R_e, element forces and R_e K_e R_e^T (warping); scatter
+  // into K_w, system matrix, right-hand side and contact-filtered matrices (assembly); linear solves (solve).
+  double warping_ms = 0.0, assembly_ms = 0.0, solve_ms = 0.0;
 };
 
 class WarpedDynamics {
@@ -145,6 +148,7 @@ class WarpedDynamics {
       ichol_cg_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   bool ldlt_analyzed_ = false;
+  double last_warping_ms_ = 0.0, last_scatter_ms_ = 0.0;  // of the latest updateWarping()
   std::unique_ptr<CholmodSolver> cholmod_;  // kCholmod only; re-analyses when the pattern changes
 };
 
