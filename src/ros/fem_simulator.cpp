@@ -1,0 +1,374 @@
+#include "ros/fem_simulator.h"
+
+#include <relaxed_connectivity/FemStats.h>
+#include <tf2_eigen/tf2_eigen.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+
+#include "fem/polygon_geometry.h"
+#include "ros/point_cloud2_converter.h"
+
+namespace rc {
+
+void FemSimulatorParams::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("fem_sim: " + what); };
+  if (scene.empty()) fail("parameter ~scene (an FEM scene file, config/fem/*.yaml) is required");
+  if (frame_id.empty() || frame_id[0] == '/')
+    fail("frame_id '" + frame_id + "' must be non-empty without '/'");
+  if (!(rate > 0) || !std::isfinite(rate)) fail("rate must be > 0 Hz (got " + std::to_string(rate) + ")");
+  if (!(real_time_factor > 0) || !std::isfinite(real_time_factor))
+    fail("real_time_factor must be > 0 (got " + std::to_string(real_time_factor) + ")");
+  if (!(tf_timeout >= 0) || !std::isfinite(tf_timeout))
+    fail("tf_timeout must be >= 0 s (got " + std::to_string(tf_timeout) + ")");
+  if (!(planarity_tolerance > 0) || !(planarity_tolerance < 1))
+    fail("planarity_tolerance must be in (0, 1) (got " + std::to_string(planarity_tolerance) + ")");
+}
+
+FemSimulatorParams readFemSimulatorParams(const ros::NodeHandle& pnh) {
+  FemSimulatorParams p;
+  pnh.param("scene", p.scene, p.scene);
+  pnh.param("frame_id", p.frame_id, p.frame_id);
+  pnh.param("rate", p.rate, p.rate);
+  pnh.param("autostart", p.autostart, p.autostart);
+  pnh.param("real_time_factor", p.real_time_factor, p.real_time_factor);
+  pnh.param("tf_timeout", p.tf_timeout, p.tf_timeout);
+  pnh.param("planarity_tolerance", p.planarity_tolerance, p.planarity_tolerance);
+  p.validate();
+  return p;
+}
+
+FemSceneCut femCutFromPolygon(const std::vector<Vec3>& input, double planarity_tolerance) {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("cut polygon: " + what); };
+  for (size_t k = 0; k < input.size(); ++k)
+    if (!input[k].allFinite()) fail("point " + std::to_string(k) + " is not finite");
+  double diameter = 0.0;
+  for (const Vec3& a : input)
+    for (const Vec3& b : input) diameter = std::max(diameter, (a - b).norm());
+  // Repeated consecutive points (also a closing copy of the first) are dropped.
+  std::vector<Vec3> polygon;
+  for (const Vec3& p : input)
+    if (polygon.empty() || (p - polygon.back()).norm() > 1e-12 * diameter) polygon.push_back(p);
+  while (polygon.size() > 1 && (polygon.back() - polygon.front()).norm() <= 1e-12 * diameter)
+    polygon.pop_back();
+  if (polygon.size() < 3)
+    fail("needs at least 3 distinct points (got " + std::to_string(input.size()) + " points, " +
+         std::to_string(polygon.size()) + " distinct)");
+
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : polygon) centroid += p;
+  centroid /= double(polygon.size());
+  Vec3 normal = Vec3::Zero();  // Newell: twice the vector area
+  for (size_t k = 0; k < polygon.size(); ++k)
+    normal += (polygon[k] - centroid).cross(polygon[(k + 1) % polygon.size()] - centroid);
+  if (!(0.5 * normal.norm() > 1e-9 * diameter * diameter)) fail("zero area (collinear or coincident points)");
+  normal.normalize();
+  for (size_t k = 0; k < polygon.size(); ++k) {
+    const double distance = std::abs(normal.dot(polygon[k] - centroid));
+    if (distance > planarity_tolerance * diameter)
+      fail("not planar: point " + std::to_string(k) + " lies " + std::to_string(distance) +
+           " m from the polygon's plane (tolerance " + std::to_string(planarity_tolerance * diameter) +
+           " m)");
+  }
+
+  FemSceneCut cut;
+  cut.point = centroid;
+  cut.normal = normal;
+  const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
+  std::vector<Eigen::Vector2d> in_plane;
+  for (const Vec3& p : polygon) {
+    const Vec3 projected = p - normal * normal.dot(p - centroid);
+    cut.region.push_back(projected);
+    in_plane.emplace_back(e1.dot(projected - centroid), e2.dot(projected - centroid));
+  }
+  const double area_tolerance = 1e-12 * diameter * diameter;
+  if (!isConvexPolygon(in_plane, area_tolerance, area_tolerance)) fail("not convex");
+  return cut;
+}
+
+SurfelCloud femNodesToCloud(const std::vector<FemBodyState>& bodies) {
+  size_t n = 0;
+  for (const FemBodyState& body : bodies) n += size_t(body.mesh->numNodes());
+  SurfelCloud cloud;
+  cloud.positions.reserve(n);
+  // Added first, looked up after: add() may move the columns added before.
+  cloud.attributes.add("velocity", ScalarType::kFloat32, 3, n);
+  cloud.attributes.add("displacement", ScalarType::kFloat32, 3, n);
+  cloud.attributes.add("body", ScalarType::kUInt32, 1, n);
+  Attribute& velocity = *cloud.attributes.find("velocity");
+  Attribute& displacement = *cloud.attributes.find("displacement");
+  Attribute& body_id = *cloud.attributes.find("body");
+  size_t i = 0;
+  for (size_t b = 0; b < bodies.size(); ++b) {
+    const FemBodyState& body = bodies[b];
+    for (int v = 0; v < body.mesh->numNodes(); ++v, ++i) {
+      const Vec3 x = body.positions->segment<3>(3 * v);
+      const Vec3 u = x - body.mesh->node(v);
+      cloud.positions.push_back(x);
+      for (uint32_t k = 0; k < 3; ++k) {
+        velocity.set(i, body.velocities ? (*body.velocities)[3 * v + k] : 0.0, k);
+        displacement.set(i, u[k], k);
+      }
+      body_id.set(i, double(b));
+    }
+  }
+  return cloud;
+}
+
+visualization_msgs::Marker femSurfaceMarker(const std::vector<FemBodyState>& bodies) {
+  static const std::array<std::array<float, 3>, 6> kPalette = {{{0.85f, 0.55f, 0.25f},
+                                                                {0.30f, 0.60f, 0.90f},
+                                                                {0.45f, 0.80f, 0.35f},
+                                                                {0.85f, 0.35f, 0.55f},
+                                                                {0.65f, 0.50f, 0.90f},
+                                                                {0.90f, 0.80f, 0.30f}}};
+  visualization_msgs::Marker marker;
+  marker.type = visualization_msgs::Marker::TRIANGLE_LIST;
+  marker.action = visualization_msgs::Marker::ADD;
+  marker.pose.orientation.w = 1.0;
+  marker.scale.x = marker.scale.y = marker.scale.z = 1.0;
+  marker.color.r = marker.color.g = marker.color.b = marker.color.a = 1.0f;
+  size_t triangles = 0;
+  for (const FemBodyState& body : bodies) triangles += body.mesh->boundaryTriangles().size();
+  marker.points.reserve(3 * triangles);
+  marker.colors.reserve(3 * triangles);
+  for (size_t b = 0; b < bodies.size(); ++b) {
+    std_msgs::ColorRGBA color;
+    color.r = kPalette[b % kPalette.size()][0];
+    color.g = kPalette[b % kPalette.size()][1];
+    color.b = kPalette[b % kPalette.size()][2];
+    color.a = 1.0f;
+    const Eigen::VectorXd& x = *bodies[b].positions;
+    for (const PolyhedralMesh::Triangle& triangle : bodies[b].mesh->boundaryTriangles())
+      for (int v : triangle) {
+        geometry_msgs::Point point;
+        point.x = x[3 * v];
+        point.y = x[3 * v + 1];
+        point.z = x[3 * v + 2];
+        marker.points.push_back(point);
+        marker.colors.push_back(color);
+      }
+  }
+  return marker;
+}
+
+FemSimulator::FemSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : nh_(nh),
+      private_nh_(private_nh),
+      params_(readFemSimulatorParams(private_nh)),
+      tf_listener_(tf_buffer_, nh) {
+  surface_pub_ = private_nh_.advertise<visualization_msgs::Marker>("surface", 1);
+  nodes_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("nodes", 1);
+  stats_pub_ = private_nh_.advertise<relaxed_connectivity::FemStats>("stats", 1);
+  scene_ = std::make_unique<FemScene>(loadFemScene(params_.scene));
+  simulation_ = std::make_unique<FemSimulation>(*scene_);
+  running_ = params_.autostart;
+  ROS_INFO_STREAM("fem_sim: loaded " << params_.scene << ": " << simulation_->numElements() << " elements, "
+                                     << simulation_->numNodes() << " nodes, " << scene_->cuts.size()
+                                     << " scheduled cuts");
+  command_srv_ = private_nh_.advertiseService("command", &FemSimulator::commandCallback, this);
+  cut_srv_ = private_nh_.advertiseService("cut", &FemSimulator::cutCallback, this);
+  timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &FemSimulator::timerCallback, this);
+}
+
+void FemSimulator::resetSimulation() {
+  simulation_ = std::make_unique<FemSimulation>(*scene_);
+  running_ = false;
+  error_.clear();
+  interactive_cuts_ = 0;
+  step_ms_ = 0.0;
+}
+
+void FemSimulator::advance(double duration, uint64_t steps) {
+  const double end = simulation_->time() + duration;
+  uint64_t done = 0;
+  const auto start = std::chrono::steady_clock::now();
+  while (done < steps && simulation_->time() < end) {
+    try {
+      simulation_->step();
+    } catch (const std::exception& e) {
+      // A failing scheduled cut may have replaced some bodies, a failing step left a non-finite state: back
+      // to the scene's start, paused, with the reason in the stats.
+      const std::string what = e.what();
+      resetSimulation();
+      error_ = what + " (reset to t = 0, paused)";
+      ROS_ERROR_STREAM("fem_sim: " << error_);
+      return;
+    }
+    ++done;
+  }
+  if (done > 0)
+    step_ms_ =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / done;
+}
+
+void FemSimulator::timerCallback(const ros::WallTimerEvent&) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!running_) return;
+    advance(params_.real_time_factor / params_.rate, std::numeric_limits<uint64_t>::max());
+  }
+  publish();
+}
+
+void FemSimulator::publish() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const ros::Time stamp = ros::Time::now();
+  const std::vector<FemBodyState> bodies = simulation_->bodyStates();
+  size_t triangles = 0;
+  for (const FemBodyState& body : bodies) triangles += body.mesh->boundaryTriangles().size();
+  if (nodes_pub_.getNumSubscribers() > 0) {
+    SurfelCloud cloud = femNodesToCloud(bodies);
+    cloud.frame_id = params_.frame_id;
+    cloud.stamp_ns = stamp.toNSec();
+    nodes_pub_.publish(PointCloud2Converter::toMessage(cloud, PointCloud2Layout::kCompact));
+  }
+  if (surface_pub_.getNumSubscribers() > 0) {
+    visualization_msgs::Marker marker = femSurfaceMarker(bodies);
+    marker.header.frame_id = params_.frame_id;
+    marker.header.stamp = stamp;
+    marker.ns = "fem_surface";
+    surface_pub_.publish(marker);
+  }
+  relaxed_connectivity::FemStats stats;
+  stats.header.frame_id = params_.frame_id;
+  stats.header.stamp = stamp;
+  stats.scene = scene_->name;
+  stats.running = running_;
+  stats.step = uint64_t(simulation_->steps());
+  stats.time = simulation_->time();
+  stats.dt = scene_->dynamics.time_step;
+  stats.bodies = uint32_t(simulation_->numBodies());
+  stats.nodes = uint32_t(simulation_->numNodes());
+  stats.elements = uint32_t(simulation_->numElements());
+  stats.surface_triangles = uint32_t(triangles);
+  stats.scheduled_cuts = uint32_t(simulation_->cutsApplied());
+  stats.interactive_cuts = uint32_t(interactive_cuts_);
+  stats.max_step_iterations = uint32_t(simulation_->maxStepIterations());
+  stats.unconverged_solves = uint64_t(simulation_->unconvergedSolves());
+  stats.min_ground_distance = simulation_->minGroundDistance();
+  stats.step_ms = step_ms_;
+  stats.topology_ms = 1e3 * simulation_->phaseTimes().topology;
+  stats.error = error_;
+  stats_pub_.publish(stats);
+}
+
+bool FemSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& request,
+                                   relaxed_connectivity::SphCommand::Response& response) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    response.success = true;
+    if (request.command == "start") {
+      error_.clear();
+      running_ = true;
+      response.message = "running";
+    } else if (request.command == "pause") {
+      running_ = false;
+      response.message = "paused at t = " + std::to_string(simulation_->time()) + " s";
+    } else if (request.command == "step") {
+      running_ = false;
+      error_.clear();
+      const uint64_t steps = std::max<uint32_t>(1, request.steps);
+      advance(std::numeric_limits<double>::infinity(), steps);
+      response.success = error_.empty();
+      response.message = error_.empty() ? "step " + std::to_string(simulation_->steps()) +
+                                              ", t = " + std::to_string(simulation_->time()) + " s"
+                                        : error_;
+    } else if (request.command == "reset") {
+      resetSimulation();
+      response.message = "reset to t = 0: " + std::to_string(simulation_->numElements()) + " elements, " +
+                         std::to_string(simulation_->numNodes()) + " nodes";
+    } else {
+      response.success = false;
+      response.message = "unknown command '" + request.command + "' (start, pause, step, reset)";
+    }
+  }
+  publish();
+  return true;
+}
+
+std::vector<Vec3> FemSimulator::polygonInSceneFrame(const relaxed_connectivity::FemCut::Request& request) {
+  const std::string& frame = request.header.frame_id;
+  if (frame.empty())
+    throw std::invalid_argument("header.frame_id is empty (give the polygon's frame, e.g. '" +
+                                params_.frame_id + "')");
+  Eigen::Isometry3d to_scene = Eigen::Isometry3d::Identity();
+  if (frame != params_.frame_id) {
+    try {
+      to_scene = tf2::transformToEigen(tf_buffer_.lookupTransform(
+          params_.frame_id, frame, request.header.stamp, ros::Duration(params_.tf_timeout)));
+    } catch (const tf2::TransformException& e) {
+      throw std::runtime_error("no transform from '" + frame + "' to '" + params_.frame_id +
+                               "': " + e.what());
+    }
+  }
+  std::vector<Vec3> polygon;
+  polygon.reserve(request.polygon.size());
+  for (const geometry_msgs::Point& p : request.polygon) polygon.push_back(to_scene * Vec3(p.x, p.y, p.z));
+  return polygon;
+}
+
+bool FemSimulator::cutCallback(relaxed_connectivity::FemCut::Request& request,
+                               relaxed_connectivity::FemCut::Response& response) {
+  response.success = false;
+  FemSceneCut cut;
+  try {
+    cut = femCutFromPolygon(polygonInSceneFrame(request), params_.planarity_tolerance);
+    cut.separate = !request.keep_connected;
+  } catch (const std::exception& e) {
+    response.message = e.what();
+    ROS_WARN_STREAM("fem_sim: cut refused: " << response.message);
+    std::lock_guard<std::mutex> lock(mutex_);
+    response.bodies = uint32_t(simulation_->numBodies());
+    response.nodes = uint32_t(simulation_->numNodes());
+    response.elements = uint32_t(simulation_->numElements());
+    return true;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    {
+      const auto start = std::chrono::steady_clock::now();
+      try {
+        const FemCutReport report =
+            request.progressive ? simulation_->applyPolygonCuts({cut.region}, cut.snap_relative_distance)
+                                : simulation_->applyCut(cut);
+        response.success = true;
+        response.bodies_cut = uint32_t(report.bodies_cut);
+        response.bodies_separated = uint32_t(report.bodies_separated);
+        response.split_elements = uint32_t(report.split_elements);
+        response.new_nodes = uint32_t(report.new_nodes);
+        response.duplicated_nodes = uint32_t(report.duplicated_nodes);
+        response.crack_faces = uint32_t(report.crack_faces);
+        if (report.bodies_cut > 0) ++interactive_cuts_;
+        const double ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        response.message =
+            report.bodies_cut == 0
+                ? std::string("the polygon crosses no element: nothing changed")
+                : "split " + std::to_string(report.split_elements) + " elements, " +
+                      std::to_string(report.new_nodes) + " new nodes, " +
+                      (request.progressive ? std::to_string(report.crack_faces) + " crack faces, "
+                                           : std::string()) +
+                      std::to_string(report.bodies_separated) + " bodies separated (" + std::to_string(ms) +
+                      " ms)";
+      } catch (const std::exception& e) {
+        // applyCut may have replaced some bodies before it failed: back to the scene's start.
+        resetSimulation();
+        response.message = std::string("cut failed: ") + e.what() + "; the simulation was reset to t = 0";
+      }
+    }
+    response.bodies = uint32_t(simulation_->numBodies());
+    response.nodes = uint32_t(simulation_->numNodes());
+    response.elements = uint32_t(simulation_->numElements());
+    ROS_INFO_STREAM("fem_sim: cut: " << response.message);
+  }
+  publish();
+  return true;
+}
+
+}  // namespace rc

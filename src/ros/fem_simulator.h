@@ -1,0 +1,105 @@
+// The fem_sim node (thesis 9): runs an FEM scene file (fem/fem_scene.h, config/fem/*.yaml) in real time,
+// publishes the bodies for rviz and cuts them with polygons given by service.
+//
+// Publishes   ~surface (visualization_msgs/Marker, TRIANGLE_LIST of the boundary triangles of all bodies at
+//             their current positions, coloured by body), ~nodes (sensor_msgs/PointCloud2: x y z,
+//             velocity[3], displacement[3] (float32), body (uint32)), ~stats (relaxed_connectivity/FemStats),
+//             all in frame_id (the scene's frame)
+// Services    ~command (relaxed_connectivity/SphCommand: start | pause | step N | reset; reset restores the
+//             scene file's mesh at t = 0, paused), ~cut (relaxed_connectivity/FemCut: a convex planar polygon
+//             in any tf2 frame, applied to the rest configuration: the crossed elements it overlaps are
+//             split by its plane (FemSimulation::applyCut with a region) or, progressive, the polygon itself
+//             cuts (FemSimulation::applyPolygonCuts); a refused cut is reported and changes nothing)
+// Parameters  (private) scene (file, required), frame_id, rate (frames per second), autostart,
+//             real_time_factor (simulated seconds per wall second), tf_timeout (s),
+//             planarity_tolerance (relative to the polygon's diameter); see config/fem_demo.yaml.
+// The scene file's frame count is ignored: the node runs until paused. Its scheduled cuts are applied when
+// their time comes (again after a reset). A failing step or scheduled cut resets the scene to t = 0, paused,
+// and the stats' error says why.
+#pragma once
+
+#include <relaxed_connectivity/FemCut.h>
+#include <relaxed_connectivity/SphCommand.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+#include <visualization_msgs/Marker.h>
+
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "core/surfel_cloud.h"
+#include "fem/fem_scene.h"
+
+namespace rc {
+
+struct FemSimulatorParams {
+  std::string scene;
+  std::string frame_id = "world";
+  double rate = 30.0;                 ///< published frames per second
+  bool autostart = true;              ///< run after loading (else paused at t = 0)
+  double real_time_factor = 1.0;      ///< simulated seconds per wall-clock second while running
+  double tf_timeout = 0.5;            ///< s to wait for the transform of a cut polygon
+  double planarity_tolerance = 1e-6;  ///< max distance of a polygon point from its plane / polygon diameter
+
+  /// Throws std::invalid_argument naming the parameter and the bad value.
+  void validate() const;
+};
+
+FemSimulatorParams readFemSimulatorParams(const ros::NodeHandle& private_nh);
+
+/// The cut of a polygon given in the scene frame: plane through its centroid with its (Newell) normal, region
+/// = the points projected onto that plane. Throws std::invalid_argument naming the problem: fewer than 3
+/// points, a non-finite point, zero area (coincident or collinear points), a point farther than
+/// planarity_tolerance * diameter from the plane, or a polygon that is not convex.
+FemSceneCut femCutFromPolygon(const std::vector<Vec3>& polygon, double planarity_tolerance);
+
+/// The nodes of all bodies (in body order) at their current positions with the fields velocity and
+/// displacement (float32 x 3, x - X) and body (uint32, index of the body).
+SurfelCloud femNodesToCloud(const std::vector<FemBodyState>& bodies);
+
+/// The boundary triangles of all bodies at their current positions as one TRIANGLE_LIST marker (3 points
+/// per triangle, one colour per vertex by body). Header and namespace are left to the caller.
+visualization_msgs::Marker femSurfaceMarker(const std::vector<FemBodyState>& bodies);
+
+class FemSimulator {
+ public:
+  /// Reads the parameters and loads ~scene (throws std::invalid_argument / FemSceneError).
+  FemSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh);
+
+  bool running() const { return running_; }
+
+ private:
+  void timerCallback(const ros::WallTimerEvent&);
+  /// Advances by up to `steps` steps or `duration` simulated seconds (whichever ends first); a failing step
+  /// resets to t = 0, paused, and sets error_.
+  void advance(double duration, uint64_t steps);
+  void publish();
+  void resetSimulation();
+  bool commandCallback(relaxed_connectivity::SphCommand::Request& request,
+                       relaxed_connectivity::SphCommand::Response& response);
+  bool cutCallback(relaxed_connectivity::FemCut::Request& request,
+                   relaxed_connectivity::FemCut::Response& response);
+  /// The polygon of a request in the scene frame (throws std::invalid_argument / std::runtime_error).
+  std::vector<Vec3> polygonInSceneFrame(const relaxed_connectivity::FemCut::Request& request);
+
+  ros::NodeHandle nh_, private_nh_;
+  FemSimulatorParams params_;
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  std::mutex mutex_;  // simulation against service calls
+  std::unique_ptr<FemScene> scene_;
+  std::unique_ptr<FemSimulation> simulation_;
+  bool running_ = false;
+  std::string error_;
+  int interactive_cuts_ = 0;
+  double step_ms_ = 0.0;
+  ros::Publisher surface_pub_, nodes_pub_, stats_pub_;
+  ros::ServiceServer command_srv_, cut_srv_;
+  ros::WallTimer timer_;
+};
+
+}  // namespace rc
