@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <deque>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -37,9 +38,11 @@ struct Attribute {
   void set(size_t i, double value, uint32_t component = 0);
 };
 
-/// An ordered set of attribute columns with unique names.
+/// An ordered set of attribute columns with unique names. Columns live in a deque: a reference returned by
+/// add() or find() stays valid while further columns are added (not across remove()).
 class AttributeSet {
  public:
+  using Columns = std::deque<Attribute>;
   /// Adds a column (zero-filled to `n` elements); throws std::invalid_argument if the name exists.
   Attribute& add(const std::string& name, ScalarType type, uint32_t count, size_t n);
   Attribute* find(const std::string& name);
@@ -53,12 +56,12 @@ class AttributeSet {
   /// Keeps only the elements whose indices are listed, in that order.
   void select(const std::vector<size_t>& indices);
 
-  const std::vector<Attribute>& columns() const { return columns_; }
-  std::vector<Attribute>& columns() { return columns_; }
+  const Columns& columns() const { return columns_; }
+  Columns& columns() { return columns_; }
   bool empty() const { return columns_.empty(); }
 
  private:
-  std::vector<Attribute> columns_;
+  Columns columns_;
 };
 
 }  // namespace rc

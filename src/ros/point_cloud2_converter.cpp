@@ -405,7 +405,7 @@ void PointCloud2Converter::fromMessage(const sensor_msgs::PointCloud2& msg, Surf
     cloud.attributes.add(f.name, toScalarType(f.datatype), f.count, n);
     extra_offsets.push_back(f.offset);
   }
-  std::vector<Attribute>& columns = cloud.attributes.columns();
+  AttributeSet::Columns& columns = cloud.attributes.columns();
 
   for (uint32_t row = 0; row < msg.height; ++row) {
     const uint8_t* row_data = msg.data.data() + size_t(row) * msg.row_step;
