@@ -343,11 +343,14 @@ StepStatistics WarpedDynamics::step() {
   for (int i = 0; i < numNodes(); ++i) {
     if (!active[i]) continue;
     ++stats.contact_nodes;
-    // Coulomb friction: the tangential velocity shrinks by mu J_n / m_i.
+    // Coulomb friction: the tangential velocity shrinks by mu J_n / m_i. A pulling reaction (J_n < 0, left
+    // active after the last contact round) gives no friction: a negative limit would accelerate the node
+    // tangentially by mu |J_n| / m_i, unbounded for the tiny lumped masses of sliver-rich meshes.
     auto v = velocities_.segment<3>(3 * i);
     const Vec3 vt = v - g.normal.dot(v) * g.normal;
     const double speed = vt.norm(),
-                 limit = g.friction * g.normal.dot(reaction.segment<3>(3 * i)) / masses3_[3 * i];
+                 limit =
+                     g.friction * std::max(0.0, g.normal.dot(reaction.segment<3>(3 * i))) / masses3_[3 * i];
     if (speed > 0.0) v -= std::min(1.0, limit / speed) * vt;
   }
   positions_ += dt * velocities_;

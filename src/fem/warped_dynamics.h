@@ -11,8 +11,9 @@
 // Ground contact (velocity clamp): nodes on or below the plane at the start of the step are constrained to
 // v+ . n = 0 inside the solve by the filter S_i = I - n n^T, i.e. (S A S + I - S) y = S (b - A z),
 // dv = y + z with z_i = -(n . v_i) n; nodes whose reaction J_i = n . (A dv - b)_i is negative (pulling) are
-// released and the step re-solved (at most 4 solves); Coulomb friction reduces the tangential speed by mu J_i
-// / m_i. Nodes that cross the plane during the step are projected back and lose their inward normal velocity.
+// released and the step re-solved (at most 4 solves); Coulomb friction reduces the tangential speed by
+// mu max(J_i, 0) / m_i (nodes still pulling after the last solve get none). Nodes that cross the plane during
+// the step are projected back and lose their inward normal velocity.
 #pragma once
 
 #include <Eigen/Core>
