@@ -1,0 +1,280 @@
+// SPH with elastic solids and temperature (thesis 8.2, Table 8.1). (a) Time per particle per step, median of
+// several steps, for three scenes built as scene files (appendix F.2 conventions: rho = 1, Gamma = 1, K = 20,
+// xi = 0.1, zeta = 0.01, h = 2 d) at ~10k, ~100k and ~1M particles, 1 and 2 threads:
+//   fluid          a fluid block in a tank of planes,
+//   fluid+elastic  the same block with an elastic cube (goal-position model) dropped into it,
+//   elastic+temp   an elastic cube on a floor heated to 100 degrees (enable: [temperature]; the thermal model
+//                  is stepped and timed after every solver step).
+// (b) The scenes of Table 8.1 (Fig. 8.4 melting bunny 9871 particles 17 s/frame, Fig. 8.5 freezing rod
+// 1606-7000 particles 18.2 s/frame, Fig. 8.8 nine dice 2214 particles 18.7 s/frame; Pentium 4, 3 GHz) with
+// our equivalents run through runSphScene: seconds per frame, steps per frame, dt and its limit, and the
+// speed-up over the thesis. `--quick`: 10k only and one frame per scene; `--no-1m`: skip the 1M rows.
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "sph/sph_fluid_solver.h"
+#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_run.h"
+#include "sph/sph_thermal.h"
+
+namespace {
+
+using namespace rc;
+
+const char* kSolverBlock =
+    "solver:\n"
+    "  smoothing_ratio: 2.0\n"
+    "  rest_density: 1\n"
+    "  stiffness: 20\n"
+    "  gamma: 1\n"
+    "  negative_pressure_scale: 0.01\n"
+    "  xsph: 0.1\n"
+    "  gravity: [0, -9.81, 0]\n";
+
+std::string vec(double x, double y, double z) {
+  char b[128];
+  std::snprintf(b, sizeof b, "[%.6g, %.6g, %.6g]", x, y, z);
+  return b;
+}
+
+enum class Kind { kFluid, kFluidElastic, kElasticThermal };
+
+const char* kindName(Kind k) {
+  return k == Kind::kFluid ? "fluid" : k == Kind::kFluidElastic ? "fluid + elastic" : "elastic + temperature";
+}
+
+/// Scene text with about `target` particles, spacing d = 0.02.
+std::string sceneText(Kind kind, size_t target) {
+  const double d = 0.02;
+  std::string s = "name: bench\ndimension: 3\nspacing: 0.02\n";
+  if (kind == Kind::kFluid) {
+    // n x n/2 x n fluid block filling the bottom of a tank of n x 2n x n cells.
+    const double n = std::round(std::cbrt(2.0 * double(target)));
+    s += kSolverBlock;
+    s += "fluid:\n  - {lo: " + vec(0, 0, 0) + ", hi: " + vec(n * d, 0.5 * n * d, n * d) + "}\n";
+    s += "boundary:\n  box_planes:\n    - {lo: " + vec(0, 0, 0) + ", hi: " + vec(n * d, 2 * n * d, n * d) +
+         "}\n";
+  } else if (kind == Kind::kFluidElastic) {
+    // Fluid n x n/2 x n plus a cube of side n/3 cells just above the surface (the fcc lattice holds ~1.4
+    // particles per cubic cell): ~(0.5 + 0.052) n^3 particles.
+    const double n = std::round(std::cbrt(double(target) / 0.552));
+    const double a = n / 3.0;
+    s += "enable: [elasticity]\n";
+    s += kSolverBlock;
+    s += "fluid:\n  - {lo: " + vec(0, 0, 0) + ", hi: " + vec(n * d, 0.5 * n * d, n * d) + "}\n";
+    s += "solids:\n  - {lo: " + vec(a * d, (0.5 * n + 1) * d, a * d) +
+         ", hi: " + vec(2 * a * d, (0.5 * n + 1 + a) * d, 2 * a * d) +
+         ", model: goal_position, goal_stiffness: 8.0e5}\n";
+    s += "boundary:\n  box_planes:\n    - {lo: " + vec(0, 0, 0) + ", hi: " + vec(n * d, 2 * n * d, n * d) +
+         "}\n";
+  } else {
+    // An elastic cube of side a cells (~1.41 a^3 fcc particles) at 0 degrees on a floor heated to 100.
+    const double a = std::round(std::cbrt(double(target) / 1.414));
+    s += "enable: [elasticity, temperature]\n";
+    s += kSolverBlock;
+    s += "solids:\n  - {lo: " + vec(0, 0.5 * d, 0) + ", hi: " + vec(a * d, (a + 0.5) * d, a * d) +
+         ", model: goal_position, goal_stiffness: 8.0e5, temperature: 0}\n";
+    s += "boundary:\n  box_planes:\n    - {lo: " + vec(-a * d, 0, -a * d) +
+         ", hi: " + vec(2 * a * d, 3 * a * d, 2 * a * d) + "}\n";
+    s += "temperature:\n  conductivity: 0.002\n  heat_capacity: 1\n  initial: 0\n  heated_planes:\n"
+         "    - {normal: [0, 1, 0], offset: 0, distance: 0.03, temperature: 100, transfer_rate: 20}\n";
+  }
+  s += "frames: {count: 1, time: 0.0333333333333}\n";
+  return s;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+struct PerParticle {
+  size_t particles = 0, solid_particles = 0;
+  double us_per_particle = 0.0, neighbors = 0.0, thermal_share = 0.0, dt = 0.0;
+  SphStepLimit limit = SphStepLimit::kMaxDt;
+};
+
+/// Median wall time per particle per step (solver step + thermal model step) after one warm-up step.
+PerParticle timeScene(const SphScene& scene, int threads, int steps) {
+  SphScene copy = scene;
+  copy.config.num_threads = threads;
+  copy.thermal.config.num_threads = threads;
+  omp_set_num_threads(threads);  // the elastic force terms use omp_get_max_threads()
+  SphFluidSolver solver = makeSphSolver(copy);
+  std::shared_ptr<SphThermalModel> thermal = makeSphThermal(copy, solver);
+  auto one = [&](double& thermal_seconds) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const SphStepStats& st = solver.step();
+    const auto t1 = std::chrono::steady_clock::now();
+    if (thermal) thermal->step(solver, st.dt);
+    const auto t2 = std::chrono::steady_clock::now();
+    thermal_seconds = std::chrono::duration<double>(t2 - t1).count();
+    return std::chrono::duration<double>(t2 - t0).count();
+  };
+  double th = 0.0;
+  one(th);
+  std::vector<double> t, tt;
+  for (int s = 0; s < steps; ++s) {
+    t.push_back(one(th));
+    tt.push_back(th);
+  }
+  PerParticle r;
+  r.particles = solver.particles().size();
+  for (const SphSceneSolid& solid : scene.solids) r.solid_particles += solid.count;
+  const double m = median(t);
+  r.us_per_particle = 1e6 * m / double(r.particles);
+  r.thermal_share = thermal ? median(tt) / m : 0.0;
+  r.neighbors = solver.lastStats().neighbors_per_particle;
+  r.dt = solver.lastStats().dt;
+  r.limit = solver.lastStats().limit;
+  return r;
+}
+
+void perParticleTable(bool quick, bool million) {
+  std::printf(
+      "## (a) Time per particle per step (median; solver step + thermal step), d = 0.02, h = 2 d\n\n");
+  std::printf(
+      "| scene | particles | solid particles | threads | neighbours/particle | us / particle / step | "
+      "x threads | thermal share | dt | dt limit |\n");
+  std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+  std::vector<size_t> sizes = {10000};
+  if (!quick) sizes.push_back(100000);
+  if (million) sizes.push_back(1000000);
+  for (Kind kind : {Kind::kFluid, Kind::kFluidElastic, Kind::kElasticThermal})
+    for (size_t n : sizes) {
+      const SphScene scene = parseSphScene(sceneText(kind, n), "bench");
+      // 1M: 2 threads and 3 steps only (whole bench under ~3 minutes on 2 cores).
+      const std::vector<int> thread_counts = n >= 1000000 ? std::vector<int>{2} : std::vector<int>{1, 2};
+      for (int threads : thread_counts) {
+        const PerParticle r = timeScene(scene, threads, n >= 1000000 ? 3 : n >= 100000 ? 5 : 9);
+        std::printf("| %s | %zu | %zu | %d | %.1f | %.3f | %.3f | %.0f%% | %.2e | %s |\n", kindName(kind),
+                    r.particles, r.solid_particles, threads, r.neighbors, r.us_per_particle,
+                    r.us_per_particle * threads, 100.0 * r.thermal_share, r.dt, toString(r.limit));
+        std::fflush(stdout);
+      }
+    }
+}
+
+struct ThesisScene {
+  const char* figure;
+  const char* thesis_particles;
+  double thesis_seconds_per_frame;
+  std::string label;
+  SphScene scene;
+};
+
+std::string configPath(const char* name) {
+  const std::string here = __FILE__;
+  return here.substr(0, here.rfind("/bench/")) + "/config/sph/" + name;
+}
+
+/// melting_block_3d.yaml with the sphere radius scaled to about `target` solid particles (the bunny of
+/// Fig. 8.4 has 9871).
+SphScene scaledMeltingBlock(size_t target) {
+  SphScene base = loadSphScene(configPath("melting_block_3d.yaml"));
+  const double radius = 0.08 * std::cbrt(double(target) / double(base.solids.at(0).count));
+  std::string s =
+      "name: melting_block_3d_scaled\ndimension: 3\nspacing: 0.02\n"
+      "enable: [elasticity, temperature, phase_transition]\n";
+  s += kSolverBlock;
+  s += "solids:\n  - {shape: sphere, center: " + vec(0, radius + 0.02, 0) +
+       ", radius: " + std::to_string(radius) +
+       ", model: goal_position, goal_stiffness: 8.0e5, temperature: 0}\n";
+  const double w = 3.0 * radius;
+  s += "boundary:\n  box_planes:\n    - {lo: " + vec(-w, 0, -w) + ", hi: " + vec(w, 1, w) +
+       ", restitution: 0.2, friction: 0.3}\n";
+  s += "temperature:\n  conductivity: 0.002\n  heat_capacity: 1\n  initial: 0\n  heated_planes:\n"
+       "    - {normal: [0, 1, 0], offset: 0, distance: 0.03, temperature: 100, transfer_rate: 20}\n"
+       "phase_transition:\n  seed: 1\n  melting: {rate: 2, temperature: 10}\n"
+       "frames: {count: 40, time: 0.0333333333333}\n";
+  return parseSphScene(s, "melting_block_3d_scaled");
+}
+
+/// A 3D freezing rod like Fig. 8.5: a fluid block of ~7000 particles at 20 degrees drops onto a rod of
+/// boundary particles held at -20 degrees (the seed of solid phase 1), freezing at 0 degrees.
+SphScene freezingRod3d() {
+  std::string s =
+      "name: freezing_rod_3d\ndimension: 3\nspacing: 0.02\n"
+      "enable: [elasticity, temperature, phase_transition]\n";
+  s += kSolverBlock;
+  s += "  viscosity: 0.02\n";
+  // 20 x 18 x 20 = 7200 fluid particles, rod 24 x 3 x 3 = 216 boundary particles.
+  s += "fluid:\n  - {lo: [-0.2, 0.3, -0.2], hi: [0.2, 0.66, 0.2], temperature: 20}\n";
+  s += "boundary:\n  boxes:\n    - {lo: [-0.24, 0.2, -0.03], hi: [0.24, 0.26, 0.03]}\n";
+  s += "  box_planes:\n    - {lo: [-0.5, 0, -0.5], hi: [0.5, 1.2, 0.5], restitution: 0.2, friction: 0.2}\n";
+  s += "temperature:\n  conductivity: 0.01\n  heat_capacity: 1\n  initial: 20\n  held:\n"
+       "    - {lo: [-0.24, 0.2, -0.03], hi: [0.24, 0.26, 0.03], temperature: -20, phase: 1}\n"
+       "phase_transition:\n  seed: 1\n  freezing:\n    rate: 1\n    temperature: 0\n    phase: 1\n"
+       "    min_solid_neighbors: 0\n    material: {model: goal_position, goal_stiffness: 8.0e5}\n"
+       "frames: {count: 40, time: 0.0333333333333}\n";
+  return parseSphScene(s, "freezing_rod_3d");
+}
+
+void thesisTable(bool quick) {
+  std::vector<ThesisScene> scenes;
+  scenes.push_back(
+      {"8.8", "2214", 18.7, "dice_3d.yaml (as shipped)", loadSphScene(configPath("dice_3d.yaml"))});
+  scenes.push_back({"8.4", "9871", 17.0, "melting_block_3d.yaml (as shipped)",
+                    loadSphScene(configPath("melting_block_3d.yaml"))});
+  scenes.push_back(
+      {"8.4", "9871", 17.0, "melting_block_3d, sphere scaled to ~9871", scaledMeltingBlock(9871)});
+  scenes.push_back({"8.5", "1606-7000", 18.2, "freezing_rod_2d.yaml (as shipped, 2D)",
+                    loadSphScene(configPath("freezing_rod_2d.yaml"))});
+  scenes.push_back({"8.5", "1606-7000", 18.2, "freezing rod in 3D, 7200 fluid", freezingRod3d()});
+  const int frames = quick ? 1 : 2;
+  std::printf(
+      "\n## (b) Table 8.1 scenes (thesis: Pentium 4, 3 GHz), %d frame(s) from the start, no output, 2 "
+      "threads\n\n",
+      frames);
+  std::printf(
+      "| Fig. | thesis particles | thesis s/frame | our scene | particles | frame time [s] | s / frame | "
+      "steps / "
+      "frame | mean dt | last dt limit | s / (1/30 s) | speed-up vs thesis (per 1/30 s) |\n");
+  std::printf("|---|---:|---:|---|---:|---:|---:|---:|---:|---|---:|---:|\n");
+  for (ThesisScene& t : scenes) {
+    SphScene& scene = t.scene;
+    scene.frame_count = frames;
+    scene.output = SphParticleOutput{};
+    scene.surface.enabled = false;
+    scene.skins.clear();
+    scene.config.num_threads = 2;
+    scene.thermal.config.num_threads = 2;
+    omp_set_num_threads(2);
+    SphFluidSolver solver = makeSphSolver(scene);
+    SphStepLimit limit = SphStepLimit::kMaxDt;
+    SphRunOptions options;
+    options.on_frame = [&](const SphFrameReport& r) { limit = r.limit; };
+    const SphRunStats st = runSphScene(scene, solver, options);
+    if (!st.instability.empty())
+      std::printf("<!-- %s unstable: %s -->\n", scene.name.c_str(), st.instability.c_str());
+    const double per_frame = st.wall_seconds / std::max(1, st.frames);
+    const double per_30th = per_frame * (1.0 / 30.0) / scene.frame_time;
+    std::printf("| %s | %s | %.1f | %s | %zu | %.4f | %.3f | %.0f | %.2e | %s | %.3f | %.0fx |\n", t.figure,
+                t.thesis_particles, t.thesis_seconds_per_frame, t.label.c_str(), st.particles,
+                scene.frame_time, per_frame, double(st.steps) / std::max(1, st.frames), st.mean_dt,
+                toString(limit), per_30th, t.thesis_seconds_per_frame / per_30th);
+    std::fflush(stdout);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool quick = false, million = true;
+  for (int a = 1; a < argc; ++a) {
+    if (!std::strcmp(argv[a], "--quick")) quick = true;
+    if (!std::strcmp(argv[a], "--no-1m")) million = false;
+  }
+  if (quick) million = false;
+  perParticleTable(quick, million);
+  thesisTable(quick);
+  return 0;
+}
