@@ -576,7 +576,7 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
     throw std::invalid_argument("SphElasticSolid::addForces: particle arrays differ in size");
   prepare(particles);
   const long m = static_cast<long>(solid_.size());
-  const int threads = static_cast<int>(std::max<long>(1, std::min<long>(omp_get_max_threads(), m / 256)));
+  const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), m / 256)));
 #pragma omp parallel num_threads(threads)
   {
     Scratch scratch;

@@ -211,6 +211,7 @@ void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
 
 void SphFluidSolver::addForceTerm(std::shared_ptr<SphForceTerm> term) {
   if (!term) throw std::invalid_argument("SphFluidSolver::addForceTerm: term is null");
+  term->setThreadLimit(num_threads_);
   force_terms_.push_back(std::move(term));
   forces_valid_ = false;
 }

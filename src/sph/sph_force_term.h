@@ -1,6 +1,8 @@
 // Extra force terms of the SPH solver, e.g. the elastic forces of solid particles (thesis 8.2).
 #pragma once
 
+#include <omp.h>
+
 #include <vector>
 
 #include "core/surfel_cloud.h"
@@ -27,6 +29,13 @@ class SphForceTerm {
   virtual double stableTimeStep(const SphParticles& particles, double cfl) const = 0;
   /// Potential energy stored by the term at the last evaluation (enters the solver's instability check).
   virtual double potentialEnergy() const = 0;
+
+  /// Threads the term may use; SphFluidSolver::addForceTerm passes the solver's own count (0: all cores).
+  void setThreadLimit(int threads) { thread_limit_ = threads; }
+  int threadLimit() const { return thread_limit_ > 0 ? thread_limit_ : omp_get_max_threads(); }
+
+ private:
+  int thread_limit_ = 0;
 };
 
 }  // namespace rc

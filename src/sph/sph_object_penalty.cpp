@@ -169,7 +169,7 @@ void SphObjectPenalty::addForces(const SphParticles& particles, const std::vecto
   s_contacts_.resize(m);
   s_repulsive_.resize(m);
   const long count = static_cast<long>(m);
-  const int threads = static_cast<int>(std::max<long>(1, std::min<long>(omp_get_max_threads(), count / 512)));
+  const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), count / 512)));
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (long s = 0; s < count; ++s) gatherForces(static_cast<size_t>(s));
   // Serial reduction in sorted order: independent of the thread count.
