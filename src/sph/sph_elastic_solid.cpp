@@ -93,22 +93,35 @@ void assignLatticePoints(const SphLattice& lattice, const Mat3& transform, const
     dist2[k] = (lattice.point(out.indices[k]) - q).squaredNorm();
     if (out.indices[k].isZero()) out.assigned[k] = 0;  // the centre particle's own point
   }
-  // One particle per lattice point: the closest keeps it (ties: lower index). Sort by (point, distance,
-  // index); all but the first of each point lose it.
-  thread_local std::vector<uint32_t> order;
-  order.resize(n);
-  for (size_t k = 0; k < n; ++k) order[k] = static_cast<uint32_t>(k);
+  // One particle per lattice point: the closest keeps it (ties: lower index). A small open-addressing table
+  // keyed by the lattice index holds the current keeper of each point (linear in the neighbourhood size).
+  size_t slots = 64;
+  while (slots < 4 * n) slots *= 2;
+  thread_local std::vector<int32_t> keeper;
+  keeper.assign(slots, -1);
   const auto& idx = out.indices;
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    const Eigen::Vector3i &ia = idx[a], &ib = idx[b];
-    if (ia.x() != ib.x()) return ia.x() < ib.x();
-    if (ia.y() != ib.y()) return ia.y() < ib.y();
-    if (ia.z() != ib.z()) return ia.z() < ib.z();
-    if (dist2[a] != dist2[b]) return dist2[a] < dist2[b];
-    return a < b;
-  });
-  for (size_t p = 1; p < n; ++p)
-    if (idx[order[p]] == idx[order[p - 1]]) out.assigned[order[p]] = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const Eigen::Vector3i& i = idx[k];
+    const uint64_t key = uint64_t(uint32_t(i.x())) * 0x9E3779B97F4A7C15ull ^
+                         uint64_t(uint32_t(i.y())) * 0xC2B2AE3D27D4EB4Full ^
+                         uint64_t(uint32_t(i.z())) * 0x165667B19E3779F9ull;
+    for (size_t slot = size_t(key >> 32) & (slots - 1);; slot = (slot + 1) & (slots - 1)) {
+      const int32_t other = keeper[slot];
+      if (other < 0) {
+        keeper[slot] = int32_t(k);
+        break;
+      }
+      if (idx[size_t(other)] != i) continue;
+      // k comes after `other`: it wins only when strictly closer.
+      if (dist2[k] < dist2[size_t(other)]) {
+        out.assigned[size_t(other)] = 0;
+        keeper[slot] = int32_t(k);
+      } else {
+        out.assigned[k] = 0;
+      }
+      break;
+    }
+  }
 }
 
 // GCC 12 reports Eigen's JacobiSVD internals as maybe-uninitialized once inlined here (a false positive).
