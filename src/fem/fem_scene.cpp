@@ -116,8 +116,9 @@ class SceneReader {
                          "' (known: lumped_masses, node_volume_fractions)");
     }
     if (const YAML::Node s = node["solver"]) {
-      src_.allowKeys(s, {"type", "preconditioner", "tolerance", "max_iterations", "warm_start"},
-                     "dynamics.solver");
+      src_.allowKeys(
+          s, {"type", "preconditioner", "tolerance", "max_iterations", "warm_start", "refactor_iterations"},
+          "dynamics.solver");
       if (const YAML::Node t = s["type"]) {
         const std::string type = src_.string(t, "dynamics.solver.type");
         if (type == "cg")
@@ -126,8 +127,11 @@ class SceneReader {
           d.solver = WarpedDynamicsOptions::Solver::kSimplicialLDLT;
         else if (type == "cholmod")
           d.solver = WarpedDynamicsOptions::Solver::kCholmod;
+        else if (type == "cholmod_pcg")
+          d.solver = WarpedDynamicsOptions::Solver::kCholmodPcg;
         else
-          src_.fail(t, "dynamics.solver.type: unknown '" + type + "' (known: cg, ldlt, cholmod)");
+          src_.fail(t,
+                    "dynamics.solver.type: unknown '" + type + "' (known: cg, ldlt, cholmod, cholmod_pcg)");
       }
       if (const YAML::Node p = s["preconditioner"]) {
         const std::string name = src_.string(p, "dynamics.solver.preconditioner");
@@ -144,6 +148,9 @@ class SceneReader {
         d.cg_max_iterations =
             int(src_.integer(s["max_iterations"], "dynamics.solver.max_iterations", 1, 1000000));
       if (s["warm_start"]) d.cg_warm_start = src_.boolean(s["warm_start"], "dynamics.solver.warm_start");
+      if (s["refactor_iterations"])
+        d.pcg_refactor_iterations =
+            int(src_.integer(s["refactor_iterations"], "dynamics.solver.refactor_iterations", 1, 1000000));
     }
   }
 

@@ -58,8 +58,10 @@ WarpedDynamics::WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOpt
     if (!(options_.ground.friction >= 0.0))
       throw std::invalid_argument("WarpedDynamics: ground friction must be non-negative");
   }
-  if (!(options_.cg_tolerance > 0.0) || options_.cg_max_iterations <= 0)
-    throw std::invalid_argument("WarpedDynamics: cg_tolerance and cg_max_iterations must be positive");
+  if (!(options_.cg_tolerance > 0.0) || options_.cg_max_iterations <= 0 ||
+      options_.pcg_refactor_iterations <= 0)
+    throw std::invalid_argument(
+        "WarpedDynamics: cg_tolerance, cg_max_iterations and pcg_refactor_iterations must be positive");
 
   const PolyhedralMesh& mesh = model_.mesh();
   const int dofs = numDofs(), num_elements = mesh.numElements();
@@ -103,7 +105,8 @@ WarpedDynamics::WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOpt
   diagonal_index_.resize(dofs);
   for (int d = 0; d < dofs; ++d) diagonal_index_[d] = valueIndex(warped_stiffness_, d, d);
   system_matrix_ = warped_stiffness_;
-  if (options_.solver == WarpedDynamicsOptions::Solver::kCholmod)
+  if (options_.solver == WarpedDynamicsOptions::Solver::kCholmod ||
+      options_.solver == WarpedDynamicsOptions::Solver::kCholmodPcg)
     cholmod_ = std::make_unique<CholmodSolver>();
 }
 
@@ -205,20 +208,30 @@ Eigen::VectorXd WarpedDynamics::solveSystem(const Eigen::SparseMatrix<double>& a
       ldlt_analyzed_ = true;
     }
     ldlt_.factorize(a);
+    ++stats.factorizations;
     if (ldlt_.info() != Eigen::Success)
       throw std::runtime_error("WarpedDynamics::step: LDLT factorisation of M + dt C + dt^2 K failed");
     x = ldlt_.solve(b);
     stats.solver_iterations += 1;
   } else if (options_.solver == WarpedDynamicsOptions::Solver::kCholmod) {
-    try {
-      cholmod_->factorize(a);  // analyses when the pattern differs from the last one
-    } catch (const std::runtime_error& error) {
-      throw std::runtime_error(std::string("WarpedDynamics::step: CHOLMOD factorisation of M + dt C + dt^2 K "
-                                           "failed: ") +
-                               error.what());
-    }
+    factorizeCholmod(a, stats);
     cholmod_->solve(b, x);
     stats.solver_iterations += 1;
+  } else if (options_.solver == WarpedDynamicsOptions::Solver::kCholmodPcg) {
+    const bool fresh = cholmod_->numFactorizations() == 0 || !cholmod_->patternMatches(a);
+    if (fresh) factorizeCholmod(a, stats);
+    x = guess;
+    if (!factorPreconditionedCg(
+            a, b, x, fresh ? options_.cg_max_iterations : options_.pcg_refactor_iterations, stats)) {
+      if (fresh) {
+        stats.converged = false;
+      } else {  // the stale factor preconditions too poorly: factorise this matrix and solve directly
+        factorizeCholmod(a, stats);
+        cholmod_->solve(b, x);
+        stats.solver_iterations += 1;
+        stats.solver_error = 0.0;
+      }
+    }
   } else if (options_.preconditioner == WarpedDynamicsOptions::Preconditioner::kJacobi) {
     jacobi_cg_.setTolerance(options_.cg_tolerance);
     jacobi_cg_.setMaxIterations(options_.cg_max_iterations);
@@ -240,6 +253,52 @@ Eigen::VectorXd WarpedDynamics::solveSystem(const Eigen::SparseMatrix<double>& a
   }
   if (!x.allFinite()) throw std::runtime_error("WarpedDynamics::step: the velocity update is not finite");
   return x;
+}
+
+void WarpedDynamics::factorizeCholmod(const Eigen::SparseMatrix<double>& a, StepStatistics& stats) {
+  try {
+    cholmod_->factorize(a);  // analyses when the pattern differs from the last one
+  } catch (const std::runtime_error& error) {
+    throw std::runtime_error(std::string("WarpedDynamics::step: CHOLMOD factorisation of M + dt C + dt^2 K "
+                                         "failed: ") +
+                             error.what());
+  }
+  ++stats.factorizations;
+}
+
+bool WarpedDynamics::factorPreconditionedCg(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
+                                            Eigen::VectorXd& x, int max_iterations, StepStatistics& stats) {
+  const double b_norm = b.norm();
+  if (b_norm == 0.0) {
+    x.setZero();
+    stats.solver_error = 0.0;
+    return true;
+  }
+  const double threshold = options_.cg_tolerance * b_norm;
+  Eigen::VectorXd r = b - a * x, z, p, q;
+  double r_norm = r.norm();
+  int iterations = 0;
+  if (r_norm > threshold) {
+    cholmod_->solve(r, z);
+    p = z;
+    double rz = r.dot(z);
+    while (iterations < max_iterations) {
+      q.noalias() = a * p;
+      const double alpha = rz / p.dot(q);
+      x += alpha * p;
+      r -= alpha * q;
+      ++iterations;
+      r_norm = r.norm();
+      if (r_norm <= threshold) break;
+      cholmod_->solve(r, z);
+      const double rz_next = r.dot(z);
+      p = z + (rz_next / rz) * p;
+      rz = rz_next;
+    }
+  }
+  stats.solver_iterations += iterations;
+  stats.solver_error = r_norm / b_norm;
+  return r_norm <= threshold;
 }
 
 void WarpedDynamics::buildConstrainedMatrix(const std::vector<char>& active) {
@@ -315,7 +374,8 @@ StepStatistics WarpedDynamics::step() {
     Eigen::VectorXd z = Eigen::VectorXd::Zero(numDofs());  // prescribed part: dv . n = -v . n
     for (int i = 0; i < numNodes(); ++i)
       if (active[i]) z.segment<3>(3 * i) = -g.normal.dot(velocities_.segment<3>(3 * i)) * g.normal;
-    Eigen::VectorXd b = rhs - system_matrix_ * z, y0 = guess;
+    // Later rounds start from the previous round's solution (only the released nodes' rows changed).
+    Eigen::VectorXd b = rhs - system_matrix_ * z, y0 = round == 0 ? guess : Eigen::VectorXd(dv - z);
     for (int i = 0; i < numNodes(); ++i)
       if (active[i]) {
         b.segment<3>(3 * i) -= g.normal.dot(b.segment<3>(3 * i)) * g.normal;

@@ -38,7 +38,10 @@ struct GroundPlane {
 
 struct WarpedDynamicsOptions {
   /// kCholmod: supernodal Cholesky (CholmodSolver), analysed once per pattern; needs a build with CHOLMOD.
-  enum class Solver { kConjugateGradient, kSimplicialLDLT, kCholmod };
+  /// kCholmodPcg: CG preconditioned by the CHOLMOD factor of an earlier system matrix (the rotations and the
+  /// contact set change slowly); when CG does not reach cg_tolerance within pcg_refactor_iterations, the
+  /// current matrix is factorised and solved directly (and preconditions the following steps).
+  enum class Solver { kConjugateGradient, kSimplicialLDLT, kCholmod, kCholmodPcg };
   enum class Preconditioner { kJacobi, kIncompleteCholesky };
   enum class RotationWeights { kLumpedMasses, kNodeVolumeFractions };
 
@@ -53,13 +56,15 @@ struct WarpedDynamicsOptions {
   Preconditioner preconditioner = Preconditioner::kJacobi;
   double cg_tolerance = 1e-8;  // relative residual |A dv - b| / |b|
   int cg_max_iterations = 2000;
-  bool cg_warm_start = true;  // start from the previous step's dv
+  bool cg_warm_start = true;         // start from the previous step's dv
+  int pcg_refactor_iterations = 10;  // kCholmodPcg: CG iterations before refactorising
   /// Keep the previous R_e when Horn's top eigenvalue gap is below this (collinear/collapsed element).
   double min_eigenvalue_gap = 1e-12;
 };
 
 struct StepStatistics {
   int solver_iterations = 0;  // CG iterations summed over the solves of the step (1 per direct solve)
+  int factorizations = 0;     // numeric factorisations (direct solvers, kCholmodPcg refactorisations)
   double solver_error = 0.0;  // CG relative residual estimate (0 for the direct solver)
   bool converged = true;
   int contact_nodes = 0;         // nodes held on the ground inside the solve (v+ . n = 0)
@@ -126,6 +131,10 @@ class WarpedDynamics {
   Eigen::VectorXd solveSystem(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
                               const Eigen::VectorXd& guess, StepStatistics& stats);
   void buildConstrainedMatrix(const std::vector<char>& active);
+  void factorizeCholmod(const Eigen::SparseMatrix<double>& a, StepStatistics& stats);
+  // CG on a x = b from x, preconditioned by cholmod_'s factor; false when not converged in max_iterations.
+  bool factorPreconditionedCg(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
+                              Eigen::VectorXd& x, int max_iterations, StepStatistics& stats);
 
   LinearElasticModel model_;
   WarpedDynamicsOptions options_;
