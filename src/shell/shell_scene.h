@@ -123,6 +123,8 @@ class ShellSimulation {
 
   const ShellScene& scene() const { return scene_; }
   const ShellSolver& solver() const { return *solver_; }
+  /// The solver, e.g. to push nodes (velocities) between frames.
+  ShellSolver& mutableSolver() { return *solver_; }
   const ShellMaterialModel* material() const { return model_.get(); }
   size_t crackCount() const { return model_ ? model_->cracks().size() : 0; }
   size_t fiberCount() const { return solver_->fibers().size(); }

@@ -16,9 +16,13 @@
 #include <set>
 #include <string>
 
+#include "launch_test_support.h"
 #include "sph/sph_scene_file.h"
 
 namespace {
+
+using rc::expectRvizTopicsPublished;
+using rc::waitFor;
 
 using relaxed_connectivity::LoadSphScene;
 using relaxed_connectivity::SphCommand;
@@ -37,17 +41,6 @@ struct Inbox {
 };
 
 /// Spins until `done` or the timeout.
-template <class Done>
-bool waitFor(Done&& done, double seconds) {
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
-  while (ros::ok() && ros::WallTime::now() < end) {
-    ros::spinOnce();
-    if (done()) return true;
-    ros::WallDuration(0.01).sleep();
-  }
-  return false;
-}
-
 /// The first stats message (in arrival order) that satisfies `accept`; it and every message before it are
 /// consumed. An empty message if none arrives within 10 s.
 template <class Accept>
@@ -182,25 +175,7 @@ TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
 
 // config/rviz/sph_demo.rviz shows topics that sph_sim publishes.
 TEST(SphDemoLaunch, RvizConfigShowsPublishedTopics) {
-  const YAML::Node rviz = YAML::LoadFile(std::string(RC_SOURCE_DIR) + "/config/rviz/sph_demo.rviz");
-  const YAML::Node manager = rviz["Visualization Manager"];
-  ASSERT_TRUE(manager.IsMap());
-  EXPECT_EQ(manager["Global Options"]["Fixed Frame"].as<std::string>(), "world");
-  ros::master::V_TopicInfo topics;
-  ASSERT_TRUE(waitFor([&] { return ros::master::getTopics(topics) && topics.size() > 2; }, 10.0));
-  int shown = 0;
-  for (const auto& display : manager["Displays"]) {
-    const std::string type = display["Class"].as<std::string>();
-    std::string topic;
-    if (type == "rviz/PointCloud2") topic = display["Topic"].as<std::string>();
-    if (type == "rviz/Marker") topic = display["Marker Topic"].as<std::string>();
-    if (topic.empty()) continue;
-    ++shown;
-    const bool published = std::any_of(topics.begin(), topics.end(),
-                                       [&](const ros::master::TopicInfo& t) { return t.name == topic; });
-    EXPECT_TRUE(published) << "rviz shows " << topic << ", which nobody publishes";
-  }
-  EXPECT_EQ(shown, 2);
+  expectRvizTopicsPublished(std::string(RC_SOURCE_DIR) + "/config/rviz/sph_demo.rviz", 2);
 }
 
 }  // namespace

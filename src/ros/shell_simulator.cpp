@@ -1,0 +1,302 @@
+#include "ros/shell_simulator.h"
+
+#include <relaxed_connectivity/ShellStats.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "ros/point_cloud2_converter.h"
+
+namespace rc {
+
+void ShellSimulatorParams::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("shell_sim: " + what); };
+  if (scene.empty()) fail("parameter ~scene (a shell scene file, config/shell/*.yaml) is required");
+  if (frame_id.empty() || frame_id[0] == '/')
+    fail("frame_id '" + frame_id + "' must be non-empty without '/'");
+  if (!(rate > 0) || !std::isfinite(rate)) fail("rate must be > 0 Hz (got " + std::to_string(rate) + ")");
+  if (node_count < 0)
+    fail("node_count must be >= 0 (0: the scene's; got " + std::to_string(node_count) + ")");
+}
+
+ShellSimulatorParams readShellSimulatorParams(const ros::NodeHandle& pnh) {
+  ShellSimulatorParams p;
+  pnh.param("scene", p.scene, p.scene);
+  pnh.param("frame_id", p.frame_id, p.frame_id);
+  pnh.param("rate", p.rate, p.rate);
+  pnh.param("autostart", p.autostart, p.autostart);
+  pnh.param("node_count", p.node_count, p.node_count);
+  p.validate();
+  return p;
+}
+
+ShellAppliedForce shellForceFromRequest(const relaxed_connectivity::ShellForce::Request& request,
+                                        const std::vector<Vec3>& positions) {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("apply_force: " + what); };
+  ShellAppliedForce applied;
+  applied.force = Vec3(request.force.x, request.force.y, request.force.z);
+  if (!applied.force.allFinite()) fail("force is not finite");
+  if (!(applied.force.norm() > 0)) fail("force is zero");
+  if (!(request.duration > 0) || !std::isfinite(request.duration))
+    fail("duration must be finite and > 0 s (got " + std::to_string(request.duration) + ")");
+  applied.remaining = request.duration;
+  if (request.node >= 0) {
+    if (size_t(request.node) >= positions.size())
+      fail("node " + std::to_string(request.node) + " is out of range (" + std::to_string(positions.size()) +
+           " nodes)");
+    applied.nodes.push_back(size_t(request.node));
+    return applied;
+  }
+  if (request.node != -1)
+    fail("node must be a node index >= 0 or -1 (nodes near point), got " + std::to_string(request.node));
+  const Vec3 point(request.point.x, request.point.y, request.point.z);
+  if (!point.allFinite()) fail("point is not finite");
+  if (!(request.radius > 0) || !std::isfinite(request.radius))
+    fail("radius must be finite and > 0 (got " + std::to_string(request.radius) + ")");
+  for (size_t i = 0; i < positions.size(); ++i)
+    if ((positions[i] - point).squaredNorm() <= request.radius * request.radius) applied.nodes.push_back(i);
+  if (applied.nodes.empty())
+    fail("no node within " + std::to_string(request.radius) + " m of the point (" +
+         std::to_string(point.x()) + ", " + std::to_string(point.y()) + ", " + std::to_string(point.z()) +
+         ")");
+  return applied;
+}
+
+namespace {
+
+geometry_msgs::Point toPoint(const Vec3& p) {
+  geometry_msgs::Point point;
+  point.x = p.x();
+  point.y = p.y();
+  point.z = p.z();
+  return point;
+}
+
+}  // namespace
+
+visualization_msgs::Marker shellNodesMarker(const std::vector<Vec3>& positions, double size) {
+  visualization_msgs::Marker marker;
+  marker.type = visualization_msgs::Marker::SPHERE_LIST;
+  marker.action = visualization_msgs::Marker::ADD;
+  marker.pose.orientation.w = 1.0;
+  marker.scale.x = marker.scale.y = marker.scale.z = size;
+  marker.color.r = 0.95f;
+  marker.color.g = 0.45f;
+  marker.color.b = 0.15f;
+  marker.color.a = 1.0f;
+  marker.points.reserve(positions.size());
+  for (const Vec3& p : positions) marker.points.push_back(toPoint(p));
+  return marker;
+}
+
+visualization_msgs::Marker shellFibersMarker(const ShellFibers& fibers, const std::vector<Vec3>& positions,
+                                             double width) {
+  visualization_msgs::Marker marker;
+  marker.type = visualization_msgs::Marker::LINE_LIST;
+  marker.action = visualization_msgs::Marker::ADD;
+  marker.pose.orientation.w = 1.0;
+  marker.scale.x = width;
+  marker.color.r = 0.3f;
+  marker.color.g = 0.6f;
+  marker.color.b = 0.9f;
+  marker.color.a = 1.0f;
+  marker.points.reserve(4 * fibers.size());
+  for (const Fiber& f : fibers.fibers) {
+    marker.points.push_back(toPoint(positions.at(f.end1)));
+    marker.points.push_back(toPoint(positions.at(f.center)));
+    marker.points.push_back(toPoint(positions.at(f.center)));
+    marker.points.push_back(toPoint(positions.at(f.end2)));
+  }
+  return marker;
+}
+
+ShellSimulator::ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : nh_(nh), private_nh_(private_nh), params_(readShellSimulatorParams(private_nh)) {
+  surfels_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("surfels", 1);
+  cracks_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("cracks", 1);
+  nodes_pub_ = private_nh_.advertise<visualization_msgs::Marker>("nodes", 1);
+  fibers_pub_ = private_nh_.advertise<visualization_msgs::Marker>("fibers", 1);
+  stats_pub_ = private_nh_.advertise<relaxed_connectivity::ShellStats>("stats", 1);
+  scene_ = loadShellScene(params_.scene);
+  if (params_.node_count > 0) {
+    scene_.nodes.spacing = 0.0;
+    scene_.nodes.target_count = size_t(params_.node_count);
+  }
+  scene_.output.every = 0;
+  simulation_ = std::make_unique<ShellSimulation>(scene_);
+  const ShellFibers& fibers = simulation_->solver().fibers();
+  double length = 0.0;
+  for (const Fiber& f : fibers.fibers) length += f.rest_length;
+  node_size_ = fibers.size() > 0 ? 0.25 * length / double(fibers.size()) : 0.01;
+  running_ = params_.autostart;
+  ROS_INFO_STREAM("shell_sim: loaded " << params_.scene << ": " << simulation_->solver().nodes().size()
+                                       << " nodes, " << simulation_->fiberCount() << " fibers, "
+                                       << simulation_->surfels().size() << " surfels");
+  command_srv_ = private_nh_.advertiseService("command", &ShellSimulator::commandCallback, this);
+  force_srv_ = private_nh_.advertiseService("apply_force", &ShellSimulator::forceCallback, this);
+  timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &ShellSimulator::timerCallback, this);
+}
+
+void ShellSimulator::resetSimulation() {
+  simulation_ = std::make_unique<ShellSimulation>(scene_);
+  forces_.clear();
+  last_frame_ = ShellFrameReport();
+  running_ = false;
+  error_.clear();
+}
+
+void ShellSimulator::applyForces() {
+  if (forces_.empty()) return;
+  const double dt = last_frame_.dt > 0 ? last_frame_.dt : scene_.solver.time_step;
+  const double frame_time = scene_.frame_time > 0 ? scene_.frame_time : scene_.steps_per_frame * dt;
+  if (!(frame_time > 0)) return;  // adaptive step before the first frame: the forces start next frame
+  ShellSolver& solver = simulation_->mutableSolver();
+  const std::vector<double>& masses = solver.energy().masses();
+  std::vector<Vec3> velocities = solver.velocities();
+  for (ShellAppliedForce& applied : forces_) {
+    const double duration = std::min(applied.remaining, frame_time);
+    for (size_t i : applied.nodes) velocities[i] += applied.force * (duration / masses[i]);
+    applied.remaining -= duration;
+  }
+  solver.setVelocities(velocities);  // pinned nodes stay at rest; the impulse counts as available energy
+  forces_.erase(std::remove_if(forces_.begin(), forces_.end(),
+                               [](const ShellAppliedForce& f) { return !(f.remaining > 0); }),
+                forces_.end());
+}
+
+void ShellSimulator::advance(int frames) {
+  for (int k = 0; k < frames; ++k) {
+    try {
+      applyForces();
+      last_frame_ = simulation_->advanceFrame();
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      resetSimulation();
+      error_ = what + " (reset to t = 0, paused)";
+      ROS_ERROR_STREAM("shell_sim: " << error_);
+      return;
+    }
+  }
+}
+
+void ShellSimulator::timerCallback(const ros::WallTimerEvent&) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!running_) return;
+    advance(1);
+  }
+  publish();
+}
+
+void ShellSimulator::publish() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const ros::Time stamp = ros::Time::now();
+  const ShellSolver& solver = simulation_->solver();
+  if (surfels_pub_.getNumSubscribers() > 0) {
+    SurfelCloud cloud = simulation_->surfels();
+    cloud.frame_id = params_.frame_id;
+    cloud.stamp_ns = stamp.toNSec();
+    surfels_pub_.publish(PointCloud2Converter::toMessage(cloud));
+  }
+  if (cracks_pub_.getNumSubscribers() > 0) {
+    SurfelCloud cloud = simulation_->crackSurfels();
+    cloud.frame_id = params_.frame_id;
+    cloud.stamp_ns = stamp.toNSec();
+    cracks_pub_.publish(PointCloud2Converter::toMessage(cloud));
+  }
+  if (nodes_pub_.getNumSubscribers() > 0) {
+    visualization_msgs::Marker marker = shellNodesMarker(solver.positions(), node_size_);
+    marker.header.frame_id = params_.frame_id;
+    marker.header.stamp = stamp;
+    marker.ns = "shell_nodes";
+    nodes_pub_.publish(marker);
+  }
+  if (fibers_pub_.getNumSubscribers() > 0) {
+    visualization_msgs::Marker marker =
+        shellFibersMarker(solver.fibers(), solver.positions(), 0.2 * node_size_);
+    marker.header.frame_id = params_.frame_id;
+    marker.header.stamp = stamp;
+    marker.ns = "shell_fibers";
+    fibers_pub_.publish(marker);
+  }
+  relaxed_connectivity::ShellStats stats;
+  stats.header.frame_id = params_.frame_id;
+  stats.header.stamp = stamp;
+  stats.scene = scene_.name;
+  stats.running = running_;
+  stats.frame = uint32_t(simulation_->frame());
+  stats.step = uint64_t(solver.stepCount());
+  stats.time = solver.time();
+  stats.dt = last_frame_.dt;
+  stats.pressure = last_frame_.pressure;
+  stats.nodes = uint32_t(solver.nodes().size());
+  stats.fibers = uint32_t(simulation_->fiberCount());
+  stats.surfels = uint32_t(simulation_->surfels().size());
+  stats.crack_surfels = uint32_t(simulation_->crackSurfels().size());
+  stats.cracks = uint32_t(simulation_->crackCount());
+  stats.active_forces = uint32_t(forces_.size());
+  stats.mean_radius = simulation_->meanRadius();
+  stats.max_speed = simulation_->maxSpeed();
+  stats.forces_ms = last_frame_.forces_ms;
+  stats.material_ms = last_frame_.material_ms;
+  stats.surface_ms = last_frame_.surface_ms;
+  stats.error = error_;
+  stats_pub_.publish(stats);
+}
+
+bool ShellSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& request,
+                                     relaxed_connectivity::SphCommand::Response& response) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    response.success = true;
+    if (request.command == "start") {
+      error_.clear();
+      running_ = true;
+      response.message = "running";
+    } else if (request.command == "pause") {
+      running_ = false;
+      response.message = "paused at frame " + std::to_string(simulation_->frame()) +
+                         ", t = " + std::to_string(simulation_->solver().time()) + " s";
+    } else if (request.command == "step") {
+      running_ = false;
+      error_.clear();
+      advance(int(std::min<uint32_t>(std::max<uint32_t>(1, request.steps), 1000000)));
+      response.success = error_.empty();
+      response.message = error_.empty() ? "frame " + std::to_string(simulation_->frame()) +
+                                              ", t = " + std::to_string(simulation_->solver().time()) + " s"
+                                        : error_;
+    } else if (request.command == "reset") {
+      resetSimulation();
+      response.message = "reset to t = 0: " + std::to_string(simulation_->solver().nodes().size()) +
+                         " nodes, " + std::to_string(simulation_->surfels().size()) + " surfels";
+    } else {
+      response.success = false;
+      response.message = "unknown command '" + request.command + "' (start, pause, step, reset)";
+    }
+  }
+  publish();
+  return true;
+}
+
+bool ShellSimulator::forceCallback(relaxed_connectivity::ShellForce::Request& request,
+                                   relaxed_connectivity::ShellForce::Response& response) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  try {
+    ShellAppliedForce applied = shellForceFromRequest(request, simulation_->solver().positions());
+    response.nodes = uint32_t(applied.nodes.size());
+    forces_.push_back(std::move(applied));
+    response.success = true;
+    response.message = "force on " + std::to_string(response.nodes) + " nodes for " +
+                       std::to_string(request.duration) + " s";
+  } catch (const std::exception& e) {
+    response.success = false;
+    response.nodes = 0;
+    response.message = e.what();
+    ROS_WARN_STREAM("shell_sim: force refused: " << response.message);
+  }
+  return true;
+}
+
+}  // namespace rc

@@ -1,0 +1,106 @@
+// The shell_sim node (thesis 7): runs a thin-shell scene file (shell/shell_scene.h, config/shell/*.yaml)
+// frame by frame in real time, publishes the dense surfels, the nodes and the fibers for rviz, and pushes
+// nodes with forces given by service.
+//
+// Publishes   ~surfels (sensor_msgs/PointCloud2, the deformed dense surfels,
+// PointCloud2Layout::kPointSurfel),
+//             ~cracks (sensor_msgs/PointCloud2, the crack discontinuity surfels), ~nodes
+//             (visualization_msgs/Marker SPHERE_LIST, one point per node), ~fibers (visualization_msgs/Marker
+//             LINE_LIST, end1-center and center-end2 per fiber), ~stats (relaxed_connectivity/ShellStats),
+//             all in frame_id
+// Services    ~command (relaxed_connectivity/SphCommand: start | pause | step N (N frames, 0 means 1) |
+// reset;
+//             reset restores the scene at t = 0, paused, and drops the applied forces), ~apply_force
+//             (relaxed_connectivity/ShellForce: a force on one node or on the nodes near a point for a
+//             simulated duration; bad input is refused with a message and changes nothing)
+// Parameters  (private) scene (file, required), frame_id, rate (frames per wall second: one frame per tick),
+//             autostart, node_count (> 0 replaces the scene's node count, for speed); see
+//             config/shell_demo.yaml.
+// The scene file's frame count and outputs are ignored: the node runs until paused. A failing frame
+// (ShellInstabilityError) resets the scene to t = 0, paused, and the stats' error says why.
+#pragma once
+
+#include <relaxed_connectivity/ShellForce.h>
+#include <relaxed_connectivity/SphCommand.h>
+#include <ros/ros.h>
+#include <visualization_msgs/Marker.h>
+
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "shell/shell_scene.h"
+
+namespace rc {
+
+struct ShellSimulatorParams {
+  std::string scene;
+  std::string frame_id = "world";
+  double rate = 30.0;     ///< frames per wall-clock second while running
+  bool autostart = true;  ///< run after loading (else paused at t = 0)
+  int node_count = 0;     ///< > 0: replaces the scene's node count (nodes.count)
+
+  /// Throws std::invalid_argument naming the parameter and the bad value.
+  void validate() const;
+};
+
+ShellSimulatorParams readShellSimulatorParams(const ros::NodeHandle& private_nh);
+
+/// A force acting on some nodes for a remaining simulated time.
+struct ShellAppliedForce {
+  std::vector<size_t> nodes;
+  Vec3 force = Vec3::Zero();  ///< on each node
+  double remaining = 0.0;     ///< simulated seconds left
+};
+
+/// Checks a ShellForce request against the current node positions and selects its nodes. Throws
+/// std::invalid_argument naming the problem: a non-finite or zero force, a duration that is not finite and
+/// > 0, a node index out of range, node = -1 with a non-finite point or a radius that is not finite and > 0,
+/// or no node within the radius.
+ShellAppliedForce shellForceFromRequest(const relaxed_connectivity::ShellForce::Request& request,
+                                        const std::vector<Vec3>& positions);
+
+/// The nodes at `positions` as a SPHERE_LIST of diameter `size`; header and namespace are left to the caller.
+visualization_msgs::Marker shellNodesMarker(const std::vector<Vec3>& positions, double size);
+/// The fibers as a LINE_LIST (end1-center, center-end2: 4 points per fiber) of width `width`.
+visualization_msgs::Marker shellFibersMarker(const ShellFibers& fibers, const std::vector<Vec3>& positions,
+                                             double width);
+
+class ShellSimulator {
+ public:
+  /// Reads the parameters and loads ~scene (throws std::invalid_argument / ShellSceneError).
+  ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh);
+
+  bool running() const { return running_; }
+
+ private:
+  void timerCallback(const ros::WallTimerEvent&);
+  /// Simulates `frames` frames with the applied forces; a failing frame resets to t = 0, paused, and sets
+  /// error_.
+  void advance(int frames);
+  /// Adds the impulses of the applied forces for the next frame (F dt / m per node).
+  void applyForces();
+  void publish();
+  void resetSimulation();
+  bool commandCallback(relaxed_connectivity::SphCommand::Request& request,
+                       relaxed_connectivity::SphCommand::Response& response);
+  bool forceCallback(relaxed_connectivity::ShellForce::Request& request,
+                     relaxed_connectivity::ShellForce::Response& response);
+
+  ros::NodeHandle nh_, private_nh_;
+  ShellSimulatorParams params_;
+  std::mutex mutex_;  // simulation against service calls
+  ShellScene scene_;
+  std::unique_ptr<ShellSimulation> simulation_;
+  std::vector<ShellAppliedForce> forces_;
+  ShellFrameReport last_frame_;
+  double node_size_ = 0.0;  ///< marker size: a quarter of the mean rest fiber length
+  bool running_ = false;
+  std::string error_;
+  ros::Publisher surfels_pub_, cracks_pub_, nodes_pub_, fibers_pub_, stats_pub_;
+  ros::ServiceServer command_srv_, force_srv_;
+  ros::WallTimer timer_;
+};
+
+}  // namespace rc

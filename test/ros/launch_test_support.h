@@ -1,0 +1,51 @@
+// Shared by the demo launch rostests: waiting while spinning, and the check that an rviz config shows only
+// topics somebody publishes.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <string>
+
+namespace rc {
+
+/// Spins until done() or `seconds` of wall time pass; returns whether done() became true.
+template <class Done>
+bool waitFor(Done&& done, double seconds) {
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+  while (ros::ok() && ros::WallTime::now() < end) {
+    ros::spinOnce();
+    if (done()) return true;
+    ros::WallDuration(0.01).sleep();
+  }
+  return false;
+}
+
+/// config/rviz/<name>.rviz has the fixed frame "world" and shows `expected_displays` PointCloud2/Marker
+/// topics, each of them advertised by somebody.
+inline void expectRvizTopicsPublished(const std::string& rviz_path, int expected_displays) {
+  const YAML::Node rviz = YAML::LoadFile(rviz_path);
+  const YAML::Node manager = rviz["Visualization Manager"];
+  ASSERT_TRUE(manager.IsMap());
+  EXPECT_EQ(manager["Global Options"]["Fixed Frame"].as<std::string>(), "world");
+  ros::master::V_TopicInfo topics;
+  ASSERT_TRUE(waitFor(
+      [&] { return ros::master::getTopics(topics) && int(topics.size()) > expected_displays; }, 10.0));
+  int shown = 0;
+  for (const auto& display : manager["Displays"]) {
+    const std::string type = display["Class"].as<std::string>();
+    std::string topic;
+    if (type == "rviz/PointCloud2") topic = display["Topic"].as<std::string>();
+    if (type == "rviz/Marker") topic = display["Marker Topic"].as<std::string>();
+    if (topic.empty()) continue;
+    ++shown;
+    const bool published = std::any_of(topics.begin(), topics.end(),
+                                       [&](const ros::master::TopicInfo& t) { return t.name == topic; });
+    EXPECT_TRUE(published) << "rviz shows " << topic << ", which nobody publishes";
+  }
+  EXPECT_EQ(shown, expected_displays);
+}
+
+}  // namespace rc
