@@ -61,7 +61,8 @@ struct SeparatedMesh {
 };
 
 /// Throws std::invalid_argument if one side of the cut has no elements or an element was left whole across
-/// the plane (region-restricted cut: partial cuts of 9.3.2 are not implemented).
+/// the plane (region-restricted cut; partial cuts that end inside the material: ProgressiveCutMesh,
+/// polygon_cut.h).
 SeparatedMesh separateAlongPlane(const PlaneCutResult& cut);
 
 }  // namespace rc
