@@ -13,6 +13,7 @@
 
 #include "fem/polygon_geometry.h"
 #include "ros/point_cloud2_converter.h"
+#include "ros/simulation_commands.h"
 
 namespace rc {
 
@@ -262,31 +263,30 @@ bool FemSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& re
                                    relaxed_connectivity::SphCommand::Response& response) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    response.success = true;
-    if (request.command == "start") {
+    SimulationCommandHandlers handlers;
+    handlers.start = [&]() -> CommandResult {
       error_.clear();
       running_ = true;
-      response.message = "running";
-    } else if (request.command == "pause") {
+      return {true, "running"};
+    };
+    handlers.pause = [&]() -> CommandResult {
       running_ = false;
-      response.message = "paused at t = " + std::to_string(simulation_->time()) + " s";
-    } else if (request.command == "step") {
+      return {true, "paused at t = " + std::to_string(simulation_->time()) + " s"};
+    };
+    handlers.step = [&](uint32_t steps) -> CommandResult {
       running_ = false;
       error_.clear();
-      const uint64_t steps = std::max<uint32_t>(1, request.steps);
       advance(std::numeric_limits<double>::infinity(), steps);
-      response.success = error_.empty();
-      response.message = error_.empty() ? "step " + std::to_string(simulation_->steps()) +
-                                              ", t = " + std::to_string(simulation_->time()) + " s"
-                                        : error_;
-    } else if (request.command == "reset") {
+      if (!error_.empty()) return {false, error_};
+      return {true, "step " + std::to_string(simulation_->steps()) +
+                        ", t = " + std::to_string(simulation_->time()) + " s"};
+    };
+    handlers.reset = [&]() -> CommandResult {
       resetSimulation();
-      response.message = "reset to t = 0: " + std::to_string(simulation_->numElements()) + " elements, " +
-                         std::to_string(simulation_->numNodes()) + " nodes";
-    } else {
-      response.success = false;
-      response.message = "unknown command '" + request.command + "' (start, pause, step, reset)";
-    }
+      return {true, "reset to t = 0: " + std::to_string(simulation_->numElements()) + " elements, " +
+                        std::to_string(simulation_->numNodes()) + " nodes"};
+    };
+    dispatchSimulationCommand(request, response, handlers);
   }
   publish();
   return true;

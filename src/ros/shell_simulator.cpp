@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "ros/point_cloud2_converter.h"
+#include "ros/simulation_commands.h"
 
 namespace rc {
 
@@ -250,31 +251,33 @@ bool ShellSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& 
                                      relaxed_connectivity::SphCommand::Response& response) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    response.success = true;
-    if (request.command == "start") {
+    auto where = [&] {
+      return "frame " + std::to_string(simulation_->frame()) +
+             ", t = " + std::to_string(simulation_->solver().time()) + " s";
+    };
+    SimulationCommandHandlers handlers;
+    handlers.start = [&]() -> CommandResult {
       error_.clear();
       running_ = true;
-      response.message = "running";
-    } else if (request.command == "pause") {
+      return {true, "running"};
+    };
+    handlers.pause = [&]() -> CommandResult {
       running_ = false;
-      response.message = "paused at frame " + std::to_string(simulation_->frame()) +
-                         ", t = " + std::to_string(simulation_->solver().time()) + " s";
-    } else if (request.command == "step") {
+      return {true, "paused at " + where()};
+    };
+    handlers.step = [&](uint32_t frames) -> CommandResult {
       running_ = false;
       error_.clear();
-      advance(int(std::min<uint32_t>(std::max<uint32_t>(1, request.steps), 1000000)));
-      response.success = error_.empty();
-      response.message = error_.empty() ? "frame " + std::to_string(simulation_->frame()) +
-                                              ", t = " + std::to_string(simulation_->solver().time()) + " s"
-                                        : error_;
-    } else if (request.command == "reset") {
+      advance(int(std::min<uint32_t>(frames, 1000000)));
+      if (!error_.empty()) return {false, error_};
+      return {true, where()};
+    };
+    handlers.reset = [&]() -> CommandResult {
       resetSimulation();
-      response.message = "reset to t = 0: " + std::to_string(simulation_->solver().nodes().size()) +
-                         " nodes, " + std::to_string(simulation_->surfels().size()) + " surfels";
-    } else {
-      response.success = false;
-      response.message = "unknown command '" + request.command + "' (start, pause, step, reset)";
-    }
+      return {true, "reset to t = 0: " + std::to_string(simulation_->solver().nodes().size()) + " nodes, " +
+                        std::to_string(simulation_->surfels().size()) + " surfels"};
+    };
+    dispatchSimulationCommand(request, response, handlers);
   }
   publish();
   return true;

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "ros/point_cloud2_converter.h"
+#include "ros/simulation_commands.h"
 #include "sph/sph_output.h"
 #include "sph/sph_scene_run.h"
 #include "sph/sph_surface.h"
@@ -177,39 +178,32 @@ bool SphSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& re
       response.message = "no scene loaded (call ~load_scene)";
       return true;
     }
-    response.success = true;
-    if (request.command == "start") {
-      if (!instability_.empty()) {
-        response.success = false;
-        response.message = "unstable at step " + std::to_string(solver_->stepCount()) + ": reset first";
-      } else {
-        running_ = true;
-        response.message = "running";
-      }
-    } else if (request.command == "pause") {
+    SimulationCommandHandlers handlers;
+    handlers.start = [&]() -> CommandResult {
+      if (!instability_.empty())
+        return {false, "unstable at step " + std::to_string(solver_->stepCount()) + ": reset first"};
+      running_ = true;
+      return {true, "running"};
+    };
+    handlers.pause = [&]() -> CommandResult {
       running_ = false;
-      response.message = "paused at t = " + std::to_string(solver_->time()) + " s";
-    } else if (request.command == "step") {
+      return {true, "paused at t = " + std::to_string(solver_->time()) + " s"};
+    };
+    handlers.step = [&](uint32_t steps) -> CommandResult {
       running_ = false;
-      if (!instability_.empty()) {
-        response.success = false;
-        response.message = "unstable: reset first";
-      } else {
-        const uint64_t steps = std::max<uint32_t>(1, request.steps);
-        advance(std::numeric_limits<double>::infinity(), steps);
-        response.message = "step " + std::to_string(solver_->stepCount()) +
-                           ", t = " + std::to_string(solver_->time()) + " s" +
-                           (instability_.empty() ? "" : " (" + instability_ + ")");
-      }
-    } else if (request.command == "reset") {
+      if (!instability_.empty()) return {false, "unstable: reset first"};
+      advance(std::numeric_limits<double>::infinity(), steps);
+      return {true, "step " + std::to_string(solver_->stepCount()) +
+                        ", t = " + std::to_string(solver_->time()) + " s" +
+                        (instability_.empty() ? "" : " (" + instability_ + ")")};
+    };
+    handlers.reset = [&]() -> CommandResult {
       solver_ = std::make_unique<SphFluidSolver>(makeSphSolver(*scene_));
       running_ = false;
       instability_.clear();
-      response.message = "reset to t = 0";
-    } else {
-      response.success = false;
-      response.message = "unknown command '" + request.command + "' (start, pause, step, reset)";
-    }
+      return {true, "reset to t = 0"};
+    };
+    dispatchSimulationCommand(request, response, handlers);
   }
   publish();
   return true;
