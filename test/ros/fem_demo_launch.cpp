@@ -149,12 +149,7 @@ TEST(FemDemoLaunch, SurfaceNodesCommandsAndCuts) {
   ASSERT_TRUE(command.waitForExistence(ros::Duration(10)));
   ASSERT_TRUE(cut.waitForExistence(ros::Duration(10)));
   auto call = [&](const std::string& name, uint32_t steps = 0) {
-    SphCommand c;
-    c.request.command = name;
-    c.request.steps = steps;
-    EXPECT_TRUE(command.call(c)) << name;
-    EXPECT_TRUE(c.response.success) << name << ": " << c.response.message;
-    return c.response;
+    return rc::callCommand(command, name, steps);
   };
 
   // Pause and reset: the scene's mesh at t = 0 in all three outputs.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <relaxed_connectivity/SphCommand.h>
 #include <ros/ros.h>
 #include <yaml-cpp/yaml.h>
 
@@ -21,6 +22,17 @@ bool waitFor(Done&& done, double seconds) {
     ros::WallDuration(0.01).sleep();
   }
   return false;
+}
+
+/// Calls a simulator's ~command service (start, pause, step, reset) and expects it to succeed.
+inline relaxed_connectivity::SphCommand::Response callCommand(ros::ServiceClient& client,
+                                                              const std::string& name, uint32_t steps = 0) {
+  relaxed_connectivity::SphCommand c;
+  c.request.command = name;
+  c.request.steps = steps;
+  EXPECT_TRUE(client.call(c)) << name;
+  EXPECT_TRUE(c.response.success) << name << ": " << c.response.message;
+  return c.response;
 }
 
 /// config/rviz/<name>.rviz has the fixed frame "world" and shows `expected_displays` PointCloud2/Marker

@@ -127,12 +127,7 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
   ASSERT_TRUE(command.waitForExistence(ros::Duration(10)));
   ASSERT_TRUE(force.waitForExistence(ros::Duration(10)));
   auto call = [&](const std::string& name, uint32_t steps = 0) {
-    SphCommand c;
-    c.request.command = name;
-    c.request.steps = steps;
-    EXPECT_TRUE(command.call(c)) << name;
-    EXPECT_TRUE(c.response.success) << name << ": " << c.response.message;
-    return c.response;
+    return rc::callCommand(command, name, steps);
   };
 
   // Pause and reset: t = 0, the markers show every node and fiber.
