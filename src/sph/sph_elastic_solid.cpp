@@ -11,6 +11,8 @@
 #include <Eigen/Dense>
 #include <Eigen/SVD>
 
+#include "sph/polar_decomposition.h"
+
 namespace rc {
 
 namespace {
@@ -43,6 +45,28 @@ bool isRotation(const Mat3& q) {
   return q.allFinite() && (q.transpose() * q - Mat3::Identity()).norm() < 1e-9 && q.determinant() > 0.0;
 }
 
+// Scalar forms of the per-neighbour accumulations (always inlined, unlike Eigen's expression loops in the
+// large neighbourhood function).
+inline void addScaled(Vec3& a, double w, const Vec3& b) {
+  a.x() += w * b.x();
+  a.y() += w * b.y();
+  a.z() += w * b.z();
+}
+/// m += w a b^T.
+inline void addOuter(Mat3& m, double w, const Vec3& a, const Vec3& b) {
+  const double wx = w * a.x(), wy = w * a.y(), wz = w * a.z();
+  m(0, 0) += wx * b.x(), m(0, 1) += wx * b.y(), m(0, 2) += wx * b.z();
+  m(1, 0) += wy * b.x(), m(1, 1) += wy * b.y(), m(1, 2) += wy * b.z();
+  m(2, 0) += wz * b.x(), m(2, 1) += wz * b.y(), m(2, 2) += wz * b.z();
+}
+/// m += w (|p|^2 I - p p^T), the inertia of a point of weight w at p.
+inline void addInertia(Mat3& m, double w, const Vec3& p) {
+  const double xx = p.x() * p.x(), yy = p.y() * p.y(), zz = p.z() * p.z();
+  m(0, 0) += w * (yy + zz), m(1, 1) += w * (xx + zz), m(2, 2) += w * (xx + yy);
+  const double xy = -w * p.x() * p.y(), xz = -w * p.x() * p.z(), yz = -w * p.y() * p.z();
+  m(0, 1) += xy, m(1, 0) += xy, m(0, 2) += xz, m(2, 0) += xz, m(1, 2) += yz, m(2, 1) += yz;
+}
+
 }  // namespace
 
 void SphElasticConfig::validate() const {
@@ -58,6 +82,8 @@ void SphElasticConfig::validate() const {
           "(K_e) must be finite and > 0, got " + std::to_string(goal_stiffness));
   require(deformation_allowance >= 0.0 && deformation_allowance <= 1.0, "deformation_allowance",
           "(s) must be in [0, 1], got " + std::to_string(deformation_allowance));
+  require(implicit_step_factor >= 0.0 && std::isfinite(implicit_step_factor), "implicit_step_factor",
+          "must be finite and >= 0, got " + std::to_string(implicit_step_factor));
   require(min_neighbors >= 2, "min_neighbors", "must be >= 2, got " + std::to_string(min_neighbors));
   require(fracture_strain >= 0.0, "fracture_strain", "must be >= 0, got " + std::to_string(fracture_strain));
   require(fracture_rate >= 0.0, "fracture_rate", "must be >= 0, got " + std::to_string(fracture_rate));
@@ -86,11 +112,9 @@ void assignLatticePoints(const SphLattice& lattice, const Mat3& transform, const
   out.assigned.assign(n, 1);
   thread_local std::vector<double> dist2;
   dist2.resize(n);
-  const Mat3 inverse = transform.inverse();
-  for (size_t k = 0; k < n; ++k) {  // (8.21)
-    const Vec3 q = inverse * offsets[k];
-    out.indices[k] = lattice.nearestIndex(q);
-    dist2[k] = (lattice.point(out.indices[k]) - q).squaredNorm();
+  const Mat3 to_coordinates = lattice.inverseBasis() * transform.inverse();  // B^-1 A^-1
+  for (size_t k = 0; k < n; ++k) {                                           // (8.21)
+    out.indices[k] = lattice.nearestIndexOfCoordinates(to_coordinates * offsets[k], &dist2[k]);
     if (out.indices[k].isZero()) out.assigned[k] = 0;  // the centre particle's own point
   }
   // One particle per lattice point: the closest keeps it (ties: lower index). A small open-addressing table
@@ -217,11 +241,12 @@ size_t SphElasticSolid::addParticles(SphParticles& particles, const std::vector<
   return first;
 }
 
-void SphElasticSolid::prepare(const SphParticles& particles) {
+void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<Vec3>& velocities) {
   const size_t n = particles.size();
   if (transform_.size() != n) {
     transform_.resize(n, orientation_);
     rotation_.resize(n, orientation_);
+    quaternion_.resize(n, Eigen::Quaterniond(orientation_));
     strain_.resize(n, Mat3::Zero());
     has_transform_.resize(n, 0);
     unassigned_count_.resize(n, 0);
@@ -243,6 +268,7 @@ void SphElasticSolid::prepare(const SphParticles& particles) {
     if (!solid) {
       has_transform_[i] = 0;  // a particle that (re)joins starts from the lattice orientation
       transform_[i] = rotation_[i] = orientation_;
+      quaternion_[i] = Eigen::Quaterniond(orientation_);
       strain_[i].setZero();
       unassigned_count_[i] = 0;
       if (config_.docking && dock_initialized_[i]) {  // it docks anew when it (re)joins
@@ -263,11 +289,13 @@ void SphElasticSolid::prepare(const SphParticles& particles) {
   const size_t m = members.size();
   solid_.resize(m);
   s_pos_.resize(m);
+  s_vel_.resize(m);
   s_mass_.resize(m);
   for (size_t s = 0; s < m; ++s) {
     const uint32_t i = members[grid_.order()[s]];
     solid_[s] = i;
     s_pos_[s] = particles.positions[i];
+    s_vel_[s] = velocities[i];
     s_mass_[s] = particles.masses[i];
   }
   contributions_.resize(m);
@@ -430,8 +458,8 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   for (size_t k = 0; k < nn; ++k) {
     if (!sc.assignment.assigned[k]) continue;
     const Vec3& l = sc.rest[k];
-    rl += sc.weights[k] * sc.offsets[k] * l.transpose();
-    ll += sc.weights[k] * l * l.transpose();
+    addOuter(rl, sc.weights[k], sc.offsets[k], l);
+    addOuter(ll, sc.weights[k], l, l);
     ++count;
   }
   assigned_[s] = static_cast<uint32_t>(count);
@@ -441,17 +469,68 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   const double det = dim == 3 ? ll.determinant() : ll.topLeftCorner<2, 2>().determinant();
   if (!(det > 1e-6 * std::pow(scale, dim))) return;  // (near) planar neighbourhood: no fit
   // (8.23) fitted to the rest points: with plasticity the elastic part A_i P_i^-1.
-  const Mat3 a = rl * ll.inverse();
+  const Mat3 ll_inverse = ll.inverse();
+  const Mat3 a = rl * ll_inverse;
   if (!a.allFinite()) return;
-  Mat3 u, v;
-  Vec3 sigma;
-  rotationSvd(a, dim, u, sigma, v);
-  const Mat3 rot = u * v.transpose();  // (8.24)
-  const Vec3 clamped = sigma.cwiseMax(0.25).cwiseMin(4.0);
-  transform_[i] = u * clamped.asDiagonal() * v.transpose();  // A_i for the next assignment
-  if (plastic) {
-    transform_[i] = transform_[i] * plastic_[i];
-    updatePlasticity(i, v, sigma);  // takes effect at the next evaluation
+  // Rotation (8.24) by the warm-started quaternion iteration; the stretch S = R^T A (symmetric at the
+  // optimum) has the singular values as eigenvalues. The SVD is kept where its factors are needed: plastic
+  // flow, a stretch outside the clamp [0.25, 4] of the next assignment's transform (or inverted), a goal
+  // stretch (8.30) at its clamp, or no convergence.
+  const double s_allow = config_.deformation_allowance;
+  const bool goal_model = config_.model == SphElasticModel::kGoalPosition;
+  Mat3 rot, goal;
+  bool polar = false;
+  if (!plastic) {
+    Eigen::Quaterniond q = quaternion_[i];
+    if (extractRotation(a, q)) {
+      rot = q.toRotationMatrix();
+      Mat3 stretch = rot.transpose() * a;
+      stretch = 0.5 * (stretch + stretch.transpose());
+      Eigen::SelfAdjointEigenSolver<Mat3> eigen;
+      eigen.computeDirect(stretch, Eigen::EigenvaluesOnly);
+      const Vec3 sigma = eigen.eigenvalues();  // ascending
+      // sv_k = s sigma_k + 1 - s >= 0.05 holds for sigma >= 0.25 whenever s <= 1.
+      if (sigma.allFinite() && sigma(0) >= 0.25 && sigma(2) <= 4.0) {
+        polar = true;
+        quaternion_[i] = q;
+        transform_[i] = a;  // A_i for the next assignment (no clamp active)
+        if (goal_model) {
+          // U diag(sv) V^T of (8.29)-(8.30) = R (s S + (1 - s) I) / det^(1/dim).
+          Mat3 sv = s_allow * stretch;
+          sv.diagonal().array() += 1.0 - s_allow;
+          if (dim == 3) {
+            sv /= std::cbrt((s_allow * sigma.array() + (1.0 - s_allow)).prod());
+          } else {
+            sv.topLeftCorner<2, 2>() /= std::sqrt(sv.topLeftCorner<2, 2>().determinant());
+            sv(2, 2) = 1.0;
+          }
+          goal = rot * sv;
+        }
+      }
+    }
+  }
+  if (!polar) {
+    Mat3 u, v;
+    Vec3 sigma;
+    rotationSvd(a, dim, u, sigma, v);
+    rot = u * v.transpose();  // (8.24)
+    const Vec3 clamped = sigma.cwiseMax(0.25).cwiseMin(4.0);
+    transform_[i] = u * clamped.asDiagonal() * v.transpose();  // A_i for the next assignment
+    if (plastic) {
+      transform_[i] = transform_[i] * plastic_[i];
+      updatePlasticity(i, v, sigma);  // takes effect at the next evaluation
+    }
+    if (goal_model) {
+      // Goal positions g'_ij = U S V^T l_ij (8.29) with the volume-preserving S (8.30).
+      Vec3 sv = (s_allow * sigma.array() + (1.0 - s_allow)).matrix().cwiseMax(0.05);
+      if (dim == 2) sv.z() = 1.0;
+      const double volume_factor = dim == 3 ? sv.prod() : sv.x() * sv.y();
+      sv /= std::pow(volume_factor, 1.0 / dim);
+      if (dim == 2) sv.z() = 1.0;
+      goal = u * sv.asDiagonal() * v.transpose();
+    }
+    Eigen::Quaterniond q(rot);
+    quaternion_[i] = q.normalized();
   }
   rotation_[i] = rot;
   has_transform_[i] = 1;
@@ -461,23 +540,21 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   // sum_j W_ij |(r_ij - g_ij) - G g_ij|^2: (8.27) weighted by W_ij (g_ij.e_beta)^2 and solved with the full
   // normal matrix. As printed, (8.28)'s denominator sum_j W_ij g_ij.e_beta vanishes on a symmetric
   // neighbourhood, and its diagonal form is not exact for linear displacements on the rotated fcc lattice.
-  Mat3 num = Mat3::Zero(), den = Mat3::Zero();
-  for (size_t k = 0; k < nn; ++k) {
-    if (!sc.assignment.assigned[k]) continue;
-    const Vec3 g = rot * sc.rest[k];
-    num += sc.weights[k] * (sc.offsets[k] - g) * g.transpose();
-    den += sc.weights[k] * g * g.transpose();
-  }
-  if (dim == 2) den(2, 2) = 1.0;
-  const Mat3 grad = num * den.inverse();
-  Mat3 strain = 0.5 * (grad + grad.transpose());
+  // With D = sum_j W_ij g_ij g_ij^T = R ll R^T and sum_j W_ij (r_ij - g_ij) g_ij^T = (rl - R ll) R^T the fit
+  // is G = A R^T - I (no second pass over the neighbours).
+  const Mat3 den_inverse = rot * ll_inverse * rot.transpose();
+  Mat3 strain = a * rot.transpose();
+  strain = 0.5 * (strain + strain.transpose()) - Mat3::Identity();
   if (dim == 2) {
     strain.row(2).setZero();
     strain.col(2).setZero();
   }
   strain_[i] = strain;
-  max_strain_[s] =
-      Eigen::SelfAdjointEigenSolver<Mat3>(strain, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
+  {
+    Eigen::SelfAdjointEigenSolver<Mat3> eigen;
+    eigen.computeDirect(strain, Eigen::EigenvaluesOnly);
+    max_strain_[s] = eigen.eigenvalues().cwiseAbs().maxCoeff();
+  }
 
   const double volume = lattice_.cellVolume();
   out.push_back({i, Vec3::Zero()});  // the centre particle first
@@ -492,12 +569,12 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     if (dim == 2) identity(2, 2) = 0.0;
     const Mat3 stress = lame_lambda_ * strain.trace() * identity + 2.0 * lame_mu_ * strain;
     energy_[s] = 0.5 * volume * (stress.cwiseProduct(strain)).sum();
-    const Mat3 stress_den = stress * den.inverse();
+    const Mat3 stress_den = stress * den_inverse;
     // Hourglass control: the strain fit does not see non-affine (zero-energy) modes; they are penalised
     // by pulling each neighbour towards the fitted affine position A_i l_ij, with energy
     // gamma Y V / (2 tr D_i) sum_j W_ij |A_i l_ij - r_ij|^2 (zero for any affine deformation; A_i minimises
     // the sum, so the force is its exact gradient).
-    const double hourglass = config_.hourglass_control * config_.youngs_modulus * volume / den.trace();
+    const double hourglass = config_.hourglass_control * config_.youngs_modulus * volume / ll.trace();
     for (size_t k = 0; k < nn; ++k) {
       if (!sc.assignment.assigned[k]) continue;
       const Vec3& l = sc.rest[k];
@@ -509,24 +586,66 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
       centre_force -= f;
     }
   } else {
-    // Goal positions g'_ij = U S V^T l_ij (8.29) with the volume-preserving S (8.30); F_ij (8.31), half to
-    // j and minus half to i.
-    const double s_allow = config_.deformation_allowance;
-    Vec3 sv = (s_allow * sigma.array() + (1.0 - s_allow)).matrix().cwiseMax(0.05);
-    if (dim == 2) sv.z() = 1.0;
-    const double volume_factor = dim == 3 ? sv.prod() : sv.x() * sv.y();
-    sv /= std::pow(volume_factor, 1.0 / dim);
-    if (dim == 2) sv.z() = 1.0;
-    const Mat3 goal = u * sv.asDiagonal() * v.transpose();
+    // F_ij (8.31) towards the goal positions, half to j and minus half to i.
     const double k_e = config_.goal_stiffness * s_mass_[s] * volume;
     double energy = 0.0;
-    for (size_t k = 0; k < nn; ++k) {
-      if (!sc.assignment.assigned[k]) continue;
-      const Vec3 delta = goal * sc.rest[k] - sc.offsets[k];
-      const Vec3 f = (0.5 * k_e * sc.weights[k]) * delta;
-      energy += 0.5 * k_e * sc.weights[k] * delta.squaredNorm();
-      out.push_back({solid_[sc.neighbors[k]], f});
-      centre_force -= f;
+    if (config_.implicit_goal && step_dt_ > 0.0) {
+      // Locally implicit springs (see SphElasticConfig::implicit_goal): the forces scaled by
+      // 1 / (1 + dt^2 k), and the damping -dt k u / (4 (1 + dt^2 k)) of the members' velocities u relative
+      // to the neighbourhood's rigid motion (weights W_j, the centre weighted sum_j W_j: its velocity is half
+      // the neighbourhood's mean, which keeps the damping stable for any dt). The damping forces have no net
+      // force or torque.
+      double w_neighbors = 0.0;
+      Vec3 weighted_r = Vec3::Zero(), weighted_v = Vec3::Zero();
+      for (size_t k = 0; k < nn; ++k) {
+        if (!sc.assignment.assigned[k]) continue;
+        w_neighbors += sc.weights[k];
+        addScaled(weighted_r, sc.weights[k], sc.offsets[k]);
+        addScaled(weighted_v, sc.weights[k], s_vel_[sc.neighbors[k]]);
+      }
+      const double w_all = 2.0 * w_neighbors;
+      const Vec3 vi = s_vel_[s];
+      const Vec3 mean_v = (w_neighbors * vi + weighted_v) / w_all;
+      const Vec3 centre = weighted_r / w_all;  // relative to x_i
+      // Angular velocity of the neighbourhood: I omega = sum_k W_k p_k x (v_k - mean_v).
+      Mat3 inertia = w_neighbors * (centre.squaredNorm() * Mat3::Identity() - centre * centre.transpose());
+      Vec3 momentum = w_neighbors * (-centre).cross(vi - mean_v);
+      for (size_t k = 0; k < nn; ++k) {
+        if (!sc.assignment.assigned[k]) continue;
+        const Vec3 p = sc.offsets[k] - centre;
+        addInertia(inertia, sc.weights[k], p);
+        addScaled(momentum, sc.weights[k], p.cross(s_vel_[sc.neighbors[k]] - mean_v));
+      }
+      Vec3 spin = Vec3::Zero();
+      if (dim == 3) {
+        const double det = inertia.determinant(), size = inertia.trace();
+        if (det > 1e-9 * size * size * size) spin = inertia.inverse() * momentum;
+      } else if (inertia(2, 2) > 0.0) {
+        spin.z() = momentum.z() / inertia(2, 2);
+      }
+      const double dt = step_dt_;
+      const double scale = 1.0 / (1.0 + dt * dt * config_.goal_stiffness * volume * w_neighbors);
+      const double damping = 0.25 * scale * dt * k_e;
+      for (size_t k = 0; k < nn; ++k) {
+        if (!sc.assignment.assigned[k]) continue;
+        const Vec3 delta = goal * sc.rest[k] - sc.offsets[k];
+        const Vec3 u = s_vel_[sc.neighbors[k]] - mean_v - spin.cross(sc.offsets[k] - centre);
+        const Vec3 f = (0.5 * scale * k_e * sc.weights[k]) * delta - (damping * sc.weights[k]) * u;
+        energy += 0.5 * k_e * sc.weights[k] * delta.squaredNorm();
+        out.push_back({solid_[sc.neighbors[k]], f});
+        centre_force -= f;
+      }
+      // The centre's damping -damping w_neighbors u_i equals minus the neighbours' sum (sum_k W_k u_k = 0),
+      // so centre_force = -sum_j f_j holds it exactly.
+    } else {
+      for (size_t k = 0; k < nn; ++k) {
+        if (!sc.assignment.assigned[k]) continue;
+        const Vec3 delta = goal * sc.rest[k] - sc.offsets[k];
+        const Vec3 f = (0.5 * k_e * sc.weights[k]) * delta;
+        energy += 0.5 * k_e * sc.weights[k] * delta.squaredNorm();
+        out.push_back({solid_[sc.neighbors[k]], f});
+        centre_force -= f;
+      }
     }
     energy_[s] = energy;
   }
@@ -542,7 +661,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   for (size_t k = 0; k < nn; ++k) {
     if (!sc.assignment.assigned[k]) continue;
     w_sum += sc.weights[k];
-    c += sc.weights[k] * sc.offsets[k];
+    addScaled(c, sc.weights[k], sc.offsets[k]);
   }
   c /= w_sum;
   Vec3 torque = (-c).cross(out[0].force);
@@ -551,7 +670,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     if (!sc.assignment.assigned[k]) continue;
     const Vec3 p = sc.offsets[k] - c;
     torque += p.cross(out[e++].force);
-    inertia += sc.weights[k] * (p.squaredNorm() * Mat3::Identity() - p * p.transpose());
+    addInertia(inertia, sc.weights[k], p);
   }
   if (dim == 2) {
     torque.x() = torque.y() = 0.0;  // in-plane forces
@@ -565,7 +684,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   e = 1;
   for (size_t k = 0; k < nn; ++k) {
     if (!sc.assignment.assigned[k]) continue;
-    out[e++].force += sc.weights[k] * omega.cross(sc.offsets[k] - c);
+    addScaled(out[e++].force, sc.weights[k], omega.cross(sc.offsets[k] - c));
   }
 }
 
@@ -581,18 +700,22 @@ void SphElasticSolid::computeForces(const SphParticles& particles, std::vector<V
   addForces(particles, particles.velocities, forces);
 }
 
-void SphElasticSolid::addForces(const SphParticles& particles, const std::vector<Vec3>& /*velocities*/,
+void SphElasticSolid::addForces(const SphParticles& particles, const std::vector<Vec3>& velocities,
                                 std::vector<Vec3>& forces) {
   if (forces.size() != particles.size())
     throw std::invalid_argument("SphElasticSolid::addForces: forces must have one entry per particle");
   if (particles.phases.size() != particles.size() || particles.kinds.size() != particles.size())
     throw std::invalid_argument("SphElasticSolid::addForces: particle arrays differ in size");
-  prepare(particles);
+  if (velocities.size() != particles.size())
+    throw std::invalid_argument("SphElasticSolid::addForces: velocities must have one entry per particle");
+  prepare(particles, velocities);
   const long m = static_cast<long>(solid_.size());
-  const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), m / 256)));
+  // A neighbourhood costs a few microseconds: 64 of them outweigh a parallel region.
+  const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), m / 64)));
+  if (scratch_.size() < size_t(threads)) scratch_.resize(threads);
 #pragma omp parallel num_threads(threads)
   {
-    Scratch scratch;
+    Scratch& scratch = scratch_[omp_get_thread_num()];
 #pragma omp for schedule(static)
     for (long s = 0; s < m; ++s) processNeighborhood(static_cast<size_t>(s), scratch);
   }
@@ -640,10 +763,19 @@ void SphElasticSolid::setLatticeTransform(size_t i, const Mat3& transform) {
   if (!transform.allFinite() || !(std::abs(det) > 0.0))
     throw std::invalid_argument("SphElasticSolid::setLatticeTransform: transform must be finite and regular");
   transform_[i] = transform;
+  Mat3 u, v;
+  Vec3 sigma;
+  rotationSvd(transform, lattice_.dimension(), u, sigma, v);
+  quaternion_[i] = Eigen::Quaterniond(Mat3(u * v.transpose())).normalized();  // warm start of (8.24)
 }
 
 double SphElasticSolid::stableTimeStep(const SphParticles& particles, double cfl) const {
-  if (config_.model == SphElasticModel::kGoalPosition) return cfl * std::sqrt(2.0 / config_.goal_stiffness);
+  if (config_.model == SphElasticModel::kGoalPosition) {
+    const double explicit_limit = cfl * std::sqrt(2.0 / config_.goal_stiffness);
+    if (!config_.implicit_goal) return explicit_limit;
+    return config_.implicit_step_factor > 0.0 ? config_.implicit_step_factor * explicit_limit
+                                              : std::numeric_limits<double>::infinity();
+  }
   double min_mass = std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < particles.size(); ++i)
     if (particles.phases[i] == phase_ && particles.kinds[i] == SphParticleKind::kFluid)

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "sph/sph_force_term.h"
 #include "sph/sph_kernels.h"
@@ -42,6 +43,24 @@ struct SphElasticConfig {
   /// reading the K_e and time steps of thesis appendix F.2 sit at the stability limit of Verlet.
   double goal_stiffness = 1.0e4;
   double deformation_allowance = 0.5;  ///< s of (8.30), in [0, 1]
+  /// Locally implicit goal springs: every neighbourhood's goal forces (8.31) are integrated as springs that
+  /// are implicit in the relative motion of the neighbourhood, with the goal held fixed within the step
+  /// (backward Euler on the particle's own stiffness, v += dt k (g - x - dt u) / (1 + dt^2 k)): with k =
+  /// K_e sum_j V W_ij the neighbourhood's stiffness per unit mass, dt the announced step (beginStep) and u
+  /// the velocity relative to the neighbourhood's weighted mean velocity, the forces are scaled by
+  /// 1 / (1 + dt^2 k) and get the damping -dt k u / (1 + dt^2 k). Both are applied per neighbourhood before
+  /// the momentum correction (8.32)-(8.33), so linear and angular momentum stay exact and rigid motions are
+  /// not damped. Unconditionally stable: stableTimeStep() no longer limits the step (the CFL, sound speed
+  /// and collision limits do). It dissipates the stiff oscillations at large dt^2 k (like backward Euler);
+  /// Off (default): the explicit force of (8.31), stable for dt < 2 / sqrt(2 K_e). Not the default because
+  /// even at the explicit limit the scaling and damping change the dynamics (softer, damped bounces: the
+  /// Fig. 8.7 tests' bounce and recovery tolerances fail with it); the stiff dice of Fig. 8.8 select it.
+  /// Needs an announced step (SphForceTerm::beginStep, as inside SphFluidSolver) or time_step > 0; with
+  /// dt = 0 the force is explicit.
+  bool implicit_goal = false;
+  /// With implicit_goal: > 0 caps the step at this multiple of the explicit limit (an accuracy bound: the
+  /// effective stiffness is about K_e / (1 + dt^2 k), k ~ K_e sum_j V W_ij); 0 (default): no elastic limit.
+  double implicit_step_factor = 0.0;
   /// Minimum assigned neighbours of a neighbourhood for shape matching (fewer: no forces from it).
   int min_neighbors = 4;
 
@@ -164,14 +183,19 @@ class SphElasticSolid : public SphForceTerm {
   void addForces(const SphParticles& particles, const std::vector<Vec3>& velocities,
                  std::vector<Vec3>& forces) override;
   /// Elastic limit cfl * 2 / omega_max (Verlet needs omega dt < 2). kGoalPosition: omega_max^2 <=
-  /// 2 K_e sum_j V W_ij < 2 K_e. kStrain: omega_max^2 <= 4 V ((lambda + 2 mu) (sum_j a_j)^2 +
-  /// gamma Y sum_j W_j / tr D) / m on a full lattice neighbourhood, a_j = W_j |D^-1 l_j| (of the order of
-  /// the P-wave speed over the spacing).
+  /// 2 K_e sum_j V W_ij < 2 K_e; with implicit_goal (unconditionally stable) infinity, or
+  /// implicit_step_factor times the explicit limit. kStrain: omega_max^2 <= 4 V ((lambda + 2 mu) (sum_j
+  /// a_j)^2 + gamma Y sum_j W_j / tr D) / m on a full lattice neighbourhood, a_j = W_j |D^-1 l_j| (of the
+  /// order of the P-wave speed over the spacing).
   double stableTimeStep(const SphParticles& particles, double cfl) const override;
   double potentialEnergy() const override { return stats_.energy; }
   /// The dt of the next evaluations' docking draws (8.34) and plastic flow (config().time_step until the
   /// first call). Throws std::invalid_argument for dt not finite and >= 0.
   void beginStep(double dt) override;
+  /// True with implicit_goal for the goal-position model.
+  bool implicitInStep() const override {
+    return config_.implicit_goal && config_.model == SphElasticModel::kGoalPosition;
+  }
   /// The dt the next evaluation uses for docking and plasticity.
   double stepTime() const { return step_dt_; }
 
@@ -226,7 +250,7 @@ class SphElasticSolid : public SphForceTerm {
     std::vector<std::pair<uint32_t, uint32_t>> keyed;  // (lattice key, neighbour) of assigned neighbours
     std::vector<DockPoint> next;
   };
-  void prepare(const SphParticles& particles);
+  void prepare(const SphParticles& particles, const std::vector<Vec3>& velocities);
   /// Shape matching and forces of the neighbourhood of solid particle s (sorted order).
   void processNeighborhood(size_t s, Scratch& scratch);
   /// Docking decisions of the neighbourhood of solid particle s (8.2.5): clears assignment.assigned of
@@ -245,13 +269,15 @@ class SphElasticSolid : public SphForceTerm {
   SphElasticStats stats_;
 
   std::vector<Eigen::Matrix3d> transform_, rotation_, strain_;
+  std::vector<Eigen::Quaterniond> quaternion_;  // rotation_ as a quaternion: warm start of (8.24)
   std::vector<uint8_t> has_transform_;
   std::vector<uint32_t> unassigned_count_;
   // Per evaluation (sorted solid order).
   std::vector<uint32_t> solid_;  // original index of each solid particle
-  std::vector<Vec3> s_pos_;
+  std::vector<Vec3> s_pos_, s_vel_;
   std::vector<double> s_mass_;
   SphSortedGrid grid_;
+  std::vector<Scratch> scratch_;                          // per thread, kept between evaluations
   std::vector<std::vector<Contribution>> contributions_;  // per sorted solid particle
   std::vector<std::vector<uint32_t>> lost_;               // neighbours left without a lattice point
   std::vector<double> energy_, max_strain_;

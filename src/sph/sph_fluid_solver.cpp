@@ -146,6 +146,8 @@ double SphFluidSolver::compressionEnergyOf(double rho) const {
 
 void SphFluidSolver::computeForces() {
   validateParticles();
+  const double dt = config_.fixed_dt > 0.0 ? config_.fixed_dt : stats_.dt;
+  if (dt > 0.0) announceStep(dt);  // before the first adaptive step the terms keep their own dt
   computeForces(particles_.velocities);
   measureState();
 }
@@ -458,6 +460,16 @@ const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
     measureState();
   }
   chooseTimeStep(requested_dt);
+  if (forces_dt_ == 0.0 && stats_.dt > 0.0) {
+    // Forces of implicit terms evaluated without a step (the first adaptive step): again with its dt.
+    bool implicit = false;
+    for (const auto& term : force_terms_) implicit = implicit || term->implicitInStep();
+    if (implicit) {
+      announceStep(stats_.dt);
+      computeForces(p.velocities);
+      measureState();
+    }
+  }
   const double dt = stats_.dt;
   const double energy_before = stats_.kinetic_energy + stats_.compression_energy + stats_.term_energy;
   // Kick, drift (with the XSPH correction), predict.
@@ -521,6 +533,7 @@ const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
 }
 
 void SphFluidSolver::announceStep(double dt) {
+  forces_dt_ = dt;
   for (const auto& term : force_terms_) term->beginStep(dt);
 }
 

@@ -158,7 +158,7 @@ class SphFluidSolver {
   const SphStepStats& lastStats() const { return stats_; }
 
   /// Recomputes densities, pressures and forces at the current positions and velocities (done by step()
-  /// when needed).
+  /// when needed). The force terms are told the fixed step, else the last step (nothing before the first).
   void computeForces();
 
  private:
@@ -189,6 +189,7 @@ class SphFluidSolver {
   double time_ = 0.0;
   uint64_t step_count_ = 0;
   bool forces_valid_ = false;
+  double forces_dt_ = 0.0;  // the dt announced to the force terms for the current forces
   int num_threads_ = 1;
   double fluid_mass_ = 0.0, max_boundary_speed2_ = 0.0;
 

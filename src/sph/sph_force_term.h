@@ -20,6 +20,10 @@ class SphForceTerm {
   /// particlesChanged()) the fixed step, else the previous step (0 before any). For terms with rates per
   /// simulated time (Poisson processes, flow); the default ignores it.
   virtual void beginStep(double /*dt*/) {}
+  /// True when the forces are integrated implicitly over the announced step (they depend on dt, e.g. the
+  /// locally implicit springs of SphElasticConfig::implicit_goal): the solver then evaluates the forces the
+  /// first step starts from again once the adaptive step is chosen, rather than with dt = 0 (explicit).
+  virtual bool implicitInStep() const { return false; }
   /// Adds the term's forces (mass * acceleration) at the particles' current positions and the given
   /// velocities to `forces` (original particle order, size particles.size()). May update internal state
   /// that persists between evaluations.

@@ -81,11 +81,37 @@ size_t SphObjectPenalty::countObjects(const SphParticles& particles) {
   return count;
 }
 
+void SphObjectPenalty::beginStep(double dt) {
+  if (!(dt >= 0.0) || !std::isfinite(dt))
+    throw std::invalid_argument("SphObjectPenalty::beginStep: dt must be finite and >= 0, got " +
+                                std::to_string(dt));
+  step_dt_ = dt;
+}
+
+void SphObjectPenalty::gatherStiffness(size_t s) {
+  const double d2 = config_.contact_distance * config_.contact_distance;
+  const Vec3 xs = s_pos_[s];
+  const uint8_t phase = s_phase_[s];
+  double k = 0.0;
+  SphSortedGrid::Run runs[9];
+  const int num_runs = grid_.neighborRuns(grid_.cellOfSorted(s), runs);
+  for (int q = 0; q < num_runs; ++q)
+    for (uint32_t j = runs[q].begin; j < runs[q].end; ++j) {
+      if (s_phase_[j] == phase) continue;
+      const double r2 = (s_pos_[j] - xs).squaredNorm();
+      if (!(r2 < d2) || r2 <= 0.0) continue;
+      k += 0.5 * (s_mass_[s] + s_mass_[j]) * kernels_.poly6(r2);
+    }
+  s_stiffness_[s] = k * volume_ * config_.stiffness / s_mass_[s];
+}
+
 void SphObjectPenalty::gatherForces(size_t s) {
   const double d = config_.contact_distance, d2 = d * d;
   const double k_c = config_.stiffness, c = config_.damping;
   const Vec3 xs = s_pos_[s], vs = s_vel_[s];
   const uint8_t phase = s_phase_[s];
+  const double dt = step_dt_;
+  const bool implicit = config_.implicit && dt > 0.0;
   Vec3 force = Vec3::Zero();
   double energy = 0.0, min_dist = d;
   uint32_t contacts = 0, repulsive = 0;
@@ -106,7 +132,13 @@ void SphObjectPenalty::gatherForces(size_t s) {
       const double mean_mass = 0.5 * (s_mass_[s] + s_mass_[j]);
       const double scale = mean_mass * volume_ * kernels_.poly6(r2);
       // n . F_sj with F_sj = scale (K_c (d - r) n - c (v_j - v_s)); (8.37) keeps it along n if positive.
-      const double normal = scale * (k_c * (d - r) - c * n.dot(s_vel_[j] - vs));
+      const double approach = n.dot(s_vel_[j] - vs);
+      double spring = k_c * (d - r);
+      if (implicit) {  // locally implicit: backward Euler on the pair, direction held fixed
+        const double k = std::max(s_stiffness_[s], s_stiffness_[j]);
+        spring = k_c * ((d - r) - dt * approach) / (1.0 + dt * dt * k);
+      }
+      const double normal = scale * (spring - c * approach);
       if (normal > 0.0) {
         ++repulsive;
         force -= normal * n;
@@ -170,8 +202,17 @@ void SphObjectPenalty::addForces(const SphParticles& particles, const std::vecto
   s_repulsive_.resize(m);
   const long count = static_cast<long>(m);
   const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), count / 512)));
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (long s = 0; s < count; ++s) gatherForces(static_cast<size_t>(s));
+  const bool implicit = config_.implicit && step_dt_ > 0.0;
+  if (implicit) s_stiffness_.resize(m);
+#pragma omp parallel num_threads(threads)
+  {
+    if (implicit) {
+#pragma omp for schedule(static)
+      for (long s = 0; s < count; ++s) gatherStiffness(static_cast<size_t>(s));
+    }
+#pragma omp for schedule(static)
+    for (long s = 0; s < count; ++s) gatherForces(static_cast<size_t>(s));
+  }
   // Serial reduction in sorted order: independent of the thread count.
   for (size_t s = 0; s < m; ++s) {
     forces[members_[s]] += s_force_[s];
@@ -196,8 +237,19 @@ double SphObjectPenalty::stableTimeStep(const SphParticles& particles, double cf
     }
   const double q = 0.5 * (1.0 + max_mass / min_mass);
   const double z = kernels_.dimension == 3 ? 12.0 : 6.0;  // kissing number: contacts per particle
-  const double omega = std::sqrt(2.0 * z * config_.stiffness * volume_ * pair_stiffness_bound_ * q) +
-                       2.0 * z * config_.damping * volume_ * kernels_.poly6(0.0) * q;
+  const double damping_omega = 2.0 * z * config_.damping * volume_ * kernels_.poly6(0.0) * q;
+  if (config_.implicit) {
+    // Contact CFL: two particles approaching at the largest speed each close at most cfl d per step.
+    double max_speed2 = 0.0;
+    for (size_t i = 0; i < particles.size(); ++i)
+      if (isObjectParticle(particles, i))
+        max_speed2 = std::max(max_speed2, particles.velocities[i].squaredNorm());
+    const double contact = max_speed2 > 0.0 ? cfl * config_.contact_distance / (2.0 * std::sqrt(max_speed2))
+                                            : std::numeric_limits<double>::infinity();
+    return damping_omega > 0.0 ? std::min(contact, cfl * 2.0 / damping_omega) : contact;
+  }
+  const double omega =
+      std::sqrt(2.0 * z * config_.stiffness * volume_ * pair_stiffness_bound_ * q) + damping_omega;
   return cfl * 2.0 / omega;
 }
 

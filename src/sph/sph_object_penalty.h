@@ -22,6 +22,15 @@ struct SphObjectPenaltyConfig {
   /// c (1/s): relative-velocity part of the interaction force, finite and >= 0. With c > 0 the projection
   /// and clamp of (8.37) make contacts inelastic without ever pulling objects together.
   double damping = 0.0;
+  /// Locally implicit contact springs (as SphElasticConfig::implicit_goal): with k_i = sum over i's contacts
+  /// of V W(r) K_c m / m_i (the stiffness per unit mass of particle i) and dt the announced step
+  /// (beginStep), the stiffness part of each pair becomes m V W(r) K_c ((d - r) - dt n . (v_j - v_i)) /
+  /// (1 + dt^2 max(k_i, k_j)) (backward Euler on the pair with the contact direction held fixed), still
+  /// clamped by (8.37). Antisymmetric and central: momentum is exact. Unconditionally stable, so the step
+  /// limit becomes the contact CFL cfl d / (2 max speed) (no pair closes more than cfl d / 1 per step) and
+  /// the explicit damping limit; the approach of colliding objects is dissipated (at most the stiffness
+  /// part). Off (default): explicit (8.37), stable below the K_c limit of stableTimeStep().
+  bool implicit = false;
 
   /// Throws std::invalid_argument naming the first invalid field.
   void validate() const;
@@ -71,9 +80,15 @@ class SphObjectPenalty : public SphForceTerm {
                  std::vector<Vec3>& forces) override;
   /// cfl * 2 / omega_max with omega_max = sqrt(2 z K_c V kappa q) + 2 z c V W(0) q: z contacts per particle
   /// (the kissing number, 6 in 2D, 12 in 3D), kappa = max over r < d of W(r) + |W'(r)| (d - r) (the pair
-  /// stiffness), q = (1 + m_max / m_min) / 2 over the object particles. Infinity with fewer than two objects.
+  /// stiffness), q = (1 + m_max / m_min) / 2 over the object particles. With `implicit` the K_c part drops
+  /// out and the contact CFL cfl d / (2 max speed of the object particles) enters instead. Infinity with
+  /// fewer than two objects.
   double stableTimeStep(const SphParticles& particles, double cfl) const override;
   double potentialEnergy() const override { return stats_.energy; }
+  /// The dt of the implicit contact springs of the next evaluations (0 until the first call: explicit).
+  /// Throws std::invalid_argument for dt not finite and >= 0.
+  void beginStep(double dt) override;
+  bool implicitInStep() const override { return config_.implicit; }
 
   /// Forces of this term alone at the current positions and velocities (zeroed first).
   void computeForces(const SphParticles& particles, std::vector<Vec3>& forces);
@@ -85,6 +100,8 @@ class SphObjectPenalty : public SphForceTerm {
   static size_t countObjects(const SphParticles& particles);
   /// Force on sorted particle s from all contacts (sum of -F'_sj), its pair energies (halved) and statistics.
   void gatherForces(size_t s);
+  /// k_s of the implicit springs: sum over the contacts of sorted particle s of V W(r) K_c m / m_s.
+  void gatherStiffness(size_t s);
 
   SphObjectPenaltyConfig config_;
   SphKernels kernels_;
@@ -99,7 +116,8 @@ class SphObjectPenalty : public SphForceTerm {
   std::vector<double> s_mass_;
   std::vector<uint8_t> s_phase_;
   std::vector<Vec3> s_force_;
-  std::vector<double> s_energy_, s_min_dist_;
+  std::vector<double> s_energy_, s_min_dist_, s_stiffness_;
+  double step_dt_ = 0.0;
   std::vector<uint32_t> s_contacts_, s_repulsive_;
 };
 
