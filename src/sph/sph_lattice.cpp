@@ -1,5 +1,7 @@
 #include "sph/sph_lattice.h"
 
+#include "sph/fast_winding_number.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -44,6 +46,11 @@ SphLattice::SphLattice(int dimension, double spacing) : dimension_(dimension), s
   basis_.col(2) = dimension == 3 ? Vec3(spacing * Vec3(0.5, std::sqrt(1.0 / 12.0), std::sqrt(2.0 / 3.0)))
                                  : Vec3(spacing * Vec3::UnitZ());
   inverse_basis_ = basis_.inverse();
+  gram_ = basis_.transpose() * basis_;
+  if (dimension == 2) {
+    gram_.row(2).setZero();
+    gram_.col(2).setZero();
+  }
 }
 
 Vec3 SphLattice::point(const Eigen::Vector3i& index) const {
@@ -231,8 +238,8 @@ std::vector<Vec3> sampleLatticeMesh(const SphLattice& lattice, const TriangleMes
     lo = lo.cwiseMin(x);
     hi = hi.cwiseMax(x);
   }
-  return sampleLattice(lattice, frame, lo, hi,
-                       [&](const Vec3& x) { return std::abs(meshWindingNumber(mesh, x)) > 0.5; });
+  const FastWindingNumber winding(mesh);
+  return sampleLattice(lattice, frame, lo, hi, [&](const Vec3& x) { return std::abs(winding(x)) > 0.5; });
 }
 
 }  // namespace rc

@@ -31,6 +31,40 @@ class SphLattice {
   /// Index of the lattice point nearest to q (Babai rounding refined over the 27 (2D: 9) neighbouring
   /// indices; exact for this reduced basis). z of q is ignored in 2D.
   Eigen::Vector3i nearestIndex(const Vec3& q) const;
+  /// The same search from lattice coordinates c = B^-1 q (c.z ignored in 2D; |c| < 2^30); *sq_dist receives
+  /// |B n - q|^2. Inline: it runs for every neighbour of every solid particle at every evaluation (8.21).
+  Eigen::Vector3i nearestIndexOfCoordinates(const Vec3& c, double* sq_dist) const {
+    // Rounding half away from zero (as std::lround) by truncation.
+    const auto round = [](double x) { return static_cast<int>(x >= 0.0 ? x + 0.5 : x - 0.5); };
+    const bool three = dimension_ == 3;
+    const int nx = round(c.x()), ny = round(c.y()), nz = three ? round(c.z()) : 0;
+    const double ex = c.x() - nx, ey = c.y() - ny, ez = three ? c.z() - nz : 0.0;
+    const Eigen::Matrix3d& g = gram_;
+    // |B e|^2 = e^T B^T B e.
+    const auto norm2 = [&g](double x, double y, double z) {
+      return g(0, 0) * x * x + g(1, 1) * y * y + g(2, 2) * z * z +
+             2.0 * (g(0, 1) * x * y + g(0, 2) * x * z + g(1, 2) * y * z);
+    };
+    Eigen::Vector3i best(nx, ny, nz);
+    double best_d2 = norm2(ex, ey, ez);
+    // Fast path: the Voronoi cell of every lattice point contains the ball of radius d/2 around it.
+    if (best_d2 >= 0.25 * spacing_ * spacing_) {
+      const int kz = three ? 1 : 0;
+      for (int dk = -kz; dk <= kz; ++dk)
+        for (int dj = -1; dj <= 1; ++dj)
+          for (int di = -1; di <= 1; ++di) {
+            const double d2 = norm2(ex - di, ey - dj, ez - dk);
+            if (d2 < best_d2) {
+              best_d2 = d2;
+              best = Eigen::Vector3i(nx + di, ny + dj, nz + dk);
+            }
+          }
+    }
+    *sq_dist = best_d2;
+    return best;
+  }
+  /// B^-1.
+  const Eigen::Matrix3d& inverseBasis() const { return inverse_basis_; }
   /// Volume (area in 2D) per lattice point: d^3 / sqrt(2) (2D: sqrt(3)/2 d^2).
   double cellVolume() const;
   /// Particle mass that gives a lattice point with full kernel support the rest density under the poly6
@@ -41,7 +75,7 @@ class SphLattice {
  private:
   int dimension_;
   double spacing_;
-  Eigen::Matrix3d basis_, inverse_basis_;
+  Eigen::Matrix3d basis_, inverse_basis_, gram_;  // gram_ = B^T B (2D: the x-y block)
 };
 
 /// Placement of a lattice in the world: x = origin + orientation * B n (orientation a rotation; in 2D a

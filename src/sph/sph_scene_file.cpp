@@ -16,6 +16,7 @@
 
 #include <Eigen/Geometry>
 
+#include "sph/fast_winding_number.h"
 #include "sph/sph_kernels.h"
 #include "sph/sph_lattice.h"
 #include "sph/sph_scene.h"
@@ -273,7 +274,7 @@ class SceneReader {
                            " is no solid of the scene; give its 'material' (solid material keys)");
         src_.allowKeys(material,
                        {"spacing", "model", "youngs_modulus", "poisson_ratio", "hourglass_control",
-                        "goal_stiffness", "deformation_allowance"},
+                        "goal_stiffness", "deformation_allowance", "implicit_goal", "implicit_step_factor"},
                        where + ".material");
         SphSceneSolid solid;
         readElasticMaterial(material, where + ".material", &solid.elastic);
@@ -318,7 +319,8 @@ class SceneReader {
       p.contact_distance = std::min(p.contact_distance, solid.elastic.lattice_spacing);
     const bool given = node && node["contact_distance"];
     if (node) {
-      src_.allowKeys(node, {"stiffness", "contact_distance", "damping"}, "collisions");
+      src_.allowKeys(node, {"stiffness", "contact_distance", "damping", "implicit"}, "collisions");
+      if (node["implicit"]) p.implicit = src_.boolean(node["implicit"], "collisions.implicit");
       optionalNumber(node, "stiffness", "collisions", &p.stiffness, &Source::positive);
       optionalNumber(node, "contact_distance", "collisions", &p.contact_distance, &Source::positive);
       optionalNumber(node, "damping", "collisions", &p.damping, &Source::nonNegative);
@@ -367,7 +369,8 @@ class SceneReader {
       src_.fail(node, where + ": the lattice spacing must be below the smoothing length (no neighbours)");
     const std::string model = node["model"] ? src_.string(node["model"], where + ".model") : "goal_position";
     const char* strain_keys[] = {"youngs_modulus", "poisson_ratio", "hourglass_control"};
-    const char* goal_keys[] = {"goal_stiffness", "deformation_allowance"};
+    const char* goal_keys[] = {"goal_stiffness", "deformation_allowance", "implicit_goal",
+                               "implicit_step_factor"};
     if (model == "strain") {
       e.model = SphElasticModel::kStrain;
       for (const char* k : goal_keys)
@@ -381,6 +384,9 @@ class SceneReader {
         if (node[k]) src_.fail(node[k], where + "." + k + ": applies to model strain, not goal_position");
       optionalNumber(node, "goal_stiffness", where, &e.goal_stiffness, &Source::positive);
       optionalNumber(node, "deformation_allowance", where, &e.deformation_allowance, &Source::unitInterval);
+      if (node["implicit_goal"])
+        e.implicit_goal = src_.boolean(node["implicit_goal"], where + ".implicit_goal");
+      optionalNumber(node, "implicit_step_factor", where, &e.implicit_step_factor, &Source::nonNegative);
     } else {
       src_.fail(node["model"], where + ".model: unknown model '" + model + "' (strain, goal_position)");
     }
@@ -428,7 +434,77 @@ class SceneReader {
     }
   }
 
-  /// An elastic object (thesis 8.2): a box or a sphere (2D: disc) sampled on the closest-packing lattice
+  /// A triangle mesh file (OBJ, PLY or OFF) named by `node`; a relative path is relative to the scene file's
+  /// folder.
+  TriangleMesh readMeshFile(const YAML::Node& node, const std::string& what) const {
+    const std::string file = src_.string(node, what);
+    std::filesystem::path path(file);
+    if (path.is_relative()) path = std::filesystem::path(src_.sourceName()).parent_path() / path;
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext != ".obj" && ext != ".ply" && ext != ".off")
+      src_.fail(node, what + ": '" + file + "' is not an OBJ, PLY or OFF file");
+    if (!std::filesystem::is_regular_file(path))
+      src_.fail(node, what + ": mesh file '" + path.string() + "' does not exist");
+    TriangleMesh mesh;
+    try {
+      mesh = readMesh(path.string());
+    } catch (const std::exception& e) {
+      src_.fail(node, what + ": " + e.what());
+    }
+    if (mesh.triangles.empty()) src_.fail(node, what + ": '" + path.string() + "' has no triangles");
+    const std::vector<Vec3>& v = mesh.vertices.positions;
+    for (size_t i = 0; i < v.size(); ++i)
+      if (!v[i].allFinite())
+        src_.fail(node, what + ": '" + path.string() + "': vertex " + std::to_string(i) + " is not finite");
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (uint32_t k : mesh.triangles[t])
+        if (k >= v.size())
+          src_.fail(node, what + ": '" + path.string() + "': triangle " + std::to_string(t) +
+                              " has a vertex index out of range");
+    return mesh;
+  }
+
+  /// Solid keys `mesh`, `scale` (a number or [sx, sy, sz]) and `translation` of shape mesh: the mesh in
+  /// the body frame, x -> scale x - c (c: the centre of the scaled bounds), and the centre of the placed
+  /// solid, translation + R c (the world mesh is translation + R (scale x)).
+  TriangleMesh readSolidMesh(const YAML::Node& node, const std::string& where,
+                             const Eigen::Matrix3d& rotation, Vec3* center, Vec3* half) const {
+    if (dimension_ != 3)
+      src_.fail(node["shape"], where + ".shape: mesh needs a 3D scene (a 2D solid is a box or a disc)");
+    TriangleMesh mesh = readMeshFile(src_.require(node, "mesh", where), where + ".mesh");
+    Vec3 scale = Vec3::Ones();
+    if (const YAML::Node s = node["scale"]) {
+      if (s.IsSequence()) {
+        scale = src_.vec(s, where + ".scale", dimension_, false);
+        if (!(scale.minCoeff() > 0) || !scale.allFinite())
+          src_.fail(s, where + ".scale: every factor must be finite and > 0");
+      } else {
+        scale = Vec3::Constant(src_.positive(s, where + ".scale"));
+      }
+    }
+    const Vec3 translation = node["translation"]
+                                 ? src_.vec(node["translation"], where + ".translation", dimension_, false)
+                                 : Vec3::Zero();
+    std::vector<Vec3>& v = mesh.vertices.positions;
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (Vec3& x : v) {
+      x = scale.cwiseProduct(x);
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+    const Vec3 c = 0.5 * (lo + hi);
+    for (Vec3& x : v) x -= c;
+    // Normals follow the (possibly non-uniform) scale: n -> scale^-1 n, renormalised.
+    for (Vec3& n : mesh.vertices.normals) n = scale.cwiseInverse().cwiseProduct(n).normalized();
+    *center = translation + rotation * c;
+    *half = 0.5 * (hi - lo);
+    return mesh;
+  }
+
+  /// An elastic object (thesis 8.2): a box, a sphere (2D: disc) or a closed triangle mesh (3D; scans with
+  /// small holes work: the generalised winding number decides inside) sampled on the closest-packing lattice
   /// (8.20) around its centre, rotated by `rotation`, with its own phase id.
   void readSolid(const YAML::Node& node, const std::string& where) {
     const std::string shape = node["shape"] ? src_.string(node["shape"], where + ".shape") : "box";
@@ -436,6 +512,7 @@ class SceneReader {
                                   "model",          "youngs_modulus",
                                   "poisson_ratio",  "hourglass_control",
                                   "goal_stiffness", "deformation_allowance",
+                                  "implicit_goal",  "implicit_step_factor",
                                   "velocity",       "phase",
                                   "rotation",       "temperature",
                                   "fracture",       "plasticity",
@@ -444,8 +521,10 @@ class SceneReader {
       keys.insert({"lo", "hi"});
     } else if (shape == "sphere") {
       keys.insert({"center", "radius"});
+    } else if (shape == "mesh") {
+      keys.insert({"mesh", "scale", "translation"});
     } else {
-      src_.fail(node["shape"], where + ".shape: unknown shape '" + shape + "' (box, sphere)");
+      src_.fail(node["shape"], where + ".shape: unknown shape '" + shape + "' (box, sphere, mesh)");
     }
     src_.allowKeys(node, keys, where);
     SphSceneSolid solid;
@@ -482,10 +561,13 @@ class SceneReader {
     // Sample in the body frame around the centre (a lattice point, so never empty), then rotate and move.
     const double d = e.lattice_spacing;
     Vec3 center, half;
+    TriangleMesh body_mesh;  // shape mesh: the mesh in the body frame
     if (shape == "box") {
       const Box box = readBox(src_, node, where, dimension_);
       center = 0.5 * (box.lo + box.hi);
       half = 0.5 * (box.hi - box.lo);
+    } else if (shape == "mesh") {
+      body_mesh = readSolidMesh(node, where, solid.orientation, &center, &half);
     } else {
       center = src_.vec(src_.require(node, "center", where), where + ".center", dimension_, false);
       half = Vec3::Constant(src_.positive(src_.require(node, "radius", where), where + ".radius"));
@@ -497,9 +579,20 @@ class SceneReader {
     try {
       const SphLattice lattice(dimension_, d);
       const SphKernels kernels(dimension_, scene_.config.smoothing_length);
-      const std::vector<Vec3> local = shape == "box"
-                                          ? sampleLatticeBox(lattice, -half, half, SphLatticeFrame())
-                                          : sampleLatticeSphere(lattice, Vec3::Zero(), half.x());
+      std::vector<Vec3> local;
+      if (shape == "box") {
+        local = sampleLatticeBox(lattice, -half, half, SphLatticeFrame());
+      } else if (shape == "sphere") {
+        local = sampleLatticeSphere(lattice, Vec3::Zero(), half.x());
+      } else {
+        const FastWindingNumber winding(body_mesh);
+        local = sampleLattice(lattice, SphLatticeFrame(), -half, half,
+                              [&](const Vec3& x) { return std::abs(winding(x)) > 0.5; });
+        if (local.empty())
+          src_.fail(node["mesh"], where + ".mesh: '" + src_.string(node["mesh"], where + ".mesh") +
+                                      "' holds no lattice point of spacing " + std::to_string(d) +
+                                      " (mesh too small for the spacing, or not closed?)");
+      }
       std::vector<Vec3> positions;
       positions.reserve(local.size());
       for (const Vec3& p : local) positions.push_back(center + solid.orientation * p);
@@ -528,13 +621,14 @@ class SceneReader {
     }
     scene_.solids.push_back(solid);
     readBlockTemperature(node, where, solid.first);
-    if (node["skin"]) readSkin(node["skin"], where + ".skin", shape, center, half);
+    if (node["skin"]) readSkin(node["skin"], where + ".skin", shape, center, half, body_mesh);
   }
 
-  /// Solid key `skin` (8.2.7): {mesh: file | resolution: n, transforms, orphans, every, obj, ply}. The rest
-  /// mesh is read or made here; it is bound once all particles exist (finishSkins).
+  /// Solid key `skin` (8.2.7): {mesh: file | resolution: n, transforms, orphans, every, obj, ply}; a solid
+  /// of shape mesh may give `mesh: same` (its own mesh, placed). The rest mesh is read or made here; it is
+  /// bound once all particles exist (finishSkins).
   void readSkin(const YAML::Node& node, const std::string& where, const std::string& shape,
-                const Vec3& center, const Vec3& half) {
+                const Vec3& center, const Vec3& half, const TriangleMesh& body_mesh) {
     if (!enabled("skin")) src_.fail(node, where + ": needs 'skin' in the scene's 'enable' list");
     src_.allowKeys(node, {"mesh", "resolution", "transforms", "orphans", "every", "obj", "ply"}, where);
     const YAML::Node mesh = node["mesh"], resolution = node["resolution"];
@@ -547,22 +641,17 @@ class SceneReader {
     pending.where = where;
     SphSceneSkin& skin = pending.skin;
     skin.solid = scene_.solids.size() - 1;
-    if (mesh) {
-      const std::string file = src_.string(mesh, where + ".mesh");
-      std::filesystem::path path(file);
-      if (path.is_relative()) path = std::filesystem::path(src_.sourceName()).parent_path() / path;
-      std::string ext = path.extension().string();
-      std::transform(ext.begin(), ext.end(), ext.begin(),
-                     [](unsigned char c) { return char(std::tolower(c)); });
-      if (ext != ".obj" && ext != ".ply" && ext != ".off")
-        src_.fail(mesh, where + ".mesh: '" + file + "' is not an OBJ, PLY or OFF file");
-      try {
-        skin.rest = readMesh(path.string());
-      } catch (const std::exception& e) {
-        src_.fail(mesh, where + ".mesh: " + e.what());
-      }
-      if (skin.rest.triangles.empty())
-        src_.fail(mesh, where + ".mesh: '" + path.string() + "' has no triangles");
+    const bool same = mesh && mesh.IsScalar() && mesh.Scalar() == "same";
+    if (same && shape != "mesh")
+      src_.fail(mesh, where + ".mesh: 'same' needs a solid of shape mesh (give a file or 'resolution')");
+    if (resolution && shape == "mesh")
+      src_.fail(resolution, where + ".resolution: a mesh solid's own surface is 'mesh: same'");
+    if (mesh && !same) {
+      skin.rest = readMeshFile(mesh, where + ".mesh");
+    } else if (same) {
+      skin.rest = body_mesh;
+      for (Vec3& x : skin.rest.vertices.positions) x = center + solid.orientation * x;
+      for (Vec3& normal : skin.rest.vertices.normals) normal = solid.orientation * normal;
     } else {
       const int n = int(src_.integer(resolution, where + ".resolution", 1, 1000));
       if (dimension_ != 3)

@@ -44,12 +44,16 @@ struct SphSurfaceOutput {
 
 /// One elastic object of the scene (`enable: [elasticity]`, key solids; thesis 8.2): its particles are
 /// the `count` particles from `first` (kind kFluid, phases == phase), sampled on the closest-packing
-/// lattice of elastic.lattice_spacing in the orientation `orientation`. Optional solid keys: `fracture`
-/// {strain, rate, max_docking_rate, docking_rate_increase, docking_rate_decrease, docking_distance, seed}
-/// (docking, 8.2.5), `plasticity` {yield_strain, flow_rate, max_strain} (both work with fixed and adaptive
-/// steps: the solver announces each step's dt; elastic.time_step is solver.fixed_dt, else solver.max_dt),
-/// and `anchor` {lo, hi}: the solid's particles in that box become static boundary particles it is fixed to
-/// (kind kStaticBoundary, still of this phase; Fig. 8.7 c).
+/// lattice of elastic.lattice_spacing in the orientation `orientation`. Shapes: box {lo, hi}, sphere
+/// {center, radius} and (3D) mesh {mesh: OBJ / PLY / OFF file relative to the scene file, scale: s |
+/// [sx, sy, sz], translation}: the mesh placed at translation + R (scale x), sampled where its generalised
+/// winding number exceeds 1/2 (closed meshes, or scans with small holes); `skin: {mesh: same}` skins it.
+/// Optional solid keys: `fracture` {strain, rate, max_docking_rate, docking_rate_increase,
+/// docking_rate_decrease, docking_distance, seed} (docking, 8.2.5), `plasticity` {yield_strain, flow_rate,
+/// max_strain} (both work with fixed and adaptive steps: the solver announces each step's dt;
+/// elastic.time_step is solver.fixed_dt, else solver.max_dt), and `anchor` {lo, hi}: the solid's particles in
+/// that box become static boundary particles it is fixed to (kind kStaticBoundary, still of this phase;
+/// Fig. 8.7 c).
 struct SphSceneSolid {
   SphElasticConfig elastic;
   uint8_t phase = 1;
