@@ -1,18 +1,22 @@
 // Per-frame time of the cutting scenes of thesis Figs. 9.9 (sliced block) and 9.10 (bunny, curved cuts),
-// split into the phases of Table 9.1: bases (element integration and solver set-up after cuts), rotations
-// (R_e, element forces, R_e K_e R_e^T), assembly, solve and topology (cuts, state transfer). Each phase is
-// the median over the timed frames of its time in that frame; "total" is the mean frame time. Fig. 9.9 runs
-// all its frames; Fig. 9.10 (28k tetrahedra, ~1 s/frame on 2 shared cores) runs its first `--bunny-frames`
-// frames (default 24: resting, the first blade sweep and the start of the second) to stay near 2 minutes. The
+// split into the phases of Table 9.1: bases (element integration and solver set-up after cuts; elements a
+// cut left unchanged reuse their data), rotations (R_e, element forces, R_e K_e R_e^T), assembly (scatter
+// into K_w, system matrix, right-hand side), solve and topology (cuts, state transfer). Each phase is given
+// as median / mean over the timed frames of its time in that frame; "total" is the mean frame time. Fig. 9.9
+// runs all its frames; Fig. 9.10 (28k tetrahedra) runs all 75 or its first `--bunny-frames` frames. The
 // thesis numbers (Pentium 4, 3 GHz) are printed next to ours: seconds per frame, in parenthesis without the
-// recomputation of basis functions, and node / element counts after all cuts.
-// Usage: bench_fem_scenes [--bunny-frames N] [--scene-dir DIR]
+// recomputation of basis functions, and node / element counts after all cuts. Last: elements integrated
+// anew / reused after the cuts.
+// Usage: bench_fem_scenes [--bunny-frames N] [--bunny-solver cholmod|cholmod_pcg|cg_ic|cg]
+//        [--refactor-iterations N] [--skip-block] [--scene-dir DIR]
+// (--bunny-solver replaces the bunny scene's solver; cg and cg_ic use tolerance 1e-6.)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -38,15 +42,37 @@ struct ThesisRow {
 struct SceneResult {
   std::string name;
   int frames = 0, nodes_start = 0, elements_start = 0, nodes = 0, elements = 0, bodies = 0;
-  long iterations = 0;
+  long iterations = 0, recomputed = 0, reused = 0;
   double setup = 0.0, mean_frame = 0.0;
   std::vector<double> bases, rotations, assembly, solve, topology, frame;
 };
 
-SceneResult runScene(const std::string& path, int max_frames) {
+// Solver override for the bunny (--bunny-solver): the scene's solver when empty.
+struct SolverOverride {
+  std::string type;  // cholmod, cholmod_pcg, cg_ic, cg
+  int refactor_iterations = 0;
+};
+
+SceneResult runScene(const std::string& path, int max_frames, const SolverOverride& solver = {}) {
   SceneResult r;
   const Clock::time_point setup_start = Clock::now();
-  const rc::FemScene scene = rc::loadFemScene(path);
+  rc::FemScene scene = rc::loadFemScene(path);
+  using Solver = rc::WarpedDynamicsOptions::Solver;
+  using Preconditioner = rc::WarpedDynamicsOptions::Preconditioner;
+  if (solver.type == "cholmod") {
+    scene.dynamics.solver = Solver::kCholmod;
+  } else if (solver.type == "cholmod_pcg") {
+    scene.dynamics.solver = Solver::kCholmodPcg;
+  } else if (solver.type == "cg_ic" || solver.type == "cg") {
+    scene.dynamics.solver = Solver::kConjugateGradient;
+    scene.dynamics.preconditioner =
+        solver.type == "cg_ic" ? Preconditioner::kIncompleteCholesky : Preconditioner::kJacobi;
+    scene.dynamics.cg_tolerance = 1e-6;
+  } else if (!solver.type.empty()) {
+    throw std::invalid_argument("unknown --bunny-solver '" + solver.type +
+                                "' (known: cholmod, cholmod_pcg, cg_ic, cg)");
+  }
+  if (solver.refactor_iterations > 0) scene.dynamics.pcg_refactor_iterations = solver.refactor_iterations;
   rc::FemSimulation sim(scene);
   r.setup = std::chrono::duration<double>(Clock::now() - setup_start).count();
   r.name = scene.name;
@@ -74,6 +100,8 @@ SceneResult runScene(const std::string& path, int max_frames) {
   r.elements = sim.numElements();
   r.bodies = sim.numBodies();
   r.iterations = sim.solverIterations();
+  r.recomputed = sim.recomputedElements();
+  r.reused = sim.reusedElements();
   return r;
 }
 
@@ -81,15 +109,26 @@ SceneResult runScene(const std::string& path, int max_frames) {
 
 int main(int argc, char** argv) {
   int bunny_frames = 0;
+  SolverOverride bunny_solver;
+  bool skip_block = false;
   std::string scene_dir =
       std::string(__FILE__).substr(0, std::string(__FILE__).rfind('/')) + "/../config/fem";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--bunny-frames") && i + 1 < argc) {
       bunny_frames = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--bunny-solver") && i + 1 < argc) {
+      bunny_solver.type = argv[++i];
+    } else if (!std::strcmp(argv[i], "--refactor-iterations") && i + 1 < argc) {
+      bunny_solver.refactor_iterations = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--skip-block")) {
+      skip_block = true;
     } else if (!std::strcmp(argv[i], "--scene-dir") && i + 1 < argc) {
       scene_dir = argv[++i];
     } else {
-      std::fprintf(stderr, "usage: %s [--bunny-frames N] [--scene-dir DIR]\n", argv[0]);
+      std::fprintf(stderr,
+                   "usage: %s [--bunny-frames N] [--bunny-solver cholmod|cholmod_pcg|cg_ic|cg] "
+                   "[--refactor-iterations N] [--skip-block] [--scene-dir DIR]\n",
+                   argv[0]);
       return 2;
     }
   }
@@ -97,9 +136,11 @@ int main(int argc, char** argv) {
   const std::string files[] = {scene_dir + "/fig9_9_sliced_block.yaml", scene_dir + "/fig9_10_bunny.yaml"};
   const int max_frames[] = {0, bunny_frames};
   std::vector<SceneResult> results;
-  for (int k = 0; k < 2; ++k) {
+  std::vector<int> rows;
+  for (int k = skip_block ? 1 : 0; k < 2; ++k) {
     try {
-      results.push_back(runScene(files[k], max_frames[k]));
+      results.push_back(runScene(files[k], max_frames[k], k == 1 ? bunny_solver : SolverOverride()));
+      rows.push_back(k);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "%s: %s\n", files[k].c_str(), e.what());
       return 1;
@@ -111,8 +152,9 @@ int main(int argc, char** argv) {
       "| setup s | nodes start -> end | elements start -> end | bodies | thesis nodes / elements end "
       "| solves or CG it. |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-  for (size_t k = 0; k < results.size(); ++k) {
-    const SceneResult& r = results[k];
+  for (size_t row = 0; row < results.size(); ++row) {
+    const SceneResult& r = results[row];
+    const int k = rows[row];
     auto phase = [](const std::vector<double>& v) {
       double sum = 0.0;
       for (double x : v) sum += x;
@@ -129,5 +171,7 @@ int main(int argc, char** argv) {
         thesis[k].seconds, thesis[k].seconds_without_bases, r.setup, r.nodes_start, r.nodes, r.elements_start,
         r.elements, r.bodies, thesis[k].nodes_end, thesis[k].elements_end, r.iterations);
   }
+  std::printf("\nElements after cuts: integrated anew / reused from the cut body\n");
+  for (const SceneResult& r : results) std::printf("%s: %ld / %ld\n", r.name.c_str(), r.recomputed, r.reused);
   return 0;
 }

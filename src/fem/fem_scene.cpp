@@ -610,24 +610,62 @@ std::vector<Vec3> interpolateCutValues(const PolyhedralMesh& mesh, const PlaneCu
 // FemSimulation
 // ---------------------------------------------------------------------------------------------------------
 
+namespace {
+
+// Whether some element of mesh may meet the convex polygon (box: the polygon's bounding box): its bounding
+// box meets the polygon's (grown by band) and its nodes are not all farther than band on one side of the
+// polygon's plane. Conservative: true for a degenerate polygon (the cut reports the problem).
+bool polygonMayMeetElements(const PolyhedralMesh& mesh, const std::vector<Vec3>& polygon,
+                            const std::pair<Vec3, Vec3>& box, double band) {
+  Vec3 normal = Vec3::Zero();  // Newell
+  for (size_t k = 0; k < polygon.size(); ++k) normal += polygon[k].cross(polygon[(k + 1) % polygon.size()]);
+  if (!(normal.norm() > 0.0) || !normal.allFinite()) return true;
+  normal.normalize();
+  const double offset = normal.dot(polygon.front());
+  const Vec3 lo = box.first - Vec3::Constant(band), hi = box.second + Vec3::Constant(band);
+  for (const ConvexPolyhedron& element : mesh.elements()) {
+    Vec3 element_lo = Vec3::Constant(INFINITY), element_hi = Vec3::Constant(-INFINITY);
+    double below = INFINITY, above = -INFINITY;
+    for (const Vec3& x : element.nodes()) {
+      element_lo = element_lo.cwiseMin(x);
+      element_hi = element_hi.cwiseMax(x);
+      const double d = normal.dot(x) - offset;
+      below = std::min(below, d);
+      above = std::max(above, d);
+    }
+    if ((element_lo.array() > hi.array()).any() || (element_hi.array() < lo.array()).any()) continue;
+    if (below <= band && above >= -band) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 FemSimulation::FemSimulation(const FemScene& scene) : scene_(scene) {
   if (!scene_.mesh) throw std::invalid_argument("FemSimulation: the scene has no mesh");
   bodies_.push_back(makeBody(*scene_.mesh, std::vector<Vec3>(scene_.mesh->numNodes(), Vec3::Zero()),
                              scene_.initial_velocities));
 }
 
-std::unique_ptr<WarpedDynamics> FemSimulation::makeBody(const PolyhedralMesh& mesh,
+std::unique_ptr<WarpedDynamics> FemSimulation::makeBody(PolyhedralMesh mesh,
                                                         const std::vector<Vec3>& displacements,
-                                                        const std::vector<Vec3>& velocities) {
+                                                        const std::vector<Vec3>& velocities,
+                                                        const LinearElasticModel* donor,
+                                                        FemCutReport* report) {
   const Clock::time_point start = Clock::now();
-  auto body = std::make_unique<WarpedDynamics>(
-      LinearElasticModel(mesh, scene_.youngs_modulus, scene_.poisson_ratio, scene_.density), scene_.dynamics);
   const int n = mesh.numNodes();
   Eigen::VectorXd x(3 * n), v(3 * n);
   for (int i = 0; i < n; ++i) {
     x.segment<3>(3 * i) = mesh.node(i) + displacements[i];
     v.segment<3>(3 * i) = velocities[i];
   }
+  LinearElasticModel model(std::move(mesh), scene_.youngs_modulus, scene_.poisson_ratio, scene_.density,
+                           ElementQuadratureOptions(), donor);
+  if (report) {
+    report->recomputed_elements += model.numRecomputedElements();
+    report->reused_elements += model.numReusedElements();
+  }
+  auto body = std::make_unique<WarpedDynamics>(std::move(model), scene_.dynamics);
   body->setPositions(x);
   body->setVelocities(v);
   times_.integration += secondsSince(start);
@@ -694,6 +732,14 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
       if ((boxes[k].first.array() <= hi.array() + margin).all() &&
           (boxes[k].second.array() >= lo.array() - margin).all())
         hits.push_back(static_cast<int>(k));
+    // Keep only polygons that an element may meet: an element whose box meets the polygon's and whose nodes
+    // are not all (beyond a margin) on one side of its plane. Saves building a ProgressiveCutMesh when
+    // the blade has not reached the body yet.
+    const double band = std::max(10.0 * snap_relative_distance, 1e-6) * (hi - lo).norm();
+    hits.erase(
+        std::remove_if(hits.begin(), hits.end(),
+                       [&](int k) { return !polygonMayMeetElements(mesh, polygons[k], boxes[k], band); }),
+        hits.end());
     if (hits.empty()) {
       times_.topology += secondsSince(start);
       next.push_back(std::move(body));
@@ -741,9 +787,12 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
       }
     }
     times_.topology += secondsSince(start);
-    for (int c = 0; c < num_components; ++c) next.push_back(makeBody(meshes[c], side_u[c], side_v[c]));
+    for (int c = 0; c < num_components; ++c)
+      next.push_back(makeBody(std::move(meshes[c]), side_u[c], side_v[c], &body->model(), &report));
   }
   bodies_ = std::move(next);
+  recomputed_elements_ += report.recomputed_elements;
+  reused_elements_ += report.reused_elements;
   return report;
 }
 
@@ -807,13 +856,17 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
           side_v[s].push_back(combined(cut_velocities, id));
         }
       times_.topology += secondsSince(start);
-      for (int s = 0; s < 2; ++s) next.push_back(makeBody(separated.sides[s], side_u[s], side_v[s]));
+      for (int s = 0; s < 2; ++s)
+        next.push_back(makeBody(separated.sides[s], side_u[s], side_v[s], &body->model(), &report));
     } else {
       times_.topology += secondsSince(start);
-      next.push_back(makeBody(result.mesh, result.displacements, cut_velocities));
+      next.push_back(
+          makeBody(std::move(result.mesh), result.displacements, cut_velocities, &body->model(), &report));
     }
   }
   bodies_ = std::move(next);
+  recomputed_elements_ += report.recomputed_elements;
+  reused_elements_ += report.reused_elements;
   return report;
 }
 

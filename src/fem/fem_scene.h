@@ -132,7 +132,7 @@ std::vector<Vec3> interpolateCutValues(const PolyhedralMesh& mesh, const PlaneCu
 
 /// Wall time per phase, seconds.
 struct FemPhaseTimes {
-  double integration = 0.0;  ///< element integration and solver setup (LinearElasticModel, WarpedDynamics)
+  double integration = 0.0;  ///< element integration (changed elements only after a cut) and solver setup
   double dynamics = 0.0;     ///< WarpedDynamics::step: warping, assembly, solve, contact
   double rotations = 0.0;    ///< of dynamics: R_e, element forces, R_e K_e R_e^T (StepStatistics::warping_ms)
   double assembly = 0.0;     ///< of dynamics: K_w scatter, system matrix, right-hand side
@@ -148,6 +148,9 @@ struct FemCutReport {
   int split_elements = 0, new_nodes = 0, duplicated_nodes = 0;
   int crack_faces = 0;  ///< polygon cuts: element faces that became crack faces
   int polygons = 0;     ///< polygon cuts: polygons applied
+  /// Elements of the new bodies integrated anew (changed by the cut) / sharing the cut body's integration
+  /// data (unchanged rest geometry, LinearElasticModel donor).
+  int recomputed_elements = 0, reused_elements = 0;
 };
 
 /// The running simulation of a scene: bodies (one WarpedDynamics each), time, scheduled cuts.
@@ -178,6 +181,9 @@ class FemSimulation {
                                 double snap_relative_distance = 1e-6);
   /// Polygons of polygon cuts applied so far (all cuts).
   long polygonsApplied() const { return polygons_applied_; }
+  /// Elements integrated anew after cuts / reused from the cut body (FemCutReport), all cuts so far.
+  long recomputedElements() const { return recomputed_elements_; }
+  long reusedElements() const { return reused_elements_; }
 
   const FemPhaseTimes& phaseTimes() const { return times_; }
   FemPhaseTimes& phaseTimes() { return times_; }
@@ -188,15 +194,18 @@ class FemSimulation {
   double minGroundDistance() const;
 
  private:
-  std::unique_ptr<WarpedDynamics> makeBody(const PolyhedralMesh& mesh, const std::vector<Vec3>& displacements,
-                                           const std::vector<Vec3>& velocities);
+  /// donor: the model of the body the mesh was cut from (its unchanged elements' data is reused), or null.
+  std::unique_ptr<WarpedDynamics> makeBody(PolyhedralMesh mesh, const std::vector<Vec3>& displacements,
+                                           const std::vector<Vec3>& velocities,
+                                           const LinearElasticModel* donor = nullptr,
+                                           FemCutReport* report = nullptr);
 
   FemScene scene_;
   std::vector<std::unique_ptr<WarpedDynamics>> bodies_;
   double time_ = 0.0;
   long steps_ = 0;
   int next_cut_ = 0, next_polygon_ = 0;  // next_polygon_: of cut next_cut_
-  long polygons_applied_ = 0;
+  long polygons_applied_ = 0, recomputed_elements_ = 0, reused_elements_ = 0;
   FemPhaseTimes times_;
   long solver_iterations_ = 0, unconverged_ = 0;
   int max_step_iterations_ = 0;

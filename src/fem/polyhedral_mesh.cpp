@@ -4,9 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <cstring>
 #include <random>
-#include <set>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -39,13 +38,10 @@ std::string faceName(int element, int face) {
   return "element " + std::to_string(element) + " face " + std::to_string(face);
 }
 
-std::set<std::array<int, 3>> canonicalTriangleSet(const std::vector<PolyhedralMesh::Triangle>& triangles) {
-  std::set<std::array<int, 3>> set;
-  for (auto t : triangles) {
-    std::sort(t.begin(), t.end());
-    set.insert(t);
-  }
-  return set;
+std::vector<std::array<int, 3>> canonicalTriangleSet(std::vector<PolyhedralMesh::Triangle> triangles) {
+  for (auto& t : triangles) std::sort(t.begin(), t.end());
+  std::sort(triangles.begin(), triangles.end());
+  return triangles;
 }
 
 void checkGridArguments(const char* builder, const Vec3& lo, const Vec3& hi, int nx, int ny, int nz) {
@@ -149,34 +145,83 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
       fail(faceName(e, f) + " is listed twice as crack face");
   }
 
-  // Faces by node set: first user, its triangulation (global ids, in the first user's orientation), use
-  // count.
-  struct SharedFace {
-    int element, face, uses;
-    std::vector<Triangle> triangles;
+  // Faces by node set (sorted node ids in a flat pool): faces sorted by key, equal keys are one face used by
+  // up to two elements; the first user (element order) triangulates it, the second reverses that.
+  std::vector<int> face_start(element_faces_.size() + 1, 0);  // global face index of (e, 0)
+  for (size_t e = 0; e < element_faces_.size(); ++e)
+    face_start[e + 1] = face_start[e] + static_cast<int>(element_faces_[e].size());
+  const int num_faces = face_start.back();
+  std::vector<int> key_start(num_faces + 1, 0), key_pool, face_element(num_faces), face_local(num_faces);
+  for (size_t e = 0; e < element_faces_.size(); ++e)
+    for (size_t f = 0; f < element_faces_[e].size(); ++f) {
+      const int g = face_start[e] + static_cast<int>(f);
+      face_element[g] = static_cast<int>(e);
+      face_local[g] = static_cast<int>(f);
+      const Face& face = element_faces_[e][f];
+      key_pool.insert(key_pool.end(), face.begin(), face.end());
+      std::sort(key_pool.end() - face.size(), key_pool.end());
+      key_start[g + 1] = static_cast<int>(key_pool.size());
+    }
+  auto keyLess = [&](int x, int y) {
+    const int nx = key_start[x + 1] - key_start[x], ny = key_start[y + 1] - key_start[y];
+    if (nx != ny) return nx < ny;
+    const int cmp =
+        std::memcmp(key_pool.data() + key_start[x], key_pool.data() + key_start[y], sizeof(int) * nx);
+    return cmp != 0 ? cmp < 0 : x < y;  // equal keys in element order
   };
-  std::map<std::vector<int>, SharedFace> face_map;
+  auto sameKey = [&](int x, int y) {
+    const int nx = key_start[x + 1] - key_start[x];
+    return nx == key_start[y + 1] - key_start[y] &&
+           std::equal(key_pool.begin() + key_start[x], key_pool.begin() + key_start[x + 1],
+                      key_pool.begin() + key_start[y]);
+  };
+  std::vector<int> order(num_faces);
+  for (int g = 0; g < num_faces; ++g) order[g] = g;
+  std::sort(order.begin(), order.end(), keyLess);
+  std::vector<int> other_user(num_faces, -1);  // the other element face of an interior face
+  // Problems are reported for the first face in element order that shows one (the third user of a face,
+  // the second user of a badly oriented pair).
+  int error_face = num_faces;
+  std::string error;
+  auto report = [&](int g, const std::string& message) {
+    if (g < error_face) {
+      error_face = g;
+      error = message;
+    }
+  };
+  auto name = [&](int g) { return faceName(face_element[g], face_local[g]); };
+  for (int k = 0; k < num_faces;) {
+    int end = k + 1;
+    while (end < num_faces && sameKey(order[k], order[end])) ++end;
+    const int first = order[k];
+    if (end - k > 2) report(order[k + 2], name(order[k + 2]) + " is used by more than two elements");
+    if (end - k >= 2) {
+      const int second = order[k + 1];
+      const std::string pair = name(second) + " and " + name(first);
+      const int relation = cyclicRelation(element_faces_[face_element[first]][face_local[first]],
+                                          element_faces_[face_element[second]][face_local[second]]);
+      if (relation == 1)
+        report(second, pair + " have the same orientation (overlapping or inverted elements)");
+      if (relation == 0) report(second, pair + " have the same nodes in a different cyclic order");
+      other_user[first] = second;
+      other_user[second] = first;
+    }
+    k = end;
+  }
+  if (error_face < num_faces) fail(error);
+  std::vector<std::vector<Triangle>> face_triangles(num_faces);  // global ids, in its element's orientation
   elements_.reserve(element_faces_.size());
   std::vector<int> local(n, -1);
   for (size_t e = 0; e < element_faces_.size(); ++e) {
     const ElementFaces& faces = element_faces_[e];
-    std::vector<std::vector<Triangle>> triangulation(faces.size());
     for (size_t f = 0; f < faces.size(); ++f) {
-      const std::vector<int> key = sortedFaceKey(faces[f]);
-      auto it = face_map.find(key);
-      if (it == face_map.end()) {
-        triangulation[f] = bestFanTriangulation(nodes_, faces[f]);
-        face_map.emplace(key, SharedFace{int(e), int(f), 1, triangulation[f]});
-        continue;
+      const int g = face_start[e] + static_cast<int>(f);
+      const int other = other_user[g];
+      if (other < 0 || other > g) {
+        face_triangles[g] = bestFanTriangulation(nodes_, faces[f]);
+      } else {
+        for (const Triangle& t : face_triangles[other]) face_triangles[g].push_back({t[0], t[2], t[1]});
       }
-      SharedFace& shared = it->second;
-      const std::string pair = faceName(int(e), int(f)) + " and " + faceName(shared.element, shared.face);
-      if (shared.uses >= 2) fail(faceName(int(e), int(f)) + " is used by more than two elements");
-      const int relation = cyclicRelation(element_faces_[shared.element][shared.face], faces[f]);
-      if (relation == 1) fail(pair + " have the same orientation (overlapping or inverted elements)");
-      if (relation == 0) fail(pair + " have the same nodes in a different cyclic order");
-      ++shared.uses;
-      for (Triangle t : shared.triangles) triangulation[f].push_back({t[0], t[2], t[1]});
     }
     // Local nodes in order of first use.
     std::vector<int> ids;
@@ -187,16 +232,17 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
           ids.push_back(v);
         }
     std::vector<Vec3> element_nodes;
+    element_nodes.reserve(ids.size());
     for (int v : ids) element_nodes.push_back(nodes_[v]);
-    std::vector<ConvexPolyhedron::Face> local_faces;
-    std::vector<std::vector<ConvexPolyhedron::Triangle>> local_triangles;
+    std::vector<ConvexPolyhedron::Face> local_faces(faces.size());
+    std::vector<std::vector<ConvexPolyhedron::Triangle>> local_triangles(faces.size());
     for (size_t f = 0; f < faces.size(); ++f) {
-      ConvexPolyhedron::Face lf;
+      ConvexPolyhedron::Face& lf = local_faces[f];
+      lf.reserve(faces[f].size());
       for (int v : faces[f]) lf.push_back(local[v]);
-      local_faces.push_back(lf);
-      std::vector<ConvexPolyhedron::Triangle> lt;
-      for (const Triangle& t : triangulation[f]) lt.push_back({local[t[0]], local[t[1]], local[t[2]]});
-      local_triangles.push_back(lt);
+      std::vector<ConvexPolyhedron::Triangle>& lt = local_triangles[f];
+      for (const Triangle& t : face_triangles[face_start[e] + f])
+        lt.push_back({local[t[0]], local[t[1]], local[t[2]]});
     }
     for (int v : ids) local[v] = -1;
     try {
@@ -219,23 +265,20 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
       }
     return triangles;
   };
-  std::map<std::vector<int>, std::pair<int, int>> first_user;
   is_boundary_node_.assign(n, 0);
-  std::map<std::pair<int, int>, int> boundary_edges;  // directed boundary polygon edges
+  std::vector<std::pair<int, int>> boundary_edges;  // directed boundary polygon edges
   std::vector<char> boundary_triangle_is_crack;
   for (size_t e = 0; e < element_faces_.size(); ++e)
     for (size_t f = 0; f < element_faces_[e].size(); ++f) {
-      const std::vector<int> key = sortedFaceKey(element_faces_[e][f]);
-      const SharedFace& shared = face_map.at(key);
-      if (shared.uses == 2) {
+      const int g = face_start[e] + static_cast<int>(f);
+      if (other_user[g] >= 0) {
         if (isCrackFace(int(e), int(f)))
           fail(faceName(int(e), int(f)) + " is listed as crack face but still connects two elements");
-        auto inserted = first_user.emplace(key, std::make_pair(int(e), int(f)));
-        if (!inserted.second) {
-          const auto& other = inserted.first->second;
+        const int other = other_user[g];
+        if (other < g) {
           if (canonicalTriangleSet(elementFaceTriangles(int(e), int(f))) !=
-              canonicalTriangleSet(elementFaceTriangles(other.first, other.second)))
-            fail(faceName(int(e), int(f)) + " and " + faceName(other.first, other.second) +
+              canonicalTriangleSet(elementFaceTriangles(face_element[other], face_local[other])))
+            fail(faceName(int(e), int(f)) + " and " + faceName(face_element[other], face_local[other]) +
                  " triangulate their shared face differently");
           ++num_interior_faces_;
         }
@@ -244,12 +287,7 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
       const Face& face = element_faces_[e][f];
       for (size_t k = 0; k < face.size(); ++k) {
         is_boundary_node_[face[k]] = 1;
-        const auto edge = std::make_pair(face[k], face[(k + 1) % face.size()]);
-        if (++boundary_edges[edge] > 1)
-          fail("the boundary is not a closed manifold: edge (" + std::to_string(edge.first) + ", " +
-               std::to_string(edge.second) + ") is used twice in the same direction (" +
-               faceName(int(e), int(f)) +
-               "): hanging node, non-conforming faces or elements touching at an edge");
+        boundary_edges.emplace_back(face[k], face[(k + 1) % face.size()]);
       }
       const char crack = isCrackFace(int(e), int(f)) ? 1 : 0;
       for (const Triangle& t : elementFaceTriangles(int(e), int(f))) {
@@ -257,10 +295,19 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
         boundary_triangle_is_crack.push_back(crack);
       }
     }
-  for (const auto& entry : boundary_edges)
-    if (!boundary_edges.count({entry.first.second, entry.first.first}))
-      fail("the boundary is not closed at edge (" + std::to_string(entry.first.first) + ", " +
-           std::to_string(entry.first.second) + "): hanging node or non-conforming faces");
+  std::sort(boundary_edges.begin(), boundary_edges.end());
+  for (size_t k = 0; k + 1 < boundary_edges.size(); ++k)
+    if (boundary_edges[k] == boundary_edges[k + 1])
+      fail(
+          "the boundary is not a closed manifold: edge (" + std::to_string(boundary_edges[k].first) + ", " +
+          std::to_string(boundary_edges[k].second) +
+          ") is used twice in the same direction: hanging node, non-conforming faces or elements touching at "
+          "an edge");
+  for (const auto& edge : boundary_edges)
+    if (!std::binary_search(boundary_edges.begin(), boundary_edges.end(),
+                            std::make_pair(edge.second, edge.first)))
+      fail("the boundary is not closed at edge (" + std::to_string(edge.first) + ", " +
+           std::to_string(edge.second) + "): hanging node or non-conforming faces");
 
   // Non-conforming faces that still close the boundary (e.g. a square split along different diagonals by
   // the two elements): coplanar, opposite boundary triangles with overlapping interiors.

@@ -33,14 +33,6 @@ void checkVector(const Eigen::VectorXd& v, Eigen::Index size, const char* name) 
   if (!v.allFinite()) throw std::invalid_argument(std::string("WarpedDynamics: ") + name + " is not finite");
 }
 
-int valueIndex(const Eigen::SparseMatrix<double>& m, int row, int col) {
-  const int* begin = m.innerIndexPtr() + m.outerIndexPtr()[col];
-  const int* end = m.innerIndexPtr() + m.outerIndexPtr()[col + 1];
-  const int* it = std::lower_bound(begin, end, row);
-  if (it == end || *it != row) throw std::logic_error("WarpedDynamics: stiffness pattern lacks an entry");
-  return static_cast<int>(it - m.innerIndexPtr());
-}
-
 }  // namespace
 
 WarpedDynamics::WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOptions& options)
@@ -83,27 +75,33 @@ WarpedDynamics::WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOpt
   warped_stiffness_.makeCompressed();
   rotations_.assign(num_elements, Eigen::Matrix3d::Identity());
   rotation_weights_.resize(num_elements);
-  rotated_stiffness_.resize(num_elements);
-  element_forces_.resize(num_elements);
-  scatter_.resize(num_elements);
+  element_force_offset_.resize(num_elements + 1);
+  element_force_offset_[0] = 0;
+  diagonal_index_.resize(dofs);
   for (int e = 0; e < num_elements; ++e) {
     const auto& ids = mesh.element(e).globalNodeIds();
     const int n = static_cast<int>(ids.size());
+    max_element_nodes_ = std::max(max_element_nodes_, n);
+    element_force_offset_[e + 1] = element_force_offset_[e] + 3 * n;
     Eigen::VectorXd& w = rotation_weights_[e];
     w.resize(n);
-    for (int a = 0; a < n; ++a)
+    for (int a = 0; a < n; ++a) {
       w[a] = options_.rotation_weights == WarpedDynamicsOptions::RotationWeights::kLumpedMasses
                  ? model_.lumpedMasses()[ids[a]]
                  : model_.quadrature(e).node_volume_fractions[a];
-    std::vector<int>& scatter = scatter_[e];
-    scatter.resize(9 * n * n);
-    for (int col = 0; col < 3 * n; ++col)
-      for (int row = 0; row < 3 * n; ++row)
-        scatter[col * 3 * n + row] =
-            valueIndex(warped_stiffness_, 3 * ids[row / 3] + row % 3, 3 * ids[col / 3] + col % 3);
+      const int diagonal = model_.blockValueIndices(e)[a * n + a];
+      for (int r = 0; r < 3; ++r)
+        diagonal_index_[3 * ids[a] + r] = diagonal + r * model_.columnLength(ids[a]) + r;
+    }
   }
-  diagonal_index_.resize(dofs);
-  for (int d = 0; d < dofs; ++d) diagonal_index_[d] = valueIndex(warped_stiffness_, d, d);
+  element_forces_ = Eigen::VectorXd::Zero(element_force_offset_[num_elements]);
+  rotated_block_offset_.resize(num_elements + 1);
+  rotated_block_offset_[0] = 0;
+  for (int e = 0; e < num_elements; ++e) {
+    const int n = mesh.element(e).numNodes();
+    rotated_block_offset_[e + 1] = rotated_block_offset_[e] + 9 * n * n;
+  }
+  rotated_blocks_ = Eigen::VectorXd::Zero(rotated_block_offset_[num_elements]);
   system_matrix_ = warped_stiffness_;
   if (options_.solver == WarpedDynamicsOptions::Solver::kCholmod ||
       options_.solver == WarpedDynamicsOptions::Solver::kCholmodPcg)
@@ -160,41 +158,74 @@ Eigen::VectorXd WarpedDynamics::elementDisplacement(int e, const ElementFrame& f
 
 void WarpedDynamics::updateWarping() {
   const Clock::time_point warping_start = Clock::now();
-  const int num_elements = model_.mesh().numElements();
+  const PolyhedralMesh& mesh = model_.mesh();
+  const int num_elements = mesh.numElements();
   int degenerate = 0;
-#pragma omp parallel for schedule(dynamic, 16) reduction(+ : degenerate) if (num_elements >= kParallelElements)
-  for (int e = 0; e < num_elements; ++e) {
-    const ElementFrame frame = elementFrame(e, positions_, rotations_[e]);
-    rotations_[e] = frame.rotation;
-    degenerate += frame.degenerate ? 1 : 0;
-    const Eigen::MatrixXd& k = model_.elementStiffness(e);
-    const Eigen::Matrix3d& r = frame.rotation;
-    const int n = static_cast<int>(k.rows() / 3);
-    // f_e = -R K_e u_e
-    const Eigen::VectorXd ku = k * elementDisplacement(e, frame);
-    Eigen::VectorXd& f = element_forces_[e];
-    f.resize(3 * n);
-    for (int a = 0; a < n; ++a) f.segment<3>(3 * a) = -(r * ku.segment<3>(3 * a));
-    // R K_e R^T block-wise
-    Eigen::MatrixXd& rk = rotated_stiffness_[e];
-    rk.resize(3 * n, 3 * n);
-    for (int b = 0; b < n; ++b)
+#pragma omp parallel reduction(+ : degenerate) if (num_elements >= kParallelElements)
+  {
+    // Per-thread scratch (no allocation per element).
+    Eigen::VectorXd rest_buffer(3 * max_element_nodes_), current_buffer(3 * max_element_nodes_),
+        u_buffer(3 * max_element_nodes_), ku_buffer(3 * max_element_nodes_);
+#pragma omp for schedule(dynamic, 64)
+    for (int e = 0; e < num_elements; ++e) {
+      const auto& ids = mesh.element(e).globalNodeIds();
+      const int n = static_cast<int>(ids.size());
+      Eigen::Map<Eigen::VectorXd> rest_local(rest_buffer.data(), 3 * n),
+          current_local(current_buffer.data(), 3 * n), u(u_buffer.data(), 3 * n), ku(ku_buffer.data(), 3 * n);
+      for (int a = 0; a < n; ++a) {
+        rest_local.segment<3>(3 * a) = rest_.segment<3>(3 * ids[a]);
+        current_local.segment<3>(3 * a) = positions_.segment<3>(3 * ids[a]);
+      }
+      const HornRegistration reg = hornRegistration(rest_local, current_local, rotation_weights_[e]);
+      if (!options_.stiffness_warping) {
+        rotations_[e].setIdentity();
+      } else if (reg.eigenvalue_gap > options_.min_eigenvalue_gap) {
+        rotations_[e] = reg.rotation;
+      } else {
+        ++degenerate;  // keep the previous R_e
+      }
+      const Eigen::Matrix3d& r = rotations_[e];
+      // u_e = R^T (x_e - c) - (X_e - C), f_e = -R K_e u_e
       for (int a = 0; a < n; ++a)
-        rk.block<3, 3>(3 * a, 3 * b).noalias() = r * k.block<3, 3>(3 * a, 3 * b) * r.transpose();
+        u.segment<3>(3 * a) = r.transpose() * (current_local.segment<3>(3 * a) - reg.current_centroid) -
+                              (rest_local.segment<3>(3 * a) - reg.rest_centroid);
+      ku.noalias() = model_.elementStiffness(e) * u;
+      double* f = element_forces_.data() + element_force_offset_[e];
+      for (int a = 0; a < n; ++a) Eigen::Map<Vec3>(f + 3 * a) = -(r * ku.segment<3>(3 * a));
+      // R_e K_e R_e^T block by block (block (a, b) column-major at 9 (b n + a)).
+      const Eigen::MatrixXd& k = model_.elementStiffness(e);
+      double* rk = rotated_blocks_.data() + rotated_block_offset_[e];
+      for (int b = 0; b < n; ++b)
+        for (int a = 0; a < n; ++a)
+          Eigen::Map<Eigen::Matrix3d>(rk + 9 * (b * n + a)).noalias() =
+              r * k.block<3, 3>(3 * a, 3 * b) * r.transpose();
+    }
   }
   degenerate_rotations_ = degenerate;
   last_warping_ms_ = millisecondsSince(warping_start);
+
+  // K_w = sum_e R_e K_e R_e^T and f_int: a serial pass adding each element's rotated 3 x 3 blocks in place
+  // (block value indices of the model's pattern).
   const Clock::time_point scatter_start = Clock::now();
+  double* values = warped_stiffness_.valuePtr();
+  std::fill(values, values + warped_stiffness_.nonZeros(), 0.0);
   elastic_forces_.setZero();
-  Eigen::Map<Eigen::VectorXd> values(warped_stiffness_.valuePtr(), warped_stiffness_.nonZeros());
-  values.setZero();
   for (int e = 0; e < num_elements; ++e) {
-    const auto& ids = model_.mesh().element(e).globalNodeIds();
-    for (size_t a = 0; a < ids.size(); ++a)
-      elastic_forces_.segment<3>(3 * ids[a]) += element_forces_[e].segment<3>(3 * a);
-    const double* rk = rotated_stiffness_[e].data();
-    const std::vector<int>& scatter = scatter_[e];
-    for (size_t k = 0; k < scatter.size(); ++k) values[scatter[k]] += rk[k];
+    const auto& ids = mesh.element(e).globalNodeIds();
+    const int n = static_cast<int>(ids.size());
+    const double* f = element_forces_.data() + element_force_offset_[e];
+    const double* rk = rotated_blocks_.data() + rotated_block_offset_[e];
+    const int* index = model_.blockValueIndices(e);
+    for (int b = 0; b < n; ++b) {
+      elastic_forces_.segment<3>(3 * ids[b]) += Eigen::Map<const Vec3>(f + 3 * b);
+      const int length = model_.columnLength(ids[b]);
+      for (int a = 0; a < n; ++a) {
+        const double* block = rk + 9 * (b * n + a);
+        double* column = values + index[b * n + a];
+        for (int c = 0; c < 3; ++c)
+          for (int row = 0; row < 3; ++row) column[c * length + row] += block[3 * c + row];
+      }
+    }
   }
   last_scatter_ms_ = millisecondsSince(scatter_start);
 }

@@ -143,10 +143,12 @@ class WarpedDynamics {
   std::vector<Eigen::Matrix3d> rotations_;
   int degenerate_rotations_ = 0;
   Eigen::VectorXd elastic_forces_;
-  std::vector<Eigen::MatrixXd> rotated_stiffness_;  // R_e K_e R_e^T (block-wise), scratch
-  std::vector<Eigen::VectorXd> element_forces_;     // scratch
-  std::vector<std::vector<int>> scatter_;           // column-major element entry -> value index in K_w
-  std::vector<int> diagonal_index_;                 // dof -> value index of the diagonal entry
+  Eigen::VectorXd element_forces_;  // f_e of every element, element e at element_force_offset_[e]
+  std::vector<int> element_force_offset_;
+  Eigen::VectorXd rotated_blocks_;  // R_e K_e R_e^T of every element as 3 x 3 blocks, scratch
+  std::vector<int> rotated_block_offset_;
+  int max_element_nodes_ = 0;
+  std::vector<int> diagonal_index_;  // dof -> value index of the diagonal entry
   Eigen::SparseMatrix<double> warped_stiffness_, system_matrix_, constrained_matrix_;
   Eigen::VectorXd previous_dv_;
   // Lower: the symmetric product is serial; Eigen's OpenMP SpMV (Lower | Upper) spin-waits badly on small
