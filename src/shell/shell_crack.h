@@ -34,8 +34,10 @@ bool crackVisible(const std::vector<ShellCrack>& cracks, const Vec3& a, const Ve
 /// Recomputes the neighbourhoods (and fans) of every node that has a neighbour it cannot see: its
 /// `neighbor_count` nearest visible nodes among the 4 * neighbor_count nearest (fewer if not enough are
 /// visible), fan-ordered as in selectShellNodes. Rest positions, normals and areas stay. Returns the
-/// recomputed nodes (ascending).
+/// recomputed nodes (ascending). If the neighbourhoods already see past cracks[0 .. first_new_crack) (they
+/// came from an earlier call), only the newer cracks are tested to find the nodes to recompute (same result,
+/// less work); the recomputation itself respects all cracks.
 std::vector<uint32_t> recomputeVisibleNeighborhoods(ShellNodes& nodes, const std::vector<ShellCrack>& cracks,
-                                                    size_t neighbor_count);
+                                                    size_t neighbor_count, size_t first_new_crack = 0);
 
 }  // namespace rc

@@ -49,20 +49,15 @@ ShellEnergy::ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, con
 }
 
 double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slots, double* membrane,
-                                 double* bending) const {
+                                 double* bending, double* fiber_length, double* fiber_angle) const {
   const ShellNodes& nodes = *nodes_;
   const uint32_t* nb = nodes.neighborsOf(i);
   const size_t k = nodes.neighborCount(i);
   const size_t f0 = fibers_->node_offsets[i], f1 = fibers_->node_offsets[i + 1];
+  const Fiber* fib = fibers_->fibers.data() + f0;
   const double area = nodes.rest_areas[i];
   const double ks = material_.stretch_stiffness, kb = material_.bending_stiffness;
   constexpr double beta = kSplineAngleScale;
-  double normal_length = 0.0;
-  const Vec3 normal = fanNormal(nodes, i, x, &normal_length);
-
-  thread_local std::vector<double> len, angle, dkappa;
-  thread_local std::vector<std::array<Vec3, 3>> grad_len, grad_angle;
-  thread_local std::vector<Vec3> grad_normal;
   const size_t m = f1 - f0;
   if (m == 0) {  // cut off by cracks: no fibers, no energy
     if (membrane) *membrane = 0.0;
@@ -71,28 +66,54 @@ double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slo
       for (size_t q = 0; q <= k; ++q) slots[q].setZero();
     return 0.0;
   }
-  len.resize(m), angle.resize(m), dkappa.resize(m), grad_len.resize(m), grad_angle.resize(m),
-      grad_normal.resize(m);
+  const Vec3 xc = x[i];
+  Vec3 normal_sum = Vec3::Zero();  // fanNormal, inlined on edge vectors
+  for (size_t p = nodes.fan_offsets[i]; p < nodes.fan_offsets[i + 1]; ++p) {
+    const auto& pr = nodes.fan_pairs[p];
+    normal_sum += (x[nb[pr.first]] - xc).cross(x[nb[pr.second]] - xc);
+  }
+  const double normal_length = normal_sum.norm();
+  const Vec3 normal = normal_length > 0.0 ? Vec3(normal_sum / normal_length) : nodes.rest_normals[i];
+
+  // Per-fiber terms on the stack (heap only for unusually large neighbourhoods).
+  constexpr size_t kStackFibers = 32;
+  FiberMeasure stack_terms[kStackFibers];
+  thread_local std::vector<FiberMeasure> heap_terms;
+  FiberMeasure* terms = stack_terms;
+  if (m > kStackFibers) {
+    heap_terms.resize(m);
+    terms = heap_terms.data();
+  }
+  const bool want_gradient = slots != nullptr;
 
   // Per-fiber factors (7.3.4): the fiber term of fiber k is scaled by stretch_scale, the area term by their
   // weighted mean; bending uses g_k = sqrt(bend_scale) d_k in place of d_k (stays >= 0 by Cauchy-Schwarz).
   double s = 0.0, s0 = 0.0, fiber_stretch = 0.0, mean_dk = 0.0, sq_dk = 0.0, mean_scale = 0.0;
+  double dkappa[kStackFibers];
+  thread_local std::vector<double> heap_dkappa;
+  double* dk = dkappa;
+  if (m > kStackFibers) {
+    heap_dkappa.resize(m);
+    dk = heap_dkappa.data();
+  }
   for (size_t q = 0; q < m; ++q) {
-    const Fiber& f = fibers_->fibers[f0 + q];
-    const Vec3 &x1 = x[f.end1], &xc = x[i], &x2 = x[f.end2];
-    len[q] = fiberArcLength(x1, xc, x2, slots ? &grad_len[q] : nullptr);
-    angle[q] = fiberNormalAngle(x1, xc, x2, normal, slots ? &grad_angle[q] : nullptr,
-                                slots ? &grad_normal[q] : nullptr);
-    dkappa[q] = std::sqrt(f.bend_scale) *
-                (angle[q] / (beta * len[q]) - f.rest_angle / (beta * f.rest_length));  // (7.9), calibrated
+    const Fiber& f = fib[q];
+    FiberMeasure& t = terms[q];
+    measureFiber(x[f.end1] - xc, x[f.end2] - xc, normal, want_gradient, &t);
+    if (fiber_length) fiber_length[q] = t.length;
+    if (fiber_angle) fiber_angle[q] = t.angle;
+    const double sqrt_bend = f.bend_scale == 1.0 ? 1.0 : std::sqrt(f.bend_scale);
+    dk[q] = sqrt_bend *
+            (t.angle / (beta * t.length) - f.rest_angle / (beta * f.rest_length));  // (7.9), calibrated
     const double l0sq = f.rest_length * f.rest_length;
-    s += f.weight * len[q] * len[q];
+    const double lsq = t.length * t.length;
+    s += f.weight * lsq;
     s0 += f.weight * l0sq;
-    const double e = len[q] * len[q] / l0sq - 1.0;  // A_k / A_k^0 - 1 (7.5)
+    const double e = lsq / l0sq - 1.0;  // A_k / A_k^0 - 1 (7.5)
     fiber_stretch += f.weight * f.stretch_scale * e * e;
     mean_scale += f.weight * f.stretch_scale;
-    mean_dk += f.weight * dkappa[q];
-    sq_dk += f.weight * dkappa[q] * dkappa[q];
+    mean_dk += f.weight * dk[q];
+    sq_dk += f.weight * dk[q] * dk[q];
   }
   const double r = s / s0 - 1.0;                                                    // A_i / A_i^0 - 1 (7.6)
   const double e_mem = 0.5 * area * ks * (mean_scale * r * r + fiber_stretch);      // (7.7)
@@ -103,25 +124,29 @@ double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slo
 
   for (size_t q = 0; q <= k; ++q) slots[q].setZero();
   Vec3 dn = Vec3::Zero();
+  const double area_kb = area * kb, area_ks2 = 2.0 * area * ks, area_term = mean_scale * r / s0;
   for (size_t q = 0; q < m; ++q) {  // (7.16), (7.17)
-    const Fiber& f = fibers_->fibers[f0 + q];
+    const Fiber& f = fib[q];
+    const FiberMeasure& t = terms[q];
     const double l0sq = f.rest_length * f.rest_length;
-    const double de_dkappa =
-        area * kb * f.weight * (4.0 * dkappa[q] - 2.0 * mean_dk) * std::sqrt(f.bend_scale);
-    const double de_dtheta = de_dkappa / (beta * len[q]);
-    const double de_dl = area * ks * f.weight * len[q] * 2.0 *
-                             (mean_scale * r / s0 + f.stretch_scale * (len[q] * len[q] / l0sq - 1.0) / l0sq) -
-                         de_dtheta * angle[q] / len[q];
-    slots[1 + f.local1] += de_dl * grad_len[q][0] + de_dtheta * grad_angle[q][0];
-    slots[0] += de_dl * grad_len[q][1] + de_dtheta * grad_angle[q][1];
-    slots[1 + f.local2] += de_dl * grad_len[q][2] + de_dtheta * grad_angle[q][2];
-    dn += de_dtheta * grad_normal[q];
+    const double sqrt_bend = f.bend_scale == 1.0 ? 1.0 : std::sqrt(f.bend_scale);
+    const double de_dkappa = area_kb * f.weight * (4.0 * dk[q] - 2.0 * mean_dk) * sqrt_bend;
+    const double de_dtheta = de_dkappa / (beta * t.length);
+    const double de_dl = area_ks2 * f.weight * t.length *
+                             (area_term + f.stretch_scale * (t.length * t.length / l0sq - 1.0) / l0sq) -
+                         de_dtheta * t.angle / t.length;
+    const Vec3 g1 = de_dl * t.grad_length[0] + de_dtheta * t.grad_angle[0];
+    const Vec3 g2 = de_dl * t.grad_length[1] + de_dtheta * t.grad_angle[1];
+    slots[1 + f.local1] += g1;
+    slots[1 + f.local2] += g2;
+    slots[0] -= g1 + g2;  // translation invariance of l and theta at fixed N
+    dn += de_dtheta * t.grad_normal;
   }
   if (normal_length > 0.0) {  // through N = n / |n|, n = sum (x_a - x_i) x (x_b - x_i)
     const Vec3 g = (dn - normal * normal.dot(dn)) / normal_length;
     for (size_t p = nodes.fan_offsets[i]; p < nodes.fan_offsets[i + 1]; ++p) {
       const auto& pr = nodes.fan_pairs[p];
-      const Vec3 ea = x[nb[pr.first]] - x[i], eb = x[nb[pr.second]] - x[i];
+      const Vec3 ea = x[nb[pr.first]] - xc, eb = x[nb[pr.second]] - xc;
       const Vec3 ga = eb.cross(g), gb = g.cross(ea);
       slots[1 + pr.first] += ga;
       slots[1 + pr.second] += gb;
@@ -143,18 +168,32 @@ void ShellEnergy::gatherSlots(const std::vector<Vec3>& slot_values, std::vector<
 }
 
 ShellEnergyValue ShellEnergy::evaluate(const std::vector<Vec3>& x, std::vector<Vec3>* gradient) const {
+  return evaluate(x, gradient, nullptr, nullptr);
+}
+
+ShellEnergyValue ShellEnergy::evaluate(const std::vector<Vec3>& x, std::vector<Vec3>* gradient,
+                                       std::vector<double>* fiber_length,
+                                       std::vector<double>* fiber_angle) const {
   const size_t n = nodes_->size();
   if (x.size() != n)
     throw std::invalid_argument("ShellEnergy::evaluate: position count differs from node count");
-  std::vector<double> mem(n), bend(n);
+  node_membrane_.resize(n);
+  node_bending_.resize(n);
+  if (fiber_length) fiber_length->resize(fibers_->size());
+  if (fiber_angle) fiber_angle->resize(fibers_->size());
+  double* lengths = fiber_length ? fiber_length->data() : nullptr;
+  double* angles = fiber_angle ? fiber_angle->data() : nullptr;
+  const size_t* offsets = fibers_->node_offsets.data();
 #pragma omp parallel for schedule(static) if (n >= kParallelNodes)
   for (size_t i = 0; i < n; ++i) {
-    evaluateNode(i, x, gradient ? slot_values_.data() + slot_offsets_[i] : nullptr, &mem[i], &bend[i]);
+    evaluateNode(i, x, gradient ? slot_values_.data() + slot_offsets_[i] : nullptr, &node_membrane_[i],
+                 &node_bending_[i], lengths ? lengths + offsets[i] : nullptr,
+                 angles ? angles + offsets[i] : nullptr);
   }
   if (gradient) gatherSlots(slot_values_, *gradient);
   ShellEnergyValue value;
-  for (size_t i = 0; i < n; ++i) value.membrane += mem[i], value.bending += bend[i];  // fixed order
-  return value;
+  for (size_t i = 0; i < n; ++i) value.membrane += node_membrane_[i], value.bending += node_bending_[i];
+  return value;  // fixed summation order: deterministic for any thread count
 }
 
 void ShellEnergy::nodeEnergies(const std::vector<Vec3>& x, std::vector<double>* membrane,
@@ -199,59 +238,65 @@ ShellStableStep ShellEnergy::stableStep(const std::vector<Vec3>& x) const {
   const double ks = material_.stretch_stiffness, kb = material_.bending_stiffness;
   constexpr double beta = kSplineAngleScale;
   std::vector<double> row_mem(slot_offsets_[n], 0.0), row_bend(slot_offsets_[n], 0.0);
-#pragma omp parallel for schedule(static) if (n >= kParallelNodes)
-  for (size_t i = 0; i < n; ++i) {
-    const uint32_t* nb = nodes.neighborsOf(i);
-    const size_t k = nodes.neighborCount(i);
-    const double area = nodes.rest_areas[i];
-    double normal_length = 0.0;
-    const Vec3 normal = fanNormal(nodes, i, x, &normal_length);
-    double* rm = row_mem.data() + slot_offsets_[i];
-    double* rb = row_bend.data() + slot_offsets_[i];
-    std::vector<Vec3> g_area(k + 1, Vec3::Zero()), g(k + 1);
-    double s0 = 0.0, mean_scale = 0.0;
-    for (size_t q = fibers_->node_offsets[i]; q < fibers_->node_offsets[i + 1]; ++q) {
-      const Fiber& f = fibers_->fibers[q];
-      s0 += f.weight * f.rest_length * f.rest_length;
-      mean_scale += f.weight * f.stretch_scale;
-    }
-    if (s0 <= 0.0) continue;  // no fibers
-    // Adds c |g_p| sum_q |g_q| to row p for a Gauss-Newton term c g g^T.
-    auto add_term = [&](double c, const std::vector<Vec3>& gv, double* rows) {
-      double sum = 0.0;
-      for (const Vec3& v : gv) sum += v.norm();
-      for (size_t p = 0; p <= k; ++p) rows[p] += c * gv[p].norm() * sum;
-    };
-    for (size_t q = fibers_->node_offsets[i]; q < fibers_->node_offsets[i + 1]; ++q) {
-      const Fiber& f = fibers_->fibers[q];
-      std::array<Vec3, 3> gl, gt;
-      Vec3 gn;
-      const double l = fiberArcLength(x[f.end1], x[i], x[f.end2], &gl);
-      const double theta = fiberNormalAngle(x[f.end1], x[i], x[f.end2], normal, &gt, &gn);
-      const double l0sq = f.rest_length * f.rest_length;
-      std::fill(g.begin(), g.end(), Vec3::Zero());
-      g[1 + f.local1] = gl[0] * (2.0 * l / l0sq), g[0] = gl[1] * (2.0 * l / l0sq),
-            g[1 + f.local2] = gl[2] * (2.0 * l / l0sq);
-      add_term(area * ks * f.weight * f.stretch_scale, g, rm);
-      g_area[1 + f.local1] += gl[0] * (2.0 * f.weight * l / s0);
-      g_area[0] += gl[1] * (2.0 * f.weight * l / s0);
-      g_area[1 + f.local2] += gl[2] * (2.0 * f.weight * l / s0);
-      const double scale = 1.0 / (beta * l), scale_l = -theta / (beta * l * l);  // d kappa / d theta, d l
-      std::fill(g.begin(), g.end(), Vec3::Zero());
-      g[1 + f.local1] = gt[0] * scale + gl[0] * scale_l, g[0] = gt[1] * scale + gl[1] * scale_l;
-      g[1 + f.local2] = gt[2] * scale + gl[2] * scale_l;
-      if (normal_length > 0.0) {
-        const Vec3 gamma = (gn - normal * normal.dot(gn)) * (scale / normal_length);
-        for (size_t p = nodes.fan_offsets[i]; p < nodes.fan_offsets[i + 1]; ++p) {
-          const auto& pr = nodes.fan_pairs[p];
-          const Vec3 ea = x[nb[pr.first]] - x[i], eb = x[nb[pr.second]] - x[i];
-          const Vec3 ga = eb.cross(gamma), gb = gamma.cross(ea);
-          g[1 + pr.first] += ga, g[1 + pr.second] += gb, g[0] -= ga + gb;
-        }
+#pragma omp parallel if (n >= kParallelNodes)
+  {
+    std::vector<Vec3> g_area, g;  // per thread, sized to the largest neighbourhood seen
+#pragma omp for schedule(static)
+    for (size_t i = 0; i < n; ++i) {
+      const uint32_t* nb = nodes.neighborsOf(i);
+      const size_t k = nodes.neighborCount(i);
+      const double area = nodes.rest_areas[i];
+      double normal_length = 0.0;
+      const Vec3 normal = fanNormal(nodes, i, x, &normal_length);
+      double* rm = row_mem.data() + slot_offsets_[i];
+      double* rb = row_bend.data() + slot_offsets_[i];
+      g_area.assign(k + 1, Vec3::Zero());
+      g.resize(k + 1);
+      double s0 = 0.0, mean_scale = 0.0;
+      for (size_t q = fibers_->node_offsets[i]; q < fibers_->node_offsets[i + 1]; ++q) {
+        const Fiber& f = fibers_->fibers[q];
+        s0 += f.weight * f.rest_length * f.rest_length;
+        mean_scale += f.weight * f.stretch_scale;
       }
-      add_term(4.0 * area * kb * f.weight * f.bend_scale, g, rb);
+      if (s0 <= 0.0) continue;  // no fibers
+      // Adds c |g_p| sum_q |g_q| to row p for a Gauss-Newton term c g g^T.
+      auto add_term = [&](double c, const std::vector<Vec3>& gv, double* rows) {
+        double norms[256], sum = 0.0;
+        for (size_t p = 0; p <= k; ++p) sum += (norms[p] = gv[p].norm());
+        for (size_t p = 0; p <= k; ++p) rows[p] += c * norms[p] * sum;
+      };
+      for (size_t q = fibers_->node_offsets[i]; q < fibers_->node_offsets[i + 1]; ++q) {
+        const Fiber& f = fibers_->fibers[q];
+        FiberMeasure fm;
+        measureFiber(x[f.end1] - x[i], x[f.end2] - x[i], normal, true, &fm);
+        const Vec3 gl[3] = {fm.grad_length[0], -(fm.grad_length[0] + fm.grad_length[1]), fm.grad_length[1]};
+        const Vec3 gt[3] = {fm.grad_angle[0], -(fm.grad_angle[0] + fm.grad_angle[1]), fm.grad_angle[1]};
+        const double l = fm.length, theta = fm.angle;
+        const double l0sq = f.rest_length * f.rest_length;
+        std::fill(g.begin(), g.end(), Vec3::Zero());
+        g[1 + f.local1] = gl[0] * (2.0 * l / l0sq), g[0] = gl[1] * (2.0 * l / l0sq),
+              g[1 + f.local2] = gl[2] * (2.0 * l / l0sq);
+        add_term(area * ks * f.weight * f.stretch_scale, g, rm);
+        g_area[1 + f.local1] += gl[0] * (2.0 * f.weight * l / s0);
+        g_area[0] += gl[1] * (2.0 * f.weight * l / s0);
+        g_area[1 + f.local2] += gl[2] * (2.0 * f.weight * l / s0);
+        const double scale = 1.0 / (beta * l), scale_l = -theta / (beta * l * l);  // d kappa / d theta, d l
+        std::fill(g.begin(), g.end(), Vec3::Zero());
+        g[1 + f.local1] = gt[0] * scale + gl[0] * scale_l, g[0] = gt[1] * scale + gl[1] * scale_l;
+        g[1 + f.local2] = gt[2] * scale + gl[2] * scale_l;
+        if (normal_length > 0.0) {
+          const Vec3 gamma = (fm.grad_normal - normal * normal.dot(fm.grad_normal)) * (scale / normal_length);
+          for (size_t p = nodes.fan_offsets[i]; p < nodes.fan_offsets[i + 1]; ++p) {
+            const auto& pr = nodes.fan_pairs[p];
+            const Vec3 ea = x[nb[pr.first]] - x[i], eb = x[nb[pr.second]] - x[i];
+            const Vec3 ga = eb.cross(gamma), gb = gamma.cross(ea);
+            g[1 + pr.first] += ga, g[1 + pr.second] += gb, g[0] -= ga + gb;
+          }
+        }
+        add_term(4.0 * area * kb * f.weight * f.bend_scale, g, rb);
+      }
+      add_term(area * ks * mean_scale, g_area, rm);
     }
-    add_term(area * ks * mean_scale, g_area, rm);
   }
   double lambda_mem = 0.0, lambda_bend = 0.0, lambda_sum = 0.0;
   for (size_t p = 0; p < n; ++p) {

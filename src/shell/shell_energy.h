@@ -61,6 +61,10 @@ class ShellEnergy {
 
   /// Total energies at positions x; if `gradient` is given it receives dE/dx (size nodes).
   ShellEnergyValue evaluate(const std::vector<Vec3>& x, std::vector<Vec3>* gradient = nullptr) const;
+  /// The same, and every fiber's current arc length and signed normal angle in `fiber_length` /
+  /// `fiber_angle` (resized to the fiber count; as measureFibers gives them), measured in the same pass.
+  ShellEnergyValue evaluate(const std::vector<Vec3>& x, std::vector<Vec3>* gradient,
+                            std::vector<double>* fiber_length, std::vector<double>* fiber_angle) const;
 
   /// Per-node membrane and bending energies (either output may be null).
   void nodeEnergies(const std::vector<Vec3>& x, std::vector<double>* membrane,
@@ -80,9 +84,8 @@ class ShellEnergy {
   const ShellMaterial& material() const { return material_; }
 
  private:
-  struct Scratch;
-  double evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slots, double* membrane,
-                      double* bending) const;
+  double evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slots, double* membrane, double* bending,
+                      double* fiber_length = nullptr, double* fiber_angle = nullptr) const;
   void gatherSlots(const std::vector<Vec3>& slot_values, std::vector<Vec3>& out) const;
 
   const ShellNodes* nodes_;
@@ -93,6 +96,7 @@ class ShellEnergy {
   std::vector<size_t> gather_offsets_;
   std::vector<size_t> gather_slots_;  ///< slots referring to node p, in ascending owner order
   mutable std::vector<Vec3> slot_values_;
+  mutable std::vector<double> node_membrane_, node_bending_;  ///< evaluate() scratch
 };
 
 }  // namespace rc

@@ -103,6 +103,57 @@ double fiberNormalAngle(const Vec3& x1, const Vec3& x, const Vec3& x2, const Vec
   return std::asin(u0) - std::asin(u1);
 }
 
+namespace {
+// Coefficients of e1 = x1 - x and e2 = x2 - x in f1'(t) and f2'(t) at the Gauss points (B.6).
+struct ArcBasis {
+  double a1[3], b1[3], a2[3], b2[3];
+};
+constexpr ArcBasis makeArcBasis() {
+  ArcBasis b{};
+  for (int g = 0; g < 3; ++g) {
+    const double t = kGaussS[g];
+    b.a1[g] = -1.25 + 0.75 * t * t, b.b1[g] = -0.25 + 0.75 * t * t;
+    b.a2[g] = -0.5 + 1.5 * t - 0.75 * t * t, b.b2[g] = 0.5 + 1.5 * t - 0.75 * t * t;
+  }
+  return b;
+}
+constexpr ArcBasis kArcBasis = makeArcBasis();
+}  // namespace
+
+void measureFiber(const Vec3& e1, const Vec3& e2, const Vec3& normal, bool gradients, FiberMeasure* out) {
+  const ArcBasis& b = kArcBasis;
+  double length = 0.0;
+  Vec3 gl1 = Vec3::Zero(), gl2 = Vec3::Zero();
+  for (int g = 0; g < 3; ++g) {  // (B.4), (B.6)
+    const Vec3 d1 = b.a1[g] * e1 + b.b1[g] * e2, d2 = b.a2[g] * e1 + b.b2[g] * e2;
+    const double n1 = d1.norm(), n2 = d2.norm(), w = kGaussW[g];
+    length += w * (n1 + n2);
+    if (!gradients) continue;
+    const Vec3 u1 = n1 > 0.0 ? Vec3(d1 * (w / n1)) : Vec3::Zero();
+    const Vec3 u2 = n2 > 0.0 ? Vec3(d2 * (w / n2)) : Vec3::Zero();
+    gl1 += b.a1[g] * u1 + b.a2[g] * u2;
+    gl2 += b.b1[g] * u1 + b.b2[g] * u2;
+  }
+  out->length = length;
+  // End tangents t0 = b1, t1 = b2 + 2 c2 + 3 d2 (kT0, kT1 on x1 - x, x2 - x).
+  const Vec3 t0 = kT0[0] * e1 + kT0[2] * e2, t1 = kT1[0] * e1 + kT1[2] * e2;
+  const double l0 = t0.norm(), l1 = t1.norm();
+  const Vec3 h0 = t0 / l0, h1 = t1 / l1;
+  constexpr double kMax = 1.0 - 1e-12;
+  const double u0 = std::max(-kMax, std::min(kMax, normal.dot(h0)));
+  const double u1 = std::max(-kMax, std::min(kMax, normal.dot(h1)));
+  out->angle = std::asin(u0) - std::asin(u1);
+  if (!gradients) return;
+  const double r0 = 1.0 / std::sqrt(1.0 - u0 * u0), r1 = 1.0 / std::sqrt(1.0 - u1 * u1);
+  const Vec3 g0 = (normal - u0 * h0) * (r0 / l0);   // d theta / d t0
+  const Vec3 g1 = -(normal - u1 * h1) * (r1 / l1);  // d theta / d t1
+  out->grad_length[0] = gl1;
+  out->grad_length[1] = gl2;
+  out->grad_angle[0] = kT0[0] * g0 + kT1[0] * g1;
+  out->grad_angle[1] = kT0[2] * g0 + kT1[2] * g1;
+  out->grad_normal = r0 * h0 - r1 * h1;
+}
+
 std::vector<Fiber> buildNodeFibers(const ShellNodes& nodes, size_t i, double min_rest_length) {
   const std::vector<Vec3>& x = nodes.rest_positions;
   const uint32_t* nb = nodes.neighborsOf(i);

@@ -62,4 +62,14 @@ double fiberTangentAngle(const Vec3& x1, const Vec3& x, const Vec3& x2);
 double fiberNormalAngle(const Vec3& x1, const Vec3& x, const Vec3& x2, const Vec3& normal,
                         std::array<Vec3, 3>* grad = nullptr, Vec3* grad_normal = nullptr);
 
+/// Arc length (B.4) and signed normal angle (fiberNormalAngle) of one fiber in a single pass, from the edge
+/// vectors e1 = x1 - x, e2 = x2 - x (both quantities are translation invariant). With `gradients`, also
+/// d l / d(x1, x2), d theta / d(x1, x2) at fixed N (the derivatives for x are minus their sums) and
+/// d theta / d N. Equals fiberArcLength and fiberNormalAngle up to round-off.
+struct FiberMeasure {
+  double length = 0.0, angle = 0.0;
+  Vec3 grad_length[2], grad_angle[2], grad_normal;
+};
+void measureFiber(const Vec3& e1, const Vec3& e2, const Vec3& normal, bool gradients, FiberMeasure* out);
+
 }  // namespace rc

@@ -114,6 +114,17 @@ ShellMaterialModel::ShellMaterialModel(const ShellNodes& nodes, const ShellFiber
 ShellMaterialReport ShellMaterialModel::updatePlasticity(const ShellNodes& nodes, ShellFibers& fibers,
                                                          const std::vector<Vec3>& x, double dt) {
   const ShellPlasticity& p = options_.plasticity;
+  if (!std::isfinite(p.stretch_yield) && !std::isfinite(p.bend_yield)) {
+    return applyPlasticity(fibers, length_, angle_, dt);  // checks the arguments only
+  }
+  measureFibers(nodes, fibers, x, &length_, &angle_);
+  return applyPlasticity(fibers, length_, angle_, dt);
+}
+
+ShellMaterialReport ShellMaterialModel::applyPlasticity(ShellFibers& fibers,
+                                                        const std::vector<double>& length,
+                                                        const std::vector<double>& angle, double dt) {
+  const ShellPlasticity& p = options_.plasticity;
   if (!(dt >= 0.0) || p.stretch_creep * dt > 1.0 || p.bend_creep * dt > 1.0) {
     throw std::invalid_argument(
         "ShellMaterialModel::updatePlasticity: need dt >= 0 and creep * dt <= 1 (dt " + std::to_string(dt) +
@@ -124,16 +135,18 @@ ShellMaterialReport ShellMaterialModel::updatePlasticity(const ShellNodes& nodes
   }
   ShellMaterialReport report;
   if (!std::isfinite(p.stretch_yield) && !std::isfinite(p.bend_yield)) return report;
-  measureFibers(nodes, fibers, x, &length_, &angle_);
+  if (length.size() != fibers.size() || angle.size() != fibers.size()) {
+    throw std::invalid_argument("ShellMaterialModel: fiber measures do not match the fibers");
+  }
   for (size_t q = 0; q < fibers.size(); ++q) {
     Fiber& f = fibers.fibers[q];
     FiberMaterialState& st = states_[q];
-    const double dl = length_[q] - f.rest_length;
+    const double dl = length[q] - f.rest_length;
     if (std::abs(dl) > p.stretch_yield * st.original_length) {  // (7.20)
       f.rest_length += p.stretch_creep * dl * dt;               // (7.22)
       ++report.stretch_yielding;
     }
-    const double dtheta = angle_[q] - f.rest_angle;
+    const double dtheta = angle[q] - f.rest_angle;
     if (std::abs(dtheta) > p.bend_yield) {                // (7.21)
       const double plastic = p.bend_creep * dtheta * dt;  // (7.23)
       f.rest_angle += plastic;
@@ -145,13 +158,12 @@ ShellMaterialReport ShellMaterialModel::updatePlasticity(const ShellNodes& nodes
   return report;
 }
 
-bool ShellMaterialModel::anyOverloaded(const ShellNodes& nodes, const ShellFibers& fibers,
-                                       const std::vector<Vec3>& x) {
-  measureFibers(nodes, fibers, x, &length_, &angle_);
+bool ShellMaterialModel::anyOverloaded(const ShellFibers& fibers, const std::vector<double>& length,
+                                       const std::vector<double>& angle) const {
   for (size_t q = 0; q < fibers.size(); ++q) {  // (7.24)
     const Fiber& f = fibers.fibers[q];
-    if (length_[q] / f.rest_length - 1.0 > states_[q].stretch_threshold ||
-        std::abs(angle_[q] - f.rest_angle) > states_[q].bend_threshold)
+    if (length[q] / f.rest_length - 1.0 > states_[q].stretch_threshold ||
+        std::abs(angle[q] - f.rest_angle) > states_[q].bend_threshold)
       return true;
   }
   return false;
@@ -162,18 +174,23 @@ ShellMaterialReport ShellMaterialModel::updateFracture(ShellNodes& nodes, ShellF
   if (states_.size() != fibers.size()) {
     throw std::invalid_argument("ShellMaterialModel: fiber count differs from the material state");
   }
-  ShellMaterialReport report;
   measureFibers(nodes, fibers, x, &length_, &angle_);
+  const std::vector<double> length = length_, angle = angle_;
+  return fracture(nodes, fibers, length, angle);
+}
+
+size_t ShellMaterialModel::selectCracks(const ShellNodes& nodes, const ShellFibers& fibers,
+                                        const std::vector<double>& length, const std::vector<double>& angle) {
   std::vector<std::pair<double, uint32_t>> overloaded;  // (load / threshold, fiber), (7.24)
   std::vector<char> by_stretch(fibers.size(), 0);
   for (size_t q = 0; q < fibers.size(); ++q) {
     const Fiber& f = fibers.fibers[q];
-    const double s = (length_[q] / f.rest_length - 1.0) / states_[q].stretch_threshold;
-    const double b = std::abs(angle_[q] - f.rest_angle) / states_[q].bend_threshold;
+    const double s = (length[q] / f.rest_length - 1.0) / states_[q].stretch_threshold;
+    const double b = std::abs(angle[q] - f.rest_angle) / states_[q].bend_threshold;
     if (s > 1.0 || b > 1.0) overloaded.emplace_back(std::max(s, b), static_cast<uint32_t>(q));
     by_stretch[q] = s >= b;
   }
-  if (overloaded.empty()) return report;
+  if (overloaded.empty()) return 0;
   std::sort(overloaded.begin(), overloaded.end(), [](const auto& a, const auto& b) {
     return a.first > b.first || (a.first == b.first && a.second < b.second);
   });
@@ -201,12 +218,27 @@ ShellMaterialReport ShellMaterialModel::updateFracture(ShellNodes& nodes, ShellF
     cracks_.push_back(crack);
     crack_nodes_.insert(f.center);
   }
-  report.new_cracks = cracks_.size() - first_new;
+  return cracks_.size() - first_new;
+}
+
+ShellMaterialReport ShellMaterialModel::fracture(ShellNodes& nodes, ShellFibers& fibers,
+                                                 const std::vector<double>& length,
+                                                 const std::vector<double>& angle) {
+  ShellMaterialReport report;
+  report.new_cracks = selectCracks(nodes, fibers, length, angle);
+  if (report.new_cracks > 0) rebuildAfterCracks(nodes, fibers, cracks_.size() - report.new_cracks, &report);
+  return report;
+}
+
+void ShellMaterialModel::rebuildAfterCracks(ShellNodes& nodes, ShellFibers& fibers, size_t first_new,
+                                            ShellMaterialReport* out) {
+  ShellMaterialReport& report = *out;
 
   // Old fibers by node, to keep those of untouched nodes and to inherit thresholds.
   const ShellFibers old_fibers = fibers;
   const std::vector<FiberMaterialState> old_states = states_;
-  const std::vector<uint32_t> dirty = recomputeVisibleNeighborhoods(nodes, cracks_, neighbor_count_);
+  const std::vector<uint32_t> dirty =
+      recomputeVisibleNeighborhoods(nodes, cracks_, neighbor_count_, first_new);
   report.recomputed_nodes = dirty.size();
   std::vector<char> is_dirty(nodes.size(), 0);
   for (uint32_t i : dirty) is_dirty[i] = 1;
@@ -240,25 +272,25 @@ ShellMaterialReport ShellMaterialModel::updateFracture(ShellNodes& nodes, ShellF
     fibers.node_offsets[i + 1] = fibers.fibers.size();
   }
   report.fiber_delta = static_cast<long>(fibers.size()) - static_cast<long>(old_fibers.size());
-  return report;
 }
 
 ShellMaterialReport ShellMaterialModel::update(ShellSolver& solver, double dt) {
+  // The solver measured every fiber with its forces at the current positions: no second pass here.
   ShellMaterialReport report =
-      updatePlasticity(solver.nodes(), solver.mutableFibers(), solver.positions(), dt);
-  const bool fracture = std::isfinite(options_.fracture.stretch_threshold) ||
-                        std::isfinite(options_.fracture.bend_threshold) ||
-                        std::any_of(states_.begin(), states_.end(), [](const FiberMaterialState& s) {
-                          return std::isfinite(s.stretch_threshold) || std::isfinite(s.bend_threshold);
-                        });
-  if (fracture && anyOverloaded(solver.nodes(), solver.fibers(), solver.positions())) {
-    ShellNodes nodes = solver.nodes();
-    ShellFibers fibers = solver.fibers();
-    const ShellMaterialReport f = updateFracture(nodes, fibers, solver.positions());
-    report.new_cracks = f.new_cracks;
-    report.recomputed_nodes = f.recomputed_nodes;
-    report.fiber_delta = f.fiber_delta;
-    if (f.new_cracks > 0) {
+      applyPlasticity(solver.mutableFibers(), solver.fiberLengths(), solver.fiberAngles(), dt);
+  const bool fracture_on = std::isfinite(options_.fracture.stretch_threshold) ||
+                           std::isfinite(options_.fracture.bend_threshold) ||
+                           std::any_of(states_.begin(), states_.end(), [](const FiberMaterialState& s) {
+                             return std::isfinite(s.stretch_threshold) || std::isfinite(s.bend_threshold);
+                           });
+  if (fracture_on && anyOverloaded(solver.fibers(), solver.fiberLengths(), solver.fiberAngles())) {
+    // Cracks are chosen on the solver's own arrays; nodes and fibers are copied only when one is made.
+    report.new_cracks =
+        selectCracks(solver.nodes(), solver.fibers(), solver.fiberLengths(), solver.fiberAngles());
+    if (report.new_cracks > 0) {
+      ShellNodes nodes = solver.nodes();
+      ShellFibers fibers = solver.fibers();
+      rebuildAfterCracks(nodes, fibers, cracks_.size() - report.new_cracks, &report);
       solver.setTopology(std::move(nodes), std::move(fibers));
       return report;
     }

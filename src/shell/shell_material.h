@@ -117,7 +117,17 @@ class ShellMaterialModel {
   const ShellMaterialOptions& options() const { return options_; }
 
  private:
-  bool anyOverloaded(const ShellNodes& nodes, const ShellFibers& fibers, const std::vector<Vec3>& x);
+  ShellMaterialReport applyPlasticity(ShellFibers& fibers, const std::vector<double>& length,
+                                      const std::vector<double>& angle, double dt);
+  bool anyOverloaded(const ShellFibers& fibers, const std::vector<double>& length,
+                     const std::vector<double>& angle) const;
+  ShellMaterialReport fracture(ShellNodes& nodes, ShellFibers& fibers, const std::vector<double>& length,
+                               const std::vector<double>& angle);
+  /// Appends the cracks of the most overloaded fibers (7.24) to cracks_; returns how many.
+  size_t selectCracks(const ShellNodes& nodes, const ShellFibers& fibers, const std::vector<double>& length,
+                      const std::vector<double>& angle);
+  /// Re-neighbouring and fiber rebuild for cracks_[first_new ..] (fills recomputed_nodes, fiber_delta).
+  void rebuildAfterCracks(ShellNodes& nodes, ShellFibers& fibers, size_t first_new, ShellMaterialReport* out);
 
   ShellMaterialOptions options_;
   std::vector<FiberMaterialState> states_;

@@ -455,8 +455,11 @@ ShellSimulation::ShellSimulation(const ShellScene& scene) : scene_(scene) {
       const Vec3& p = nodes.rest_positions[i];
       if ((p.array() < pin.lo.array()).any() || (p.array() > pin.hi.array()).any() || solver_->pinned(i))
         continue;
-      solver_->pin(i);
-      if (pin.velocity.squaredNorm() > 0) moving_pins_.emplace_back(i, pin.velocity);
+      if (pin.velocity.squaredNorm() > 0) {
+        solver_->setPinVelocity(i, pin.velocity);  // moved in the solver's drift: one force pass per step
+      } else {
+        solver_->pin(i);
+      }
     }
   }
   if (scene_.initial_velocity.squaredNorm() > 0)
@@ -512,11 +515,6 @@ void ShellSimulation::takeStep(ShellFrameReport* report) {
   if (pressure_) *pressure_ = scene_.balloon.pressureAt(solver_->time());
   Clock::time_point t0 = Clock::now();
   const ShellStepReport r = solver_->step();
-  if (!moving_pins_.empty()) {
-    std::vector<Vec3> x = solver_->positions();
-    for (const auto& [i, v] : moving_pins_) x[i] += r.dt * v;
-    solver_->setPositions(x);
-  }
   report->forces_ms += msSince(t0);
   report->dt = r.dt;
   if (model_) {
@@ -552,31 +550,34 @@ double ShellSimulation::animateSurface() {
   const std::vector<ShellCrack>& cracks = model_ ? model_->cracks() : no_cracks;
   ShellSkinningOptions options;
   options.node_count = scene_.skinning_nodes;
-  if (!skinning_ || cracks.size() != bound_cracks_) {
-    try {
-      skinning_ = std::make_unique<ShellSkinning>(scene_.surfels, solver_->nodes(), cracks, options);
-    } catch (const std::invalid_argument&) {
-      // A surfel cut off from every node by the cracks: keep the previous binding (first binding: rethrow).
-      if (!skinning_) throw;
-      ++skinning_fallbacks_;
-    }
-    if (!cracks.empty()) {
-      // Each surfel of a pair is moved a little into its own piece (opposite its normal) so its nearest
-      // nodes include visible ones also where the disc reaches past the shell's border.
-      cracks_ = crackDiscontinuitySurfels(cracks);
-      for (size_t k = 0; k < cracks_.size(); ++k)
-        cracks_.positions[k] -= 0.25 * cracks[k / 2].radius * cracks_.normals[k];
-      crack_skinning_.reset();
-      try {
-        crack_skinning_ = std::make_unique<ShellSkinning>(cracks_, solver_->nodes(), cracks, options);
-      } catch (const std::invalid_argument&) {
-        cracks_.clear();  // a surfel with no visible node: no crack surfels until the next crack
-      } catch (const std::runtime_error&) {
-        cracks_.clear();
-      }
-    }
-    bound_cracks_ = cracks.size();
+  if (!skinning_) {
+    skinning_ = std::make_unique<ShellSkinning>(scene_.surfels, solver_->nodes(), cracks, options);
+  } else if (cracks.size() != bound_cracks_) {
+    // Only surfels that a new crack cuts from one of their nodes are re-bound (equal to a full re-binding);
+    // one left with no visible node keeps its previous binding.
+    if (skinning_->rebind(scene_.surfels, solver_->nodes(), cracks) > 0) ++skinning_fallbacks_;
   }
+  if (cracks.size() != bound_cracks_ && !cracks.empty()) {
+    // Each surfel of a pair is moved a little into its own piece (opposite its normal) so its nearest
+    // nodes include visible ones also where the disc reaches past the shell's border.
+    cracks_ = crackDiscontinuitySurfels(cracks);
+    for (size_t k = 0; k < cracks_.size(); ++k)
+      cracks_.positions[k] -= 0.25 * cracks[k / 2].radius * cracks_.normals[k];
+    try {
+      if (crack_skinning_ && crack_skinning_->boundCracks() == crack_skinning_->size() / 2) {
+        crack_skinning_->rebind(cracks_, solver_->nodes(), cracks);  // the pairs of earlier cracks stay
+      } else {
+        crack_skinning_ = std::make_unique<ShellSkinning>(cracks_, solver_->nodes(), cracks, options);
+      }
+    } catch (const std::invalid_argument&) {
+      crack_skinning_.reset();
+      cracks_.clear();  // a surfel with no visible node: no crack surfels until the next crack
+    } catch (const std::runtime_error&) {
+      crack_skinning_.reset();
+      cracks_.clear();
+    }
+  }
+  bound_cracks_ = cracks.size();
   skinning_->deform(solver_->nodes(), solver_->positions(), &surfels_);
   if (crack_skinning_) crack_skinning_->deform(solver_->nodes(), solver_->positions(), &cracks_);
   return msSince(t0);

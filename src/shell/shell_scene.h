@@ -131,7 +131,8 @@ class ShellSimulation {
   const SurfelCloud& surfels() const { return surfels_; }      ///< deformed dense surfels
   const SurfelCloud& crackSurfels() const { return cracks_; }  ///< deformed discontinuity surfels
   int frame() const { return frame_; }
-  /// Rebindings after a crack that left a dense surfel without a visible node (the old binding was kept).
+  /// Re-bindings after cracks in which some dense surfel was left without a visible node (that surfel kept
+  /// its old binding; the others were re-bound).
   size_t skinningFallbacks() const { return skinning_fallbacks_; }
   /// Mean distance of the nodes from their centroid (a balloon's radius).
   double meanRadius() const;
@@ -145,7 +146,6 @@ class ShellSimulation {
   ShellScene scene_;
   std::unique_ptr<ShellSolver> solver_;
   std::unique_ptr<ShellMaterialModel> model_;
-  std::vector<std::pair<size_t, Vec3>> moving_pins_;  ///< node, velocity
   std::shared_ptr<double> pressure_;
   std::unique_ptr<ShellSkinning> skinning_, crack_skinning_;
   size_t bound_cracks_ = 0;

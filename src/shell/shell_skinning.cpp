@@ -50,7 +50,8 @@ Vec3 planeNormal(const std::vector<Vec3>& x, const uint32_t* ids, size_t count, 
     const Vec3 d = x[ids[m]] - c;
     cov += d * d.transpose();
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(cov);  // closed form: the smallest eigenvalue is well separated for a plane fit
   Vec3 n = eig.eigenvectors().col(0);
   return n.dot(reference) < 0.0 ? Vec3(-n) : n;
 }
@@ -62,6 +63,84 @@ double skinWeight(double t) {  // (7.30): w(0) = inf, w(1) = 0, smooth
 }
 
 }  // namespace
+
+struct ShellSkinning::Binder {
+  const SurfelCloud& rest;
+  const ShellNodes& nodes;
+  const std::vector<ShellCrack>& cracks;
+  const KdTree& tree;
+  const Attribute* roles;
+  size_t candidates;
+  double offset;
+  /// Point a surfel is bound from: discontinuity surfels on their material side, behind the normal.
+  Vec3 bindPoint(size_t s) const {
+    const Vec3& p = rest.positions[s];
+    const bool discontinuity = roles && std::lround(roles->get(s)) == kDiscontinuityRole;
+    return discontinuity ? Vec3(p - offset * rest.normals[s].normalized()) : p;
+  }
+};
+
+bool ShellSkinning::bindSurfel(const Binder& b, size_t s, uint32_t* ids, uint8_t* set_size,
+                               uint8_t* frame_count, uint8_t* frame_slots, double* weights,
+                               Vec3* coords) const {
+  const SurfelCloud& rest = b.rest;
+  const std::vector<Vec3>& xr = b.nodes.rest_positions;
+  const size_t per_frame = has_axes_ ? 4 : 2;
+  const Vec3& p = rest.positions[s];
+  const Vec3 normal = rest.normals[s].normalized();
+  const Vec3 bind = b.bindPoint(s);
+  thread_local std::vector<Neighbor> found;
+  found.resize(b.candidates);
+  const size_t got = b.tree.knn(bind, b.candidates, found.data());
+  // Only cracks within radius + (farthest candidate) of the bind point can cut a segment to a candidate.
+  thread_local std::vector<const ShellCrack*> near;
+  near.clear();
+  if (!b.cracks.empty() && got > 0) {
+    const double far_candidate = std::sqrt(found[got - 1].sq_dist);
+    for (const ShellCrack& k : b.cracks) {
+      const double reach = (k.radius + far_candidate) * (1.0 + 1e-9);
+      if ((k.center - bind).squaredNorm() <= reach * reach) near.push_back(&k);
+    }
+  }
+  size_t m = 0;
+  for (size_t c = 0; c < got && m < node_count_; ++c) {
+    const Vec3& node = xr[found[c].index];
+    bool visible = true;
+    for (size_t k = 0; k < near.size() && visible; ++k) visible = !crackSeparates(*near[k], bind, node);
+    if (visible) ids[m++] = found[c].index;
+  }
+  *set_size = 0;
+  *frame_count = 0;
+  if (m == 0) return false;
+  *set_size = static_cast<uint8_t>(m);
+  Vec3 reference = Vec3::Zero();
+  for (size_t j = 0; j < m; ++j) reference += b.nodes.rest_normals[ids[j]];
+  const Vec3 plane = planeNormal(xr, ids, m, reference.norm() > 0.0 ? reference : normal);
+  const double far = (xr[ids[m - 1]] - p).norm();
+  const Vec3 local = p - xr[ids[0]];
+  size_t f = 0;
+  double sum = 0.0;
+  for (size_t j = 1; j < m; ++j) {
+    const double w = far > 0.0 ? skinWeight((xr[ids[j]] - p).norm() / far) : 0.0;
+    const Frame frame = makeFrame(xr[ids[0]], xr[ids[j]], plane);
+    if (!(w > 0.0) || frame.e2.squaredNorm() < 1e-4) continue;  // e_1 nearly along N: no frame
+    frame_slots[f] = static_cast<uint8_t>(j);
+    weights[f] = w;
+    Vec3* c = coords + f * per_frame;
+    c[0] = toLocal(frame, local);
+    c[1] = toLocal(frame, normal);
+    if (has_axes_) c[2] = toLocal(frame, rest.axes1[s]), c[3] = toLocal(frame, rest.axes2[s]);
+    sum += w;
+    ++f;
+  }
+  for (size_t q = 0; q < f; ++q) weights[q] /= sum;  // (7.29)
+  if (f == 0) {  // no usable frame (a single visible node): move rigidly with x_0, no rotation
+    coords[0] = local, coords[1] = normal;
+    if (has_axes_) coords[2] = rest.axes1[s], coords[3] = rest.axes2[s];
+  }
+  *frame_count = static_cast<uint8_t>(f);
+  return true;
+}
 
 ShellSkinning::ShellSkinning(const SurfelCloud& rest, const ShellNodes& nodes,
                              const std::vector<ShellCrack>& cracks, const ShellSkinningOptions& options) {
@@ -81,58 +160,20 @@ ShellSkinning::ShellSkinning(const SurfelCloud& rest, const ShellNodes& nodes,
   coords_.assign(surfel_count_ * frames * per_frame, Vec3::Zero());
   frame_slots_.assign(surfel_count_ * frames, 0);
   set_size_.assign(surfel_count_, 0);
-  const Attribute* roles = rest.attributes.find("surfel_role");
-  const std::vector<Vec3>& xr = nodes.rest_positions;
-  KdTree tree(xr);
-  const size_t candidates = std::min(nodes.size(), 4 * node_count_);
-  const double offset = 1e-6 * std::max(nodes.spacing, 1e-12);
+  const KdTree tree(nodes.rest_positions);
+  const Binder binder{rest,
+                      nodes,
+                      cracks,
+                      tree,
+                      rest.attributes.find("surfel_role"),
+                      std::min(nodes.size(), 4 * node_count_),
+                      1e-6 * std::max(nodes.spacing, 1e-12)};
   std::vector<char> isolated(surfel_count_, 0);
 #pragma omp parallel for schedule(static) if (surfel_count_ >= kParallelSurfels)
   for (size_t s = 0; s < surfel_count_; ++s) {
-    const Vec3& p = rest.positions[s];
-    const Vec3 normal = rest.normals[s].normalized();
-    const bool discontinuity = roles && std::lround(roles->get(s)) == kDiscontinuityRole;
-    const Vec3 bind = discontinuity ? Vec3(p - offset * normal) : p;  // material side: behind the normal
-    std::vector<Neighbor> found(candidates);
-    const size_t got = tree.knn(bind, candidates, found.data());
-    uint32_t* ids = node_ids_.data() + s * node_count_;
-    size_t m = 0;
-    for (size_t c = 0; c < got && m < node_count_; ++c) {
-      if (cracks.empty() || crackVisible(cracks, bind, xr[found[c].index])) ids[m++] = found[c].index;
-    }
-    if (m == 0) {
-      isolated[s] = 1;
-      continue;
-    }
-    set_size_[s] = static_cast<uint8_t>(m);
-    Vec3 reference = Vec3::Zero();
-    for (size_t j = 0; j < m; ++j) reference += nodes.rest_normals[ids[j]];
-    const Vec3 plane = planeNormal(xr, ids, m, reference.norm() > 0.0 ? reference : normal);
-    const double far = (xr[ids[m - 1]] - p).norm();
-    const Vec3 local = p - xr[ids[0]];
-    size_t f = 0;
-    double sum = 0.0;
-    for (size_t j = 1; j < m; ++j) {
-      const double w = far > 0.0 ? skinWeight((xr[ids[j]] - p).norm() / far) : 0.0;
-      const Frame frame = makeFrame(xr[ids[0]], xr[ids[j]], plane);
-      if (!(w > 0.0) || frame.e2.squaredNorm() < 1e-4) continue;  // e_1 nearly along N: no frame
-      const size_t slot = s * frames + f;
-      frame_slots_[slot] = static_cast<uint8_t>(j);
-      weights_[slot] = w;
-      Vec3* c = coords_.data() + slot * per_frame;
-      c[0] = toLocal(frame, local);
-      c[1] = toLocal(frame, normal);
-      if (has_axes_) c[2] = toLocal(frame, rest.axes1[s]), c[3] = toLocal(frame, rest.axes2[s]);
-      sum += w;
-      ++f;
-    }
-    for (size_t q = 0; q < f; ++q) weights_[s * frames + q] /= sum;  // (7.29)
-    if (f == 0) {  // no usable frame (a single visible node): move rigidly with x_0, no rotation
-      Vec3* c = coords_.data() + s * frames * per_frame;
-      c[0] = local, c[1] = normal;
-      if (has_axes_) c[2] = rest.axes1[s], c[3] = rest.axes2[s];
-    }
-    frame_count_[s] = static_cast<uint8_t>(f);
+    isolated[s] = !bindSurfel(binder, s, node_ids_.data() + s * node_count_, &set_size_[s], &frame_count_[s],
+                              frame_slots_.data() + s * frames, weights_.data() + s * frames,
+                              coords_.data() + s * frames * per_frame);
   }
   for (size_t s = 0; s < surfel_count_; ++s) {
     if (isolated[s]) {
@@ -140,6 +181,95 @@ ShellSkinning::ShellSkinning(const SurfelCloud& rest, const ShellNodes& nodes,
                                   " sees no node (all candidates are behind cracks)");
     }
   }
+  bound_cracks_ = cracks.size();
+  last_rebound_ = surfel_count_;
+}
+
+size_t ShellSkinning::rebind(const SurfelCloud& rest, const ShellNodes& nodes,
+                             const std::vector<ShellCrack>& cracks) {
+  if (rest.size() < surfel_count_ || cracks.size() < bound_cracks_ || rest.hasAxes() != has_axes_ ||
+      !rest.hasNormals()) {
+    throw std::invalid_argument(
+        "ShellSkinning::rebind: the cloud and cracks must extend those bound (same channels)");
+  }
+  rest.validate();
+  const size_t old_count = surfel_count_, count = rest.size();
+  const size_t frames = node_count_ - 1, per_frame = has_axes_ ? 4 : 2;
+  const KdTree tree(nodes.rest_positions);
+  const Binder binder{rest,
+                      nodes,
+                      cracks,
+                      tree,
+                      rest.attributes.find("surfel_role"),
+                      std::min(nodes.size(), 4 * node_count_),
+                      1e-6 * std::max(nodes.spacing, 1e-12)};
+  // Surfels cut from one of their nodes by a new crack (the rest keep P_p exactly), then appended ones.
+  const std::vector<Vec3>& xr = nodes.rest_positions;
+  std::vector<char> affected(old_count, 0);
+  if (cracks.size() > bound_cracks_) {
+#pragma omp parallel for schedule(static) if (old_count >= kParallelSurfels)
+    for (size_t s = 0; s < old_count; ++s) {
+      const Vec3 bind = binder.bindPoint(s);
+      const uint32_t* ids = node_ids_.data() + s * node_count_;
+      const size_t m = set_size_[s];
+      const double far_node = m > 0 ? (xr[ids[m - 1]] - bind).norm() : 0.0;  // P_p is nearest first
+      bool cut = false;
+      for (size_t c = bound_cracks_; c < cracks.size() && !cut; ++c) {
+        const ShellCrack& k = cracks[c];
+        const double reach = (k.radius + far_node) * (1.0 + 1e-9);
+        if ((k.center - bind).squaredNorm() > reach * reach) continue;  // cannot reach a segment to P_p
+        for (size_t j = 0; j < m && !cut; ++j) cut = crackSeparates(k, bind, xr[ids[j]]);
+      }
+      affected[s] = cut;
+    }
+  }
+  std::vector<size_t> todo;
+  for (size_t s = 0; s < old_count; ++s)
+    if (affected[s]) todo.push_back(s);
+  for (size_t s = old_count; s < count; ++s) todo.push_back(s);
+  const size_t t = todo.size();
+  std::vector<uint32_t> ids(t * node_count_, 0);
+  std::vector<uint8_t> sizes(t, 0), nframes(t, 0), slots(t * frames, 0);
+  std::vector<double> weights(t * frames, 0.0);
+  std::vector<Vec3> coords(t * frames * per_frame, Vec3::Zero());
+  std::vector<char> seen(t, 0);
+#pragma omp parallel for schedule(dynamic, 64) if (t >= 256)
+  for (size_t r = 0; r < t; ++r) {
+    seen[r] = bindSurfel(binder, todo[r], ids.data() + r * node_count_, &sizes[r], &nframes[r],
+                         slots.data() + r * frames, weights.data() + r * frames,
+                         coords.data() + r * frames * per_frame);
+  }
+  for (size_t r = 0; r < t; ++r) {
+    if (!seen[r] && todo[r] >= old_count) {
+      throw std::invalid_argument("ShellSkinning::rebind: surfel " + std::to_string(todo[r]) +
+                                  " sees no node (all candidates are behind cracks)");
+    }
+  }
+  surfel_count_ = count;
+  node_ids_.resize(count * node_count_, 0);
+  set_size_.resize(count, 0);
+  frame_count_.resize(count, 0);
+  frame_slots_.resize(count * frames, 0);
+  weights_.resize(count * frames, 0.0);
+  coords_.resize(count * frames * per_frame, Vec3::Zero());
+  size_t kept = 0;
+  for (size_t r = 0; r < t; ++r) {
+    if (!seen[r]) {  // an old surfel now behind cracks on all sides: keep its binding
+      ++kept;
+      continue;
+    }
+    const size_t s = todo[r];
+    std::copy_n(ids.data() + r * node_count_, node_count_, node_ids_.data() + s * node_count_);
+    set_size_[s] = sizes[r];
+    frame_count_[s] = nframes[r];
+    std::copy_n(slots.data() + r * frames, frames, frame_slots_.data() + s * frames);
+    std::copy_n(weights.data() + r * frames, frames, weights_.data() + s * frames);
+    std::copy_n(coords.data() + r * frames * per_frame, frames * per_frame,
+                coords_.data() + s * frames * per_frame);
+  }
+  bound_cracks_ = cracks.size();
+  last_rebound_ = t - kept;
+  return kept;
 }
 
 void ShellSkinning::deform(const ShellNodes& nodes, const std::vector<Vec3>& x, SurfelCloud* out) const {

@@ -37,9 +37,27 @@ class ShellSkinning {
   /// nodes). `out` keeps its other channels; it is resized to the rest cloud's size if it differs.
   void deform(const ShellNodes& nodes, const std::vector<Vec3>& x, SurfelCloud* out) const;
 
+  /// Incremental re-binding after new cracks (7.3.2): `rest` is the bound cloud, possibly with surfels
+  /// appended (their bindings are made), and `cracks` extends the cracks bound so far. Only surfels that a
+  /// new crack separates from one of their nodes P_p are re-bound; for the others the nearest visible
+  /// nodes cannot change, so the result equals a full binding against all cracks. A re-bound surfel that
+  /// would see no node keeps its old binding; returns how many did. Throws std::invalid_argument (and
+  /// changes nothing) if an appended surfel sees no node or the inputs do not extend the bound ones.
+  size_t rebind(const SurfelCloud& rest, const ShellNodes& nodes, const std::vector<ShellCrack>& cracks);
+
   size_t size() const { return surfel_count_; }
+  /// Cracks the binding respects (those given to the constructor and to rebind()).
+  size_t boundCracks() const { return bound_cracks_; }
+  /// Surfels re-bound by the last rebind() call (appended ones included).
+  size_t lastRebound() const { return last_rebound_; }
 
  private:
+  struct Binder;
+  bool bindSurfel(const Binder& b, size_t s, uint32_t* ids, uint8_t* set_size, uint8_t* frame_count,
+                  uint8_t* frame_slots, double* weights, Vec3* coords) const;
+
+  size_t bound_cracks_ = 0;
+  size_t last_rebound_ = 0;
   size_t surfel_count_ = 0;
   size_t node_count_ = 0;  ///< stride of node_ids_
   bool has_axes_ = false;

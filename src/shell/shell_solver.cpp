@@ -39,6 +39,22 @@ void ShellSolver::pin(size_t node) {
   v_[node].setZero();
 }
 
+void ShellSolver::setPinVelocity(size_t node, const Vec3& velocity) {
+  if (!velocity.allFinite()) throw std::invalid_argument("ShellSolver::setPinVelocity: non-finite velocity");
+  pin(node);
+  for (auto& [i, v] : moving_pins_) {
+    if (i == node) {
+      v = velocity;
+      return;
+    }
+  }
+  moving_pins_.emplace_back(node, velocity);
+}
+
+void ShellSolver::evaluateForces() {
+  elastic_ = energy_.evaluate(x_, &gradient_, &fiber_length_, &fiber_angle_);
+}
+
 void ShellSolver::setPositions(const std::vector<Vec3>& x) {
   if (x.size() != x_.size())
     throw std::invalid_argument("ShellSolver::setPositions: wrong number of positions");
@@ -63,7 +79,7 @@ void ShellSolver::setExternalForce(ShellExternalForce force) {
 
 void ShellSolver::refreshForces() {
   const double before = elastic_.total();
-  elastic_ = energy_.evaluate(x_, &gradient_);
+  evaluateForces();
   reference_energy_ += std::max(0.0, elastic_.total() - before);
 }
 
@@ -79,10 +95,11 @@ void ShellSolver::setTopology(ShellNodes nodes, ShellFibers fibers) {
 }
 
 void ShellSolver::resetReference() {
-  elastic_ = energy_.evaluate(x_, &gradient_);
+  evaluateForces();
   external_.assign(x_.size(), Vec3::Zero());
   if (external_force_) external_force_(x_, external_);
   external_work_ = 0.0;
+  pin_work_ = 0.0;
   reference_energy_ = kineticEnergy() + elastic_.total();
   reference_gravity_ = gravityPotential();
 }
@@ -132,8 +149,17 @@ ShellStepReport ShellSolver::step() {
     v_[i] += 0.5 * dt * a;
     x_[i] += dt * v_[i];
   }
+  pin_force_before_.resize(moving_pins_.size());
+  for (size_t p = 0; p < moving_pins_.size(); ++p) {  // prescribed motion of pulled pins
+    pin_force_before_[p] = gradient_[moving_pins_[p].first];
+    x_[moving_pins_[p].first] += dt * moving_pins_[p].second;
+  }
   applyGround();
-  elastic_ = energy_.evaluate(x_, &gradient_);
+  evaluateForces();
+  for (size_t p = 0; p < moving_pins_.size(); ++p) {  // work of the pins on the shell, trapezoidal
+    const auto& [i, v] = moving_pins_[p];
+    pin_work_ += 0.5 * (pin_force_before_[p] + gradient_[i]).dot(dt * v);
+  }
   if (external_force_) {  // trapezoidal work of the external force over the drift
     external_next_.assign(n, Vec3::Zero());
     external_force_(x_, external_next_);
@@ -169,7 +195,7 @@ ShellStepReport ShellSolver::step() {
     }
   }
   const double available = reference_energy_ + std::max(0.0, reference_gravity_ - report.gravity_potential) +
-                           std::max(0.0, external_work_) + energy_floor_;
+                           std::max(0.0, external_work_) + std::max(0.0, pin_work_) + energy_floor_;
   const double held = report.kinetic + elastic_.total();
   if (!std::isfinite(held) || held > options_.blowup_factor * available) {
     std::ostringstream os;

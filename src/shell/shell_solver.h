@@ -66,6 +66,9 @@ class ShellSolver {
   ShellSolver(ShellNodes nodes, const ShellMaterial& material, const ShellSolverOptions& options);
 
   void pin(size_t node);
+  /// Pins `node` and moves it with this velocity during the drift of every step (a pulled edge, 7.3.2
+  /// experiments). The work the moving pins do on the shell counts as available energy (trapezoidal).
+  void setPinVelocity(size_t node, const Vec3& velocity);
   bool pinned(size_t node) const { return pinned_.at(node) != 0; }
   void setPositions(const std::vector<Vec3>& x);
   void setVelocities(const std::vector<Vec3>& v);
@@ -90,6 +93,10 @@ class ShellSolver {
   const ShellNodes& nodes() const { return nodes_; }
   const ShellFibers& fibers() const { return fibers_; }
   const ShellEnergy& energy() const { return energy_; }
+  /// Arc length and signed normal angle of every fiber at positions() (as measureFibers), measured with the
+  /// forces; valid after construction, every step and every change of positions, rest state or topology.
+  const std::vector<double>& fiberLengths() const { return fiber_length_; }
+  const std::vector<double>& fiberAngles() const { return fiber_angle_; }
   double time() const { return time_; }
   size_t stepCount() const { return step_count_; }
 
@@ -98,6 +105,7 @@ class ShellSolver {
   double kineticEnergy() const;
   double gravityPotential() const;
   void resetReference();
+  void evaluateForces();
 
   ShellNodes nodes_;
   ShellFibers fibers_;
@@ -106,7 +114,11 @@ class ShellSolver {
   std::vector<Vec3> x_, v_, gradient_, external_, external_next_, x_before_;
   ShellExternalForce external_force_;
   double external_work_ = 0.0;
+  std::vector<double> fiber_length_, fiber_angle_;
   std::vector<char> pinned_;
+  std::vector<std::pair<size_t, Vec3>> moving_pins_;  ///< node, velocity
+  std::vector<Vec3> pin_force_before_;                ///< gradient at the moving pins before the drift
+  double pin_work_ = 0.0;
   ShellEnergyValue elastic_;
   ShellStableStep stable_;
   size_t step_count_ = 0;

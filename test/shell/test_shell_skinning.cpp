@@ -168,6 +168,65 @@ TEST(ShellSkinning, CracksGivePairedDiscontinuitySurfelsThatFollowTheirPiece) {
   EXPECT_LT(pair, 1e-12);
 }
 
+// A growing cut: binding against the first cracks and re-binding locally after more equals a full binding
+// against all of them, for the dense surfels and for appended discontinuity surfels alike.
+TEST(ShellSkinning, LocalRebindAfterNewCracksEqualsFullRebind) {
+  const double h = 0.1;
+  const SurfelCloud cloud = sheetCloud(1.0, 80);
+  ShellNodeOptions options;
+  options.spacing = h;
+  ShellNodes nodes = selectShellNodes(cloud, options);
+  std::vector<ShellCrack> cracks;
+  for (double y = -0.5; y <= 0.1; y += 0.5 * h) {  // grows from the bottom edge up to y = 0.1
+    ShellCrack c;
+    c.center = Vec3(0.013, y, 0.0);
+    c.normal = Vec3::UnitX();
+    c.radius = h;
+    cracks.push_back(c);
+  }
+  const size_t first = cracks.size() / 2;
+  const std::vector<ShellCrack> early(cracks.begin(), cracks.begin() + first);
+  recomputeVisibleNeighborhoods(nodes, cracks, 8);
+  std::vector<Vec3> x = shell_test::bendOntoCylinder(nodes.rest_positions, 0.8);
+  for (Vec3& p : x) p.x() += p.x() > 0.013 ? 0.05 : -0.05;
+  auto discs = [&](const std::vector<ShellCrack>& list) {
+    SurfelCloud d = crackDiscontinuitySurfels(list);
+    for (size_t k = 0; k < d.size(); ++k) d.positions[k] -= 0.25 * list[k / 2].radius * d.normals[k];
+    return d;
+  };
+  for (int kind = 0; kind < 2; ++kind) {  // 0: dense surfels, 1: discontinuity surfels (appended)
+    const SurfelCloud before = kind == 0 ? cloud : discs(early);
+    const SurfelCloud after = kind == 0 ? cloud : discs(cracks);
+    ShellSkinning local(before, nodes, early);
+    const size_t kept = local.rebind(after, nodes, cracks);
+    const ShellSkinning full(after, nodes, cracks);
+    ASSERT_EQ(local.size(), after.size());
+    EXPECT_EQ(kept, 0u);
+    EXPECT_EQ(local.boundCracks(), cracks.size());
+    SurfelCloud a = after, b = after;
+    local.deform(nodes, x, &a);
+    full.deform(nodes, x, &b);
+    size_t differ = 0;
+    for (size_t s = 0; s < after.size(); ++s) {
+      differ += a.positions[s] != b.positions[s] || a.normals[s] != b.normals[s] ||
+                a.axes1.size() != b.axes1.size();
+    }
+    std::printf("%s: %zu surfels, %zu re-bound after %zu new cracks, %zu differ from a full binding\n",
+                kind == 0 ? "dense" : "discontinuity", after.size(), local.lastRebound(),
+                cracks.size() - first, differ);
+    EXPECT_EQ(differ, 0u);
+    EXPECT_GT(local.lastRebound(), 0u);
+    if (kind == 0) {
+      EXPECT_LT(local.lastRebound(), after.size() / 5);  // local: near the new cracks only
+    } else {
+      EXPECT_GE(local.lastRebound(), 2 * (cracks.size() - first));  // the appended pairs at least
+    }
+  }
+  // The re-binding must extend what was bound.
+  ShellSkinning skin(cloud, nodes, cracks);
+  EXPECT_THROW(skin.rebind(cloud, nodes, early), std::invalid_argument);
+}
+
 TEST(ShellSkinning, RejectsBadInput) {
   const SurfelCloud cloud = sheetCloud(1.0, 30);
   ShellNodeOptions options;
