@@ -3,6 +3,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -74,6 +76,23 @@ double tangentVoronoiArea(const Vec3& x, const Vec3& n, const std::vector<Vec3>&
   return area;
 }
 
+// sqrt(lambda_max / lambda_min) of M = sum e e^T / |e|^4 (ShellNodes::sampling_anisotropy).
+double samplingAnisotropy(const std::vector<Vec2>& offsets) {
+  double mxx = 0.0, mxy = 0.0, myy = 0.0;
+  for (const Vec2& e : offsets) {
+    const double q = e.squaredNorm();
+    if (q <= 0.0) continue;
+    const double w = 1.0 / (q * q);
+    mxx += w * e.x() * e.x(), mxy += w * e.x() * e.y(), myy += w * e.y() * e.y();
+  }
+  const double mean = 0.5 * (mxx + myy);
+  const double dev = std::hypot(0.5 * (mxx - myy), mxy);
+  const double lo = mean - dev, hi = mean + dev;
+  if (!(hi > 0.0)) return std::numeric_limits<double>::infinity();
+  if (lo <= 1e-12 * hi) return std::numeric_limits<double>::infinity();
+  return std::sqrt(hi / lo);
+}
+
 void buildNeighborhoods(ShellNodes& nodes, size_t k) {
   const size_t n = nodes.size();
   if (k < 4 || k > 255) throw std::invalid_argument("ShellNodeOptions::neighbor_count must be in [4, 255]");
@@ -82,11 +101,12 @@ void buildNeighborhoods(ShellNodes& nodes, size_t k) {
                                 " nodes are too few for neighbourhoods of " + std::to_string(k));
   }
   KdTree tree(nodes.rest_positions);
-  const size_t k_area = std::min<size_t>(n - 1, 16);
+  const size_t k_area = std::min<size_t>(n - 1, std::max<size_t>(16, k));  // neighbours and area clippers
   nodes.neighbor_offsets.assign(n + 1, 0);
   nodes.neighbors.assign(n * k, 0);
   nodes.fan_offsets.assign(n + 1, 0);
   nodes.rest_areas.assign(n, 0.0);
+  nodes.sampling_anisotropy.assign(n, 0.0);
   std::vector<std::vector<std::pair<uint8_t, uint8_t>>> fans(n);
   std::vector<double> nearest(n, 0.0);
   bool duplicate = false;
@@ -109,10 +129,13 @@ void buildNeighborhoods(ShellNodes& nodes, size_t k) {
     Vec3 u, v;
     tangentFrame(nrm, &u, &v);
     std::vector<std::pair<double, uint32_t>> by_angle;
+    std::vector<Vec2> offsets;
     for (uint32_t j : ids) {
       const Vec3 e = nodes.rest_positions[j] - x;
+      offsets.emplace_back(e.dot(u), e.dot(v));
       by_angle.emplace_back(std::atan2(e.dot(v), e.dot(u)), j);
     }
+    nodes.sampling_anisotropy[i] = samplingAnisotropy(offsets);
     std::sort(by_angle.begin(), by_angle.end());
     for (size_t m = 0; m < k; ++m) nodes.neighbors[i * k + m] = by_angle[m].second;
     for (size_t m = 0; m < k; ++m) {
@@ -128,13 +151,21 @@ void buildNeighborhoods(ShellNodes& nodes, size_t k) {
   for (size_t i = 0; i < n; ++i) {
     nodes.neighbor_offsets[i + 1] = (i + 1) * k;
     nodes.fan_offsets[i + 1] = nodes.fan_offsets[i] + fans[i].size();
-    if (fans[i].empty())
-      throw std::invalid_argument("shell nodes: node " + std::to_string(i) + " has no fan");
+    if (fans[i].empty()) {
+      char what[64];
+      std::snprintf(what, sizeof what, "%.3g", nodes.sampling_anisotropy[i]);
+      throw std::invalid_argument("shell nodes: node " + std::to_string(i) +
+                                  " has no fan (every angle between consecutive neighbours is 120 degrees or "
+                                  "more; sampling anisotropy " +
+                                  what + ", the sampling is too irregular)");
+    }
     mean_nearest += nearest[i] / n;
   }
   nodes.fan_pairs.clear();
   for (auto& f : fans) nodes.fan_pairs.insert(nodes.fan_pairs.end(), f.begin(), f.end());
   nodes.spacing = mean_nearest;
+  const ShellNodeOptions defaults;
+  nodes.sampling = summarizeShellSampling(nodes, defaults.anisotropy_threshold, defaults.irregular_fraction);
 }
 
 void checkNormals(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals, const char* what) {
@@ -152,6 +183,41 @@ void checkNormals(const std::vector<Vec3>& positions, const std::vector<Vec3>& n
 
 }  // namespace
 
+ShellSamplingStats summarizeShellSampling(const ShellNodes& nodes, double threshold,
+                                          double irregular_fraction) {
+  if (!(threshold >= 1.0)) {
+    throw std::invalid_argument("ShellNodeOptions::anisotropy_threshold must be >= 1 (1 is isotropic)");
+  }
+  if (!(irregular_fraction >= 0.0 && irregular_fraction <= 1.0)) {
+    throw std::invalid_argument("ShellNodeOptions::irregular_fraction must be in [0, 1]");
+  }
+  ShellSamplingStats stats;
+  stats.threshold = threshold;
+  std::vector<double> values = nodes.sampling_anisotropy;
+  if (values.empty()) return stats;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  stats.median = values[mid];
+  if (values.size() % 2 == 0)
+    stats.median = 0.5 * (stats.median + *std::max_element(values.begin(), values.begin() + mid));
+  size_t above = 0;
+  for (double a : values) {
+    stats.worst = std::max(stats.worst, a);
+    above += a > threshold;
+  }
+  stats.fraction_above = double(above) / values.size();
+  if (stats.fraction_above > irregular_fraction) {
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "highly irregular sampling: %.1f %% of the %zu nodes have a sampling anisotropy above %.3g "
+                  "(median %.3g, worst %.3g; 1 is isotropic); fibers follow the sampling, so the material "
+                  "behaves anisotropically there (thesis 7.6)",
+                  100.0 * stats.fraction_above, values.size(), threshold, stats.median, stats.worst);
+    stats.warning = text;
+  }
+  return stats;
+}
+
 ShellNodes shellNodesFromPoints(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
                                 size_t neighbor_count) {
   checkNormals(positions, normals, "shellNodesFromPoints");
@@ -168,6 +234,7 @@ ShellNodes selectShellNodes(const SurfelCloud& cloud, const ShellNodeOptions& op
   if (!(options.spacing >= 0.0) || (options.spacing == 0.0 && options.target_count == 0)) {
     throw std::invalid_argument("ShellNodeOptions: give spacing > 0 or target_count > 0");
   }
+  summarizeShellSampling(ShellNodes(), options.anisotropy_threshold, options.irregular_fraction);  // checks
   const std::vector<Vec3>& pts = cloud.positions;
   double spacing = options.spacing;
   std::vector<uint32_t> picked;
@@ -221,6 +288,7 @@ ShellNodes selectShellNodes(const SurfelCloud& cloud, const ShellNodeOptions& op
   nodes.source_surfel = picked;
   nodes.surfel_cluster = cluster;
   buildNeighborhoods(nodes, options.neighbor_count);
+  nodes.sampling = summarizeShellSampling(nodes, options.anisotropy_threshold, options.irregular_fraction);
   return nodes;
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/surfel_cloud.h"
@@ -19,6 +20,22 @@ struct ShellNodeOptions {
   int relax_iterations = 3;
   /// Size of the rest neighbourhood N_i (nearest nodes, 7.2.1).
   size_t neighbor_count = 8;
+  /// Highly irregular sampling (7.6: fibers follow the sampling, so the material turns anisotropic) is
+  /// reported when more than `irregular_fraction` of the nodes have a sampling anisotropy (ShellNodes) above
+  /// `anisotropy_threshold`.
+  double anisotropy_threshold = 3.0;
+  double irregular_fraction = 0.02;
+};
+
+/// Summary of the per-node sampling anisotropy (see ShellNodes::sampling_anisotropy).
+struct ShellSamplingStats {
+  double median = 0.0;
+  double worst = 0.0;           ///< infinite if a node's neighbours are collinear
+  double fraction_above = 0.0;  ///< of the nodes, anisotropy > threshold
+  double threshold = 0.0;
+  /// Empty, or "highly irregular sampling: ..." with the measured values when fraction_above exceeds the
+  /// allowed fraction.
+  std::string warning;
 };
 
 /// Nodes in their rest state. Neighbourhoods are CSR lists sorted counter-clockwise around the rest normal;
@@ -36,6 +53,12 @@ struct ShellNodes {
   std::vector<size_t> fan_offsets;  ///< size() + 1 entries
   std::vector<std::pair<uint8_t, uint8_t>> fan_pairs;
   double spacing = 0.0;  ///< mean distance to the nearest neighbour
+  /// Per node: sqrt(lambda_max / lambda_min) of M = sum_j e_j e_j^T / |e_j|^4 over the rest neighbours j,
+  /// e_j the tangent-plane offset x_j - x_i. Each neighbour adds its direction weighted by 1 / |e_j|^2, so
+  /// M ~ diag(1/a^2, 1/b^2) for a lattice of spacings a, b and the value estimates the spacing ratio b / a:
+  /// 1 for square and hexagonal grids, about 1.3 at a straight grid edge, infinite for collinear neighbours.
+  std::vector<double> sampling_anisotropy;
+  ShellSamplingStats sampling;  ///< summary with the thresholds of ShellNodeOptions
 
   size_t size() const { return rest_positions.size(); }
   size_t neighborCount(size_t i) const { return neighbor_offsets[i + 1] - neighbor_offsets[i]; }
@@ -47,9 +70,16 @@ struct ShellNodes {
 /// std::invalid_argument naming the problem for an empty cloud, missing normals or bad options.
 ShellNodes selectShellNodes(const SurfelCloud& cloud, const ShellNodeOptions& options);
 
-/// Uses the given points as nodes directly (unit normals required, one per point).
+/// Uses the given points as nodes directly (unit normals required, one per point). The sampling summary uses
+/// the default thresholds of ShellNodeOptions.
 ShellNodes shellNodesFromPoints(const std::vector<Vec3>& positions, const std::vector<Vec3>& normals,
                                 size_t neighbor_count = 8);
+
+/// Median, worst and fraction above `threshold` of nodes.sampling_anisotropy, with a warning when the
+/// fraction exceeds `irregular_fraction`. Throws std::invalid_argument for threshold < 1 or a fraction
+/// outside [0, 1].
+ShellSamplingStats summarizeShellSampling(const ShellNodes& nodes, double threshold,
+                                          double irregular_fraction);
 
 /// Deformed node normal: the normalised sum of (x_a - x_i) x (x_b - x_i) over the node's fan pairs. Returns
 /// the unnormalised length in `*length` (for gradients). Equals the rest normal up to sign convention at
