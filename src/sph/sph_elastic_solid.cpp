@@ -47,20 +47,24 @@ bool isRotation(const Mat3& q) {
 
 // Scalar forms of the per-neighbour accumulations (always inlined, unlike Eigen's expression loops in the
 // large neighbourhood function).
-inline void addScaled(Vec3& a, double w, const Vec3& b) {
+[[gnu::always_inline]] inline void addScaled(Vec3& a, double w, const Vec3& b) {
   a.x() += w * b.x();
   a.y() += w * b.y();
   a.z() += w * b.z();
 }
 /// m += w a b^T.
-inline void addOuter(Mat3& m, double w, const Vec3& a, const Vec3& b) {
+[[gnu::always_inline]] inline void addOuter(Mat3& m, double w, const Vec3& a, const Vec3& b) {
   const double wx = w * a.x(), wy = w * a.y(), wz = w * a.z();
   m(0, 0) += wx * b.x(), m(0, 1) += wx * b.y(), m(0, 2) += wx * b.z();
   m(1, 0) += wy * b.x(), m(1, 1) += wy * b.y(), m(1, 2) += wy * b.z();
   m(2, 0) += wz * b.x(), m(2, 1) += wz * b.y(), m(2, 2) += wz * b.z();
 }
+/// a x b, the formula of Eigen's cross (always inlined).
+[[gnu::always_inline]] inline Vec3 crossOf(const Vec3& a, const Vec3& b) {
+  return Vec3(a.y() * b.z() - a.z() * b.y(), a.z() * b.x() - a.x() * b.z(), a.x() * b.y() - a.y() * b.x());
+}
 /// m += w (|p|^2 I - p p^T), the inertia of a point of weight w at p.
-inline void addInertia(Mat3& m, double w, const Vec3& p) {
+[[gnu::always_inline]] inline void addInertia(Mat3& m, double w, const Vec3& p) {
   const double xx = p.x() * p.x(), yy = p.y() * p.y(), zz = p.z() * p.z();
   m(0, 0) += w * (yy + zz), m(1, 1) += w * (xx + zz), m(2, 2) += w * (xx + yy);
   const double xy = -w * p.x() * p.y(), xz = -w * p.x() * p.z(), yz = -w * p.y() * p.z();
@@ -110,20 +114,61 @@ void assignLatticePoints(const SphLattice& lattice, const Mat3& transform, const
   const size_t n = offsets.size();
   out.indices.resize(n);
   out.assigned.assign(n, 1);
-  thread_local std::vector<double> dist2;
+  std::vector<double>& dist2 = out.sq_dists;
   dist2.resize(n);
   const Mat3 to_coordinates = lattice.inverseBasis() * transform.inverse();  // B^-1 A^-1
-  for (size_t k = 0; k < n; ++k) {                                           // (8.21)
-    out.indices[k] = lattice.nearestIndexOfCoordinates(to_coordinates * offsets[k], &dist2[k]);
-    if (out.indices[k].isZero()) out.assigned[k] = 0;  // the centre particle's own point
+  constexpr int kHalf = SphLatticeAssignment::kTableHalfWidth, kWidth = 2 * kHalf;
+  bool in_table = true;
+  for (size_t k = 0; k < n; ++k) {  // (8.21)
+    const Eigen::Vector3i i = lattice.nearestIndexOfCoordinates(to_coordinates * offsets[k], &dist2[k]);
+    out.indices[k] = i;
+    if (i.isZero()) out.assigned[k] = 0;  // the centre particle's own point
+    in_table = in_table && unsigned(i.x() + kHalf) < unsigned(kWidth) &&
+               unsigned(i.y() + kHalf) < unsigned(kWidth) && unsigned(i.z() + kHalf) < unsigned(kWidth);
   }
-  // One particle per lattice point: the closest keeps it (ties: lower index). A small open-addressing table
-  // keyed by the lattice index holds the current keeper of each point (linear in the neighbourhood size).
+  // One particle per lattice point: the closest keeps it (ties: lower index). A table of the lattice points
+  // around the centre (entries of older calls are told apart by a stamp, so it is never cleared) or, for
+  // far points, a small open-addressing hash table holds the current keeper of each point.
+  const auto& idx = out.indices;
+  const auto compete = [&](int32_t& keeper, size_t k) {
+    const int32_t other = keeper;  // k comes after `other`: it wins only when strictly closer.
+    if (dist2[k] < dist2[size_t(other)]) {
+      out.assigned[size_t(other)] = 0;
+      keeper = int32_t(k);
+    } else {
+      out.assigned[k] = 0;
+    }
+  };
+  if (in_table) {
+    if (out.table_stamps.size() != size_t(kWidth * kWidth * kWidth)) {
+      out.table_stamps.assign(kWidth * kWidth * kWidth, 0);
+      out.table_keepers.assign(kWidth * kWidth * kWidth, -1);
+      out.stamp = 0;
+    }
+    if (++out.stamp == 0) {  // wrapped: forget all entries
+      std::fill(out.table_stamps.begin(), out.table_stamps.end(), 0u);
+      out.stamp = 1;
+    }
+    const uint32_t stamp = out.stamp;
+    uint32_t* stamps = out.table_stamps.data();
+    int32_t* keepers = out.table_keepers.data();
+    for (size_t k = 0; k < n; ++k) {
+      const Eigen::Vector3i& i = idx[k];
+      const size_t slot =
+          (size_t(i.z() + kHalf) * kWidth + size_t(i.y() + kHalf)) * kWidth + size_t(i.x() + kHalf);
+      if (stamps[slot] != stamp) {
+        stamps[slot] = stamp;
+        keepers[slot] = int32_t(k);
+      } else {
+        compete(keepers[slot], k);
+      }
+    }
+    return;
+  }
   size_t slots = 64;
   while (slots < 4 * n) slots *= 2;
-  thread_local std::vector<int32_t> keeper;
+  std::vector<int32_t>& keeper = out.keepers;
   keeper.assign(slots, -1);
-  const auto& idx = out.indices;
   for (size_t k = 0; k < n; ++k) {
     const Eigen::Vector3i& i = idx[k];
     const uint64_t key = uint64_t(uint32_t(i.x())) * 0x9E3779B97F4A7C15ull ^
@@ -136,13 +181,7 @@ void assignLatticePoints(const SphLattice& lattice, const Mat3& transform, const
         break;
       }
       if (idx[size_t(other)] != i) continue;
-      // k comes after `other`: it wins only when strictly closer.
-      if (dist2[k] < dist2[size_t(other)]) {
-        out.assigned[size_t(other)] = 0;
-        keeper[slot] = int32_t(k);
-      } else {
-        out.assigned[k] = 0;
-      }
+      compete(keeper[slot], k);
       break;
     }
   }
@@ -260,8 +299,10 @@ void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<V
     plastic_.resize(n, Mat3::Identity());
     plastic_strain_.resize(n, 0.0);
   }
-  std::vector<Vec3> points;
-  std::vector<uint32_t> members;
+  std::vector<Vec3>& points = member_points_;
+  std::vector<uint32_t>& members = members_;
+  points.clear();
+  members.clear();
   for (size_t i = 0; i < n; ++i) {
     const bool solid = particles.phases[i] == phase_ &&
                        (particles.kinds[i] == SphParticleKind::kFluid || config_.anchor_boundary_particles);
@@ -300,6 +341,8 @@ void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<V
   }
   contributions_.resize(m);
   lost_.resize(m);
+  net_force_.resize(m);
+  net_torque_.resize(m);
   energy_.assign(m, 0.0);
   max_strain_.assign(m, 0.0);
   assigned_.assign(m, 0);
@@ -421,45 +464,68 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   out.clear();
   lost_[s].clear();
   // Current neighbours of the same solid.
-  sc.offsets.clear();
-  sc.neighbors.clear();
-  sc.weights.clear();
   const Vec3 xi = s_pos_[s];
   SphSortedGrid::Run runs[9];
   const int num_runs = grid_.neighborRuns(grid_.cellOfSorted(s), runs);
+  size_t candidates = 0;
+  for (int r = 0; r < num_runs; ++r) candidates += runs[r].end - runs[r].begin;
+  // Fixed scratch of the candidate count (only grows), filled by index and cut to the neighbours.
+  if (sc.offsets.size() < candidates) {
+    sc.offsets.resize(candidates);
+    sc.neighbors.resize(candidates);
+    sc.weights.resize(candidates);
+  }
+  Vec3* offsets = sc.offsets.data();
+  uint32_t* neighbors = sc.neighbors.data();
+  double* weights = sc.weights.data();
+  size_t nn = 0;
+  const double h2 = kernels_.h2;
   for (int r = 0; r < num_runs; ++r)
     for (uint32_t j = runs[r].begin; j < runs[r].end; ++j) {
-      if (j == s) continue;
       const Vec3 rij = s_pos_[j] - xi;
       const double d2 = rij.squaredNorm();
-      if (d2 >= kernels_.h2) continue;
-      sc.offsets.push_back(rij);
-      sc.neighbors.push_back(j);
-      sc.weights.push_back(kernels_.poly6(d2));
+      if (d2 >= h2 || j == s) continue;
+      offsets[nn] = rij;
+      neighbors[nn] = j;
+      weights[nn] = kernels_.poly6(d2);
+      ++nn;
     }
+  sc.offsets.resize(nn);
+  sc.neighbors.resize(nn);
+  sc.weights.resize(nn);
   // Lattice assignment from the previous transform (8.21).
   assignLatticePoints(lattice_, transform_[i], sc.offsets, sc.assignment);
-  const size_t nn = sc.offsets.size();
-  // Rest points of the (plastically deformed) lattice: P_i l_ij.
+  const uint8_t* assigned = sc.assignment.assigned.data();
+  // Rest points of the (plastically deformed) lattice: P_i l_ij; neighbours left without a point.
   sc.rest.resize(nn);
   const bool plastic = config_.plasticity();
   for (size_t k = 0; k < nn; ++k) {
     sc.rest[k] = lattice_.point(sc.assignment.indices[k]);
     if (plastic) sc.rest[k] = plastic_[i] * sc.rest[k];
-  }
-  for (size_t k = 0; k < nn; ++k)
-    if (!sc.assignment.assigned[k]) {
+    if (!assigned[k]) {
       ++unassigned_[s];
-      lost_[s].push_back(solid_[sc.neighbors[k]]);
+      lost_[s].push_back(solid_[neighbors[k]]);
     }
+  }
   if (config_.docking) updateDocking(s, sc);  // 8.2.5: only docked lattice points count
+  // One pass for the fit (8.23), the weighted centre of the momentum correction (8.32) and the weighted
+  // sums of the implicit springs (separate accumulators, each in neighbour order).
+  const double w_centre = kernels_.poly6(0.0);
+  double w_sum = w_centre, w_neighbors = 0.0;
+  Vec3 c = Vec3::Zero(), weighted_r = Vec3::Zero(), weighted_v = Vec3::Zero();
   Mat3 rl = Mat3::Zero(), ll = Mat3::Zero();
   size_t count = 0;
   for (size_t k = 0; k < nn; ++k) {
-    if (!sc.assignment.assigned[k]) continue;
+    if (!assigned[k]) continue;
     const Vec3& l = sc.rest[k];
-    addOuter(rl, sc.weights[k], sc.offsets[k], l);
-    addOuter(ll, sc.weights[k], l, l);
+    const double w = weights[k];
+    addOuter(rl, w, offsets[k], l);
+    addOuter(ll, w, l, l);
+    w_sum += w;
+    addScaled(c, w, offsets[k]);
+    w_neighbors += w;
+    addScaled(weighted_r, w, offsets[k]);
+    addScaled(weighted_v, w, s_vel_[neighbors[k]]);
     ++count;
   }
   assigned_[s] = static_cast<uint32_t>(count);
@@ -557,7 +623,9 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   }
 
   const double volume = lattice_.cellVolume();
-  out.push_back({i, Vec3::Zero()});  // the centre particle first
+  out.resize(count + 1);  // the centre particle first, then the assigned neighbours in order
+  out[0] = {i, Vec3::Zero()};
+  Contribution* next_out = out.data() + 1;
   Vec3 centre_force = Vec3::Zero();
   if (config_.model == SphElasticModel::kStrain) {
     // Linear elasticity: sigma = lambda tr(eps) I + 2 mu eps. Forces are the negative gradient of the
@@ -576,13 +644,13 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     // the sum, so the force is its exact gradient).
     const double hourglass = config_.hourglass_control * config_.youngs_modulus * volume / ll.trace();
     for (size_t k = 0; k < nn; ++k) {
-      if (!sc.assignment.assigned[k]) continue;
+      if (!assigned[k]) continue;
       const Vec3& l = sc.rest[k];
       const Vec3 g = rot * l;
-      const Vec3 residual = a * l - sc.offsets[k];
-      energy_[s] += 0.5 * hourglass * sc.weights[k] * residual.squaredNorm();
-      const Vec3 f = (-volume * sc.weights[k]) * (stress_den * g) + (hourglass * sc.weights[k]) * residual;
-      out.push_back({solid_[sc.neighbors[k]], f});
+      const Vec3 residual = a * l - offsets[k];
+      energy_[s] += 0.5 * hourglass * weights[k] * residual.squaredNorm();
+      const Vec3 f = (-volume * weights[k]) * (stress_den * g) + (hourglass * weights[k]) * residual;
+      *next_out++ = {solid_[neighbors[k]], f};
       centre_force -= f;
     }
   } else {
@@ -595,14 +663,6 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
       // to the neighbourhood's rigid motion (weights W_j, the centre weighted sum_j W_j: its velocity is half
       // the neighbourhood's mean, which keeps the damping stable for any dt). The damping forces have no net
       // force or torque.
-      double w_neighbors = 0.0;
-      Vec3 weighted_r = Vec3::Zero(), weighted_v = Vec3::Zero();
-      for (size_t k = 0; k < nn; ++k) {
-        if (!sc.assignment.assigned[k]) continue;
-        w_neighbors += sc.weights[k];
-        addScaled(weighted_r, sc.weights[k], sc.offsets[k]);
-        addScaled(weighted_v, sc.weights[k], s_vel_[sc.neighbors[k]]);
-      }
       const double w_all = 2.0 * w_neighbors;
       const Vec3 vi = s_vel_[s];
       const Vec3 mean_v = (w_neighbors * vi + weighted_v) / w_all;
@@ -611,10 +671,10 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
       Mat3 inertia = w_neighbors * (centre.squaredNorm() * Mat3::Identity() - centre * centre.transpose());
       Vec3 momentum = w_neighbors * (-centre).cross(vi - mean_v);
       for (size_t k = 0; k < nn; ++k) {
-        if (!sc.assignment.assigned[k]) continue;
-        const Vec3 p = sc.offsets[k] - centre;
-        addInertia(inertia, sc.weights[k], p);
-        addScaled(momentum, sc.weights[k], p.cross(s_vel_[sc.neighbors[k]] - mean_v));
+        if (!assigned[k]) continue;
+        const Vec3 p = offsets[k] - centre;
+        addInertia(inertia, weights[k], p);
+        addScaled(momentum, weights[k], crossOf(p, s_vel_[neighbors[k]] - mean_v));
       }
       Vec3 spin = Vec3::Zero();
       if (dim == 3) {
@@ -627,23 +687,23 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
       const double scale = 1.0 / (1.0 + dt * dt * config_.goal_stiffness * volume * w_neighbors);
       const double damping = 0.25 * scale * dt * k_e;
       for (size_t k = 0; k < nn; ++k) {
-        if (!sc.assignment.assigned[k]) continue;
-        const Vec3 delta = goal * sc.rest[k] - sc.offsets[k];
-        const Vec3 u = s_vel_[sc.neighbors[k]] - mean_v - spin.cross(sc.offsets[k] - centre);
-        const Vec3 f = (0.5 * scale * k_e * sc.weights[k]) * delta - (damping * sc.weights[k]) * u;
-        energy += 0.5 * k_e * sc.weights[k] * delta.squaredNorm();
-        out.push_back({solid_[sc.neighbors[k]], f});
+        if (!assigned[k]) continue;
+        const Vec3 delta = goal * sc.rest[k] - offsets[k];
+        const Vec3 u = s_vel_[neighbors[k]] - mean_v - crossOf(spin, offsets[k] - centre);
+        const Vec3 f = (0.5 * scale * k_e * weights[k]) * delta - (damping * weights[k]) * u;
+        energy += 0.5 * k_e * weights[k] * delta.squaredNorm();
+        *next_out++ = {solid_[neighbors[k]], f};
         centre_force -= f;
       }
       // The centre's damping -damping w_neighbors u_i equals minus the neighbours' sum (sum_k W_k u_k = 0),
       // so centre_force = -sum_j f_j holds it exactly.
     } else {
       for (size_t k = 0; k < nn; ++k) {
-        if (!sc.assignment.assigned[k]) continue;
-        const Vec3 delta = goal * sc.rest[k] - sc.offsets[k];
-        const Vec3 f = (0.5 * k_e * sc.weights[k]) * delta;
-        energy += 0.5 * k_e * sc.weights[k] * delta.squaredNorm();
-        out.push_back({solid_[sc.neighbors[k]], f});
+        if (!assigned[k]) continue;
+        const Vec3 delta = goal * sc.rest[k] - offsets[k];
+        const Vec3 f = (0.5 * k_e * weights[k]) * delta;
+        energy += 0.5 * k_e * weights[k] * delta.squaredNorm();
+        *next_out++ = {solid_[neighbors[k]], f};
         centre_force -= f;
       }
     }
@@ -654,23 +714,15 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   // Angular momentum (8.32)-(8.33): the torque of the neighbourhood's forces about the weighted centre c_i
   // is removed by forces w_k omega x (x_k - c_i), which sum to zero; omega solves I omega = -tau with the
   // weighted inertia tensor I, so the correction is exact (8.33 spreads tau with weights W/|x - c|).
-  const double w_centre = kernels_.poly6(0.0);
-  double w_sum = w_centre;
-  Vec3 c = Vec3::Zero();  // relative to x_i
   size_t e = 1;
-  for (size_t k = 0; k < nn; ++k) {
-    if (!sc.assignment.assigned[k]) continue;
-    w_sum += sc.weights[k];
-    addScaled(c, sc.weights[k], sc.offsets[k]);
-  }
-  c /= w_sum;
+  c /= w_sum;  // relative to x_i
   Vec3 torque = (-c).cross(out[0].force);
   Mat3 inertia = w_centre * (c.squaredNorm() * Mat3::Identity() - c * c.transpose());
   for (size_t k = 0; k < nn; ++k) {
-    if (!sc.assignment.assigned[k]) continue;
-    const Vec3 p = sc.offsets[k] - c;
-    torque += p.cross(out[e++].force);
-    addInertia(inertia, sc.weights[k], p);
+    if (!assigned[k]) continue;
+    const Vec3 p = offsets[k] - c;
+    torque += crossOf(p, out[e++].force);
+    addInertia(inertia, weights[k], p);
   }
   if (dim == 2) {
     torque.x() = torque.y() = 0.0;  // in-plane forces
@@ -683,8 +735,8 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   out[0].force += w_centre * omega.cross(-c);
   e = 1;
   for (size_t k = 0; k < nn; ++k) {
-    if (!sc.assignment.assigned[k]) continue;
-    addScaled(out[e++].force, sc.weights[k], omega.cross(sc.offsets[k] - c));
+    if (!assigned[k]) continue;
+    addScaled(out[e++].force, weights[k], crossOf(omega, offsets[k] - c));
   }
 }
 
@@ -710,14 +762,26 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
     throw std::invalid_argument("SphElasticSolid::addForces: velocities must have one entry per particle");
   prepare(particles, velocities);
   const long m = static_cast<long>(solid_.size());
-  // A neighbourhood costs a few microseconds: 64 of them outweigh a parallel region.
-  const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), m / 64)));
+  // A neighbourhood costs 1-2 us. Threads get at least 512 of them (about a millisecond): on a loaded machine
+  // a preempted or spinning worker stalls a region's barrier for far longer than a tiny region saves (the
+  // nine 249-particle dice of Fig. 8.8 ran 3x slower on 2 threads than on 1 with 64 per thread).
+  const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), m / 512)));
   if (scratch_.size() < size_t(threads)) scratch_.resize(threads);
 #pragma omp parallel num_threads(threads)
   {
     Scratch& scratch = scratch_[omp_get_thread_num()];
 #pragma omp for schedule(static)
-    for (long s = 0; s < m; ++s) processNeighborhood(static_cast<size_t>(s), scratch);
+    for (long s = 0; s < m; ++s) {
+      processNeighborhood(static_cast<size_t>(s), scratch);
+      // The neighbourhood's net force and torque (diagnostics), summed here in parallel.
+      Vec3 net_force = Vec3::Zero(), net_torque = Vec3::Zero();
+      for (const Contribution& c : contributions_[s]) {
+        net_force += c.force;
+        net_torque += crossOf(particles.positions[c.particle], c.force);
+      }
+      net_force_[s] = net_force;
+      net_torque_[s] = net_torque;
+    }
   }
   // Serial scatter in a fixed order: results do not depend on the thread count.
   SphElasticStats st;
@@ -726,11 +790,9 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
     unassigned_count_[solid_[s]] = 0;
   }
   for (size_t s = 0; s < solid_.size(); ++s) {
-    for (const Contribution& c : contributions_[s]) {
-      forces[c.particle] += c.force;
-      st.net_force += c.force;
-      st.net_torque += particles.positions[c.particle].cross(c.force);
-    }
+    for (const Contribution& c : contributions_[s]) forces[c.particle] += c.force;
+    st.net_force += net_force_[s];
+    st.net_torque += net_torque_[s];
     for (uint32_t j : lost_[s]) ++unassigned_count_[j];
     st.matched_neighborhoods += matched_[s];
     st.skipped_neighborhoods += 1 - matched_[s];

@@ -137,6 +137,13 @@ struct SphElasticStats {
 struct SphLatticeAssignment {
   std::vector<Eigen::Vector3i> indices;  ///< lattice index per neighbour
   std::vector<uint8_t> assigned;         ///< 0: lost its lattice point to a closer neighbour (or the centre)
+  // Scratch of assignLatticePoints, kept between calls.
+  static constexpr int kTableHalfWidth = 8;  ///< the keeper table spans lattice indices [-8, 8)^3
+  std::vector<double> sq_dists;              ///< squared distance to the lattice point per neighbour
+  std::vector<int32_t> keepers;              ///< hash table of the keepers (indices outside the table)
+  std::vector<int32_t> table_keepers;        ///< keeper per lattice point of the table
+  std::vector<uint32_t> table_stamps;        ///< call stamp per table entry (older: empty)
+  uint32_t stamp = 0;
 };
 
 /// (8.21) for the neighbours at `offsets` (x_j - x_i) of a particle with lattice transform `transform`
@@ -273,7 +280,9 @@ class SphElasticSolid : public SphForceTerm {
   std::vector<uint8_t> has_transform_;
   std::vector<uint32_t> unassigned_count_;
   // Per evaluation (sorted solid order).
-  std::vector<uint32_t> solid_;  // original index of each solid particle
+  std::vector<uint32_t> solid_;      // original index of each solid particle
+  std::vector<uint32_t> members_;    // solid particles in original order (scratch of prepare)
+  std::vector<Vec3> member_points_;  // their positions
   std::vector<Vec3> s_pos_, s_vel_;
   std::vector<double> s_mass_;
   SphSortedGrid grid_;
@@ -281,6 +290,7 @@ class SphElasticSolid : public SphForceTerm {
   std::vector<std::vector<Contribution>> contributions_;  // per sorted solid particle
   std::vector<std::vector<uint32_t>> lost_;               // neighbours left without a lattice point
   std::vector<double> energy_, max_strain_;
+  std::vector<Vec3> net_force_, net_torque_;  // per neighbourhood
   std::vector<uint32_t> assigned_, unassigned_;
   std::vector<uint8_t> matched_;
   // Docking and plasticity state (per particle, sized only when on).

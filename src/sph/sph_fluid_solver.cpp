@@ -204,11 +204,31 @@ void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
       xsph_[i] = s_xsph_[s];
     }
   }
+  // The force terms run on as many threads as this computation: where the whole step is small enough to run
+  // serially, a term's one parallel region per step would leave a worker spinning (libgomp's default wait
+  // policy) through the rest of the step, which on a loaded machine made 2 threads 2-3x slower than 1.
+  for (const auto& term : force_terms_) term->setThreadLimit(threads);
   addTermForces(velocities);
   size_t entries = 0;
   for (size_t s = 0; s < n; ++s) entries += row_count_[s];
   stats_.neighbors_per_particle = n ? double(entries) / double(n) : 0.0;
   forces_valid_ = true;
+}
+
+bool SphFluidSolver::neighborsCurrent() const {
+  const size_t n = particles_.size();
+  if (!forces_valid_ || grid_.size() != n || s_pos_.size() != n) return false;
+  const std::vector<uint32_t>& order = grid_.order();
+  for (size_t s = 0; s < n; ++s)
+    if (s_pos_[s] != particles_.positions[order[s]]) return false;
+  return true;
+}
+
+const uint32_t* SphFluidSolver::neighborRow(size_t s, uint32_t& count) const {
+  size_t t = 0;
+  while (thread_first_[t + 1] <= s) ++t;  // the thread that owns row s (a handful of threads)
+  count = row_count_[s];
+  return thread_lists_[t].data() + row_begin_[s];
 }
 
 void SphFluidSolver::addForceTerm(std::shared_ptr<SphForceTerm> term) {

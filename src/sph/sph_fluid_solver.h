@@ -161,6 +161,15 @@ class SphFluidSolver {
   /// when needed). The force terms are told the fixed step, else the last step (nothing before the first).
   void computeForces();
 
+  /// Whether the neighbour rows of the last force computation are those of the current particles: forces
+  /// are valid and every position is bit for bit the one they were found at (after step() they are).
+  bool neighborsCurrent() const;
+  /// The cell grid of the last force computation: grid().order()[s] is the particle at sorted position s.
+  const SphSortedGrid& neighborGrid() const { return grid_; }
+  /// Neighbours (d < h, self excluded) of the particle at sorted position s as sorted positions, in the
+  /// grid's stable cell order; `count` receives their number. Valid while neighborsCurrent().
+  const uint32_t* neighborRow(size_t s, uint32_t& count) const;
+
  private:
   void validateParticles() const;
   void computeForces(const std::vector<Vec3>& velocities);

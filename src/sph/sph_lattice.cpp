@@ -53,12 +53,6 @@ SphLattice::SphLattice(int dimension, double spacing) : dimension_(dimension), s
   }
 }
 
-Vec3 SphLattice::point(const Eigen::Vector3i& index) const {
-  Vec3 p = basis_.col(0) * index.x() + basis_.col(1) * index.y();
-  if (dimension_ == 3) p += basis_.col(2) * index.z();
-  return p;
-}
-
 Eigen::Vector3i SphLattice::nearestIndex(const Vec3& q_in) const {
   Vec3 q = q_in;
   if (dimension_ == 2) q.z() = 0.0;

@@ -27,7 +27,11 @@ class SphLattice {
   /// B (columns are the lattice vectors; in 2D the third column is d e3 and unused).
   const Eigen::Matrix3d& basis() const { return basis_; }
   /// B n (n.z ignored in 2D).
-  Vec3 point(const Eigen::Vector3i& index) const;
+  Vec3 point(const Eigen::Vector3i& index) const {
+    Vec3 p = basis_.col(0) * index.x() + basis_.col(1) * index.y();
+    if (dimension_ == 3) p += basis_.col(2) * index.z();
+    return p;
+  }
   /// Index of the lattice point nearest to q (Babai rounding refined over the 27 (2D: 9) neighbouring
   /// indices; exact for this reduced basis). z of q is ignored in 2D.
   Eigen::Vector3i nearestIndex(const Vec3& q) const;

@@ -17,6 +17,9 @@
 namespace rc {
 namespace {
 
+/// Fewer points than this are blended on one thread (a parallel region costs more than it saves).
+constexpr std::ptrdiff_t kParallelPoints = 4096;
+
 using Mat3 = Eigen::Matrix3d;
 
 bool finite(const Vec3& v) {
@@ -217,7 +220,7 @@ void SphSkin::fitCompact(const std::vector<Vec3>& positions, std::vector<Mat3>& 
   checkPositions(positions);
   compact.resize(bound_.size());
   const std::ptrdiff_t bound_count = static_cast<std::ptrdiff_t>(bound_.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (bound_count >= kParallelPoints)
   for (std::ptrdiff_t l = 0; l < bound_count; ++l) {
     const Vec3& xi = positions[bound_[l]];
     Mat3 b = Mat3::Zero();
@@ -240,7 +243,7 @@ void SphSkin::deform(const std::vector<Vec3>& positions, const std::vector<Mat3>
     throw std::invalid_argument("SphSkin: " + std::to_string(transforms.size()) + " transforms for " +
                                 std::to_string(system_size_) + " particles");
   const std::ptrdiff_t bound_count = static_cast<std::ptrdiff_t>(bound_.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (bound_count >= kParallelPoints)
   for (std::ptrdiff_t l = 0; l < bound_count; ++l)
     current_[l] = transforms[bound_[l]] * rest_inverse_[l];  // F_i = A_i (A_i^0)^-1
   blend(positions);
@@ -253,7 +256,7 @@ void SphSkin::deform(const std::vector<Vec3>& positions) {
 
 void SphSkin::blend(const std::vector<Vec3>& positions) {
   const std::ptrdiff_t point_count = static_cast<std::ptrdiff_t>(rest_points_.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (point_count >= kParallelPoints)
   for (std::ptrdiff_t p = 0; p < point_count; ++p) {
     Vec3 s = Vec3::Zero();
     Mat3 j = Mat3::Zero();
@@ -274,7 +277,7 @@ void SphSkin::transformNormals(const std::vector<Vec3>& rest_normals, std::vecto
                                 std::to_string(rest_points_.size()) + " bound points");
   out.resize(rest_normals.size());
   const std::ptrdiff_t count = static_cast<std::ptrdiff_t>(rest_normals.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (count >= kParallelPoints)
   for (std::ptrdiff_t p = 0; p < count; ++p) {
     const Vec3 n = cofactor(jacobians_[p]) * rest_normals[p];
     const double length = n.norm();
@@ -290,7 +293,7 @@ void SphSkin::deformSurfels(const SurfelCloud& rest, SurfelCloud& out) const {
   out = rest;
   out.positions = points_;
   const std::ptrdiff_t count = static_cast<std::ptrdiff_t>(rest.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (count >= kParallelPoints)
   for (std::ptrdiff_t p = 0; p < count; ++p) {
     const Mat3& j = jacobians_[p];
     double area_factor = std::cbrt(std::abs(j.determinant()));

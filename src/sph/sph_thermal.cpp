@@ -142,11 +142,17 @@ double SphThermalModel::totalHeat(const SphParticles& particles) const {
 }
 
 const SphThermalStats& SphThermalModel::step(SphFluidSolver& solver, double dt) {
-  if (step(solver.particles(), solver.kernels(), dt)) solver.particlesChanged();
+  const SphFluidSolver* rows = solver.neighborsCurrent() ? &solver : nullptr;
+  if (advance(solver.particles(), solver.kernels(), dt, rows)) solver.particlesChanged();
   return stats_;
 }
 
 bool SphThermalModel::step(SphParticles& particles, const SphKernels& kernels, double dt) {
+  return advance(particles, kernels, dt, nullptr);
+}
+
+bool SphThermalModel::advance(SphParticles& particles, const SphKernels& kernels, double dt,
+                              const SphFluidSolver* solver) {
   if (!(dt >= 0.0) || !finite(dt))
     throw std::invalid_argument("SphThermalModel::step: dt must be finite and >= 0, got " +
                                 std::to_string(dt));
@@ -157,11 +163,23 @@ bool SphThermalModel::step(SphParticles& particles, const SphKernels& kernels, d
   stats_ = SphThermalStats();
   stats_.step = step_count_;
   stats_.dt = dt;
-  buildNeighbors(particles, kernels);
+  if (solver)
+    buildNeighborsFrom(*solver);
+  else
+    buildNeighbors(particles, kernels);
   diffuse(particles, dt);
   const bool changed = transitions(particles, kernels, dt);
   stats_.total_heat = totalHeat(particles);
   return changed;
+}
+
+void SphThermalModel::setMember(size_t s, uint32_t i, const SphParticles& particles) {
+  s_index_[s] = i;
+  points_[s] = particles.positions[i];
+  const double rho = config_.use_particle_densities && particles.densities[i] > 0.0 ? particles.densities[i]
+                                                                                    : config_.rest_density;
+  s_mc_[s] = particles.masses[i] * config_.heat_capacity;
+  s_vol_[s] = particles.masses[i] / rho;
 }
 
 void SphThermalModel::buildNeighbors(const SphParticles& particles, const SphKernels& kernels) {
@@ -182,15 +200,10 @@ void SphThermalModel::buildNeighbors(const SphParticles& particles, const SphKer
   s_mc_.resize(m);
   s_vol_.resize(m);
   for (size_t s = 0; s < m; ++s) {
-    const uint32_t i = members_[grid_.order()[s]];
-    s_index_[s] = i;
-    points_[s] = particles.positions[i];  // now in sorted order
-    const double rho = config_.use_particle_densities && particles.densities[i] > 0.0 ? particles.densities[i]
-                                                                                      : config_.rest_density;
-    s_mc_[s] = particles.masses[i] * config_.heat_capacity;
-    s_vol_[s] = particles.masses[i] / rho;
+    setMember(s, members_[grid_.order()[s]], particles);  // now in sorted order
   }
-  row_start_.assign(m + 1, 0);
+  row_start_.resize(m + 1);
+  row_start_[0] = 0;
   const double h2 = kernels.h2;
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (long s = 0; s < static_cast<long>(m); ++s) {
@@ -204,26 +217,81 @@ void SphThermalModel::buildNeighbors(const SphParticles& particles, const SphKer
   }
   for (size_t s = 0; s < m; ++s) row_start_[s + 1] += row_start_[s];
   nbr_.resize(row_start_[m]);
-  coeff_.resize(row_start_[m]);
-  stats_.pairs = row_start_[m];
-  // g_ij = 2 k V_i V_j (-w'(r) / r), poly6: -w'(r) / r = 6 a / h^2 (1 - r^2/h^2)^2. The expression is
-  // symmetric in i and j bit for bit, so the pair fluxes cancel exactly.
-  const double scale = 2.0 * config_.conductivity * 6.0 * kernels.poly6_coeff / h2;
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (long s = 0; s < static_cast<long>(m); ++s) {
     SphSortedGrid::Run runs[9];
     const int num_runs = grid_.neighborRuns(grid_.cellOfSorted(s), runs);
     size_t k = row_start_[s];
     for (int r = 0; r < num_runs; ++r)
-      for (uint32_t j = runs[r].begin; j < runs[r].end; ++j) {
-        if (j == uint32_t(s)) continue;
-        const double d2 = (points_[j] - points_[s]).squaredNorm();
-        if (d2 >= h2) continue;
-        const double t = 1.0 - d2 / h2;
-        nbr_[k] = j;
-        coeff_[k] = scale * (s_vol_[s] * s_vol_[j]) * (t * t);
-        ++k;
-      }
+      for (uint32_t j = runs[r].begin; j < runs[r].end; ++j)
+        if (j != uint32_t(s) && (points_[j] - points_[s]).squaredNorm() < h2) nbr_[k++] = j;
+  }
+  fillCoefficients(kernels, threads);
+}
+
+void SphThermalModel::buildNeighborsFrom(const SphFluidSolver& solver) {
+  const SphParticles& particles = solver.particles();
+  const std::vector<uint32_t>& order = solver.neighborGrid().order();
+  const size_t n = order.size();
+  // Participants in the solver's cell order (a subsequence of it).
+  thermal_of_.resize(n);
+  solver_pos_.clear();
+  for (size_t t = 0; t < n; ++t) {
+    const uint32_t i = order[t];
+    const bool member = particles.kinds[i] == SphParticleKind::kFluid || held_[i];
+    thermal_of_[t] = member ? static_cast<int32_t>(solver_pos_.size()) : -1;
+    if (member) solver_pos_.push_back(static_cast<uint32_t>(t));
+  }
+  const size_t m = solver_pos_.size();
+  stats_.participants = m;
+  const int threads = static_cast<int>(std::max<size_t>(1, std::min<size_t>(num_threads_, m / 2048)));
+  s_index_.resize(m);
+  points_.resize(m);
+  s_mc_.resize(m);
+  s_vol_.resize(m);
+  for (size_t s = 0; s < m; ++s) {
+    setMember(s, order[solver_pos_[s]], particles);
+  }
+  row_start_.resize(m + 1);
+  row_start_[0] = 0;
+  for (size_t s = 0; s < m; ++s) {
+    uint32_t count = 0;
+    const uint32_t* row = solver.neighborRow(solver_pos_[s], count);
+    size_t members = 0;
+    for (uint32_t e = 0; e < count; ++e) members += thermal_of_[row[e]] >= 0;
+    row_start_[s + 1] = row_start_[s] + members;
+  }
+  nbr_.resize(row_start_[m]);
+  for (size_t s = 0; s < m; ++s) {
+    uint32_t count = 0;
+    const uint32_t* row = solver.neighborRow(solver_pos_[s], count);
+    size_t k = row_start_[s];
+    for (uint32_t e = 0; e < count; ++e) {
+      const int32_t j = thermal_of_[row[e]];
+      if (j >= 0) nbr_[k++] = static_cast<uint32_t>(j);
+    }
+  }
+  fillCoefficients(solver.kernels(), threads);
+}
+
+void SphThermalModel::fillCoefficients(const SphKernels& kernels, int threads) {
+  const size_t m = s_index_.size();
+  coeff_.resize(row_start_[m]);
+  stats_.pairs = row_start_[m];
+  // g_ij = 2 k V_i V_j (-w'(r) / r), poly6: -w'(r) / r = 6 a / h^2 (1 - r^2/h^2)^2. The expression is
+  // symmetric in i and j bit for bit, so the pair fluxes cancel exactly.
+  const double h2 = kernels.h2;
+  const double scale = 2.0 * config_.conductivity * 6.0 * kernels.poly6_coeff / h2;
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (long s = 0; s < static_cast<long>(m); ++s) {
+    const Vec3 xs = points_[s];
+    const double vs = s_vol_[s];
+    for (size_t k = row_start_[s]; k < row_start_[s + 1]; ++k) {
+      const uint32_t j = nbr_[k];
+      const double d2 = (points_[j] - xs).squaredNorm();
+      const double t = 1.0 - d2 / h2;
+      coeff_[k] = scale * (vs * s_vol_[j]) * (t * t);
+    }
   }
 }
 

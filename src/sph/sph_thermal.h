@@ -122,7 +122,8 @@ class SphThermalModel {
   void setFreezingSolid(std::shared_ptr<SphElasticSolid> solid);
 
   /// Advances temperatures by dt and applies melting and freezing; calls solver.particlesChanged() if a
-  /// phase changed. Call after each solver step with that step's dt.
+  /// phase changed. Call after each solver step with that step's dt: the neighbour rows of the step are
+  /// then reused (SphFluidSolver::neighborsCurrent), else searched anew.
   const SphThermalStats& step(SphFluidSolver& solver, double dt);
   /// The same on bare particles (densities as set there); returns whether a phase changed.
   bool step(SphParticles& particles, const SphKernels& kernels, double dt);
@@ -140,7 +141,14 @@ class SphThermalModel {
   static double uniformRandom(uint64_t seed, uint64_t step, uint64_t particle);
 
  private:
+  bool advance(SphParticles& particles, const SphKernels& kernels, double dt, const SphFluidSolver* solver);
+  /// Sorted slot s holds particle i: its index, position, heat capacity m c and volume m / rho.
+  void setMember(size_t s, uint32_t i, const SphParticles& particles);
   void buildNeighbors(const SphParticles& particles, const SphKernels& kernels);
+  /// The same rows from the solver's neighbour rows of the step (no grid or distance search of its own).
+  void buildNeighborsFrom(const SphFluidSolver& solver);
+  /// g_ij of the rows (row_start_ and nbr_ set); `threads` OpenMP threads.
+  void fillCoefficients(const SphKernels& kernels, int threads);
   void diffuse(const SphParticles& particles, double dt);
   bool transitions(SphParticles& particles, const SphKernels& kernels, double dt);
 
@@ -157,6 +165,8 @@ class SphThermalModel {
   SphSortedGrid grid_;
   std::vector<Vec3> points_;
   std::vector<uint32_t> members_, s_index_;
+  std::vector<int32_t> thermal_of_;   // solver sorted position -> participant (or -1)
+  std::vector<uint32_t> solver_pos_;  // participant -> solver sorted position
   std::vector<double> s_mc_, s_vol_, s_temp_, s_next_;
   std::vector<size_t> row_start_;
   std::vector<uint32_t> nbr_;
