@@ -71,5 +71,8 @@ struct FiberMeasure {
   Vec3 grad_length[2], grad_angle[2], grad_normal;
 };
 void measureFiber(const Vec3& e1, const Vec3& e2, const Vec3& normal, bool gradients, FiberMeasure* out);
+/// measureFiber for two fibers with the same normal at once (one per SIMD lane): e1[0..1], e2[0..1] in,
+/// out[0..1] out; the same results as two measureFiber calls.
+void measureFiberPair(const Vec3* e1, const Vec3* e2, const Vec3& normal, bool gradients, FiberMeasure* out);
 
 }  // namespace rc

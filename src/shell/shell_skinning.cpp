@@ -35,10 +35,6 @@ Vec3 toLocal(const Frame& f, const Vec3& v) {
               v.dot(f.e3) / f.e3.squaredNorm());
 }
 
-Vec3 toWorld(const Frame& f, const Vec3& y) {
-  return y.x() * f.e1 + y.y() * f.e2 + y.z() * f.e3;
-}
-
 // Least-squares plane normal of the points, oriented along `reference` (unchanged if fewer than 3 points).
 Vec3 planeNormal(const std::vector<Vec3>& x, const uint32_t* ids, size_t count, const Vec3& reference) {
   if (count < 3) return reference.normalized();
@@ -181,8 +177,25 @@ ShellSkinning::ShellSkinning(const SurfelCloud& rest, const ShellNodes& nodes,
                                   " sees no node (all candidates are behind cracks)");
     }
   }
+  plane_set_.assign(surfel_count_, 0);
+  for (size_t s = 0; s < surfel_count_; ++s) assignPlaneSet(s);
   bound_cracks_ = cracks.size();
   last_rebound_ = surfel_count_;
+}
+
+void ShellSkinning::assignPlaneSet(size_t s) {
+  const size_t m = set_size_[s];
+  uint32_t sorted[256];
+  std::copy_n(node_ids_.data() + s * node_count_, m, sorted);
+  std::sort(sorted, sorted + m);
+  std::string key(reinterpret_cast<const char*>(sorted), m * sizeof(uint32_t));
+  const auto [it, inserted] = set_index_.emplace(std::move(key), static_cast<uint32_t>(set_sizes_.size()));
+  if (inserted) {
+    set_ids_.insert(set_ids_.end(), sorted, sorted + m);
+    set_ids_.resize(set_ids_.size() + node_count_ - m, 0);
+    set_sizes_.push_back(static_cast<uint8_t>(m));
+  }
+  plane_set_[s] = it->second;
 }
 
 size_t ShellSkinning::rebind(const SurfelCloud& rest, const ShellNodes& nodes,
@@ -252,6 +265,7 @@ size_t ShellSkinning::rebind(const SurfelCloud& rest, const ShellNodes& nodes,
   frame_slots_.resize(count * frames, 0);
   weights_.resize(count * frames, 0.0);
   coords_.resize(count * frames * per_frame, Vec3::Zero());
+  plane_set_.resize(count, 0);
   size_t kept = 0;
   for (size_t r = 0; r < t; ++r) {
     if (!seen[r]) {  // an old surfel now behind cracks on all sides: keep its binding
@@ -266,6 +280,7 @@ size_t ShellSkinning::rebind(const SurfelCloud& rest, const ShellNodes& nodes,
     std::copy_n(weights.data() + r * frames, frames, weights_.data() + s * frames);
     std::copy_n(coords.data() + r * frames * per_frame, frames * per_frame,
                 coords_.data() + s * frames * per_frame);
+    assignPlaneSet(s);
   }
   bound_cracks_ = cracks.size();
   last_rebound_ = t - kept;
@@ -278,38 +293,57 @@ void ShellSkinning::deform(const ShellNodes& nodes, const std::vector<Vec3>& x, 
   if (out->size() != surfel_count_) out->positions.resize(surfel_count_);
   out->normals.resize(surfel_count_);
   if (has_axes_) out->axes1.resize(surfel_count_), out->axes2.resize(surfel_count_);
-  std::vector<Vec3> fan(nodes.size());
-#pragma omp parallel for schedule(static) if (nodes.size() >= kParallelSurfels)
-  for (size_t i = 0; i < nodes.size(); ++i) fan[i] = fanNormal(nodes, i, x);
+  const size_t sets = set_sizes_.size();
+  fan_.resize(nodes.size());
+  set_normals_.resize(sets);
+  Vec3* fan = fan_.data();
+  Vec3* planes = set_normals_.data();
   const size_t frames = node_count_ - 1, per_frame = has_axes_ ? 4 : 2;
-#pragma omp parallel for schedule(static) if (surfel_count_ >= kParallelSurfels)
-  for (size_t s = 0; s < surfel_count_; ++s) {
-    const uint32_t* ids = node_ids_.data() + s * node_count_;
-    const size_t m = set_size_[s], nf = frame_count_[s];
-    const Vec3& x0 = x[ids[0]];
-    if (nf == 0) {  // no frame: translate with x_0
+#pragma omp parallel if (surfel_count_ >= kParallelSurfels)
+  {
+#pragma omp for schedule(static)
+    for (size_t i = 0; i < nodes.size(); ++i) fan[i] = fanNormal(nodes, i, x);
+#pragma omp for schedule(static)
+    for (size_t c = 0; c < sets; ++c) {  // plane normal of each distinct P_p, once
+      const uint32_t* ids = set_ids_.data() + c * node_count_;
+      const size_t m = set_sizes_[c];
+      Vec3 reference = Vec3::Zero();
+      for (size_t j = 0; j < m; ++j) reference += fan[ids[j]];
+      planes[c] = planeNormal(x, ids, m, reference);
+    }
+#pragma omp for schedule(static)
+    for (size_t s = 0; s < surfel_count_; ++s) {
+      const uint32_t* ids = node_ids_.data() + s * node_count_;
+      const size_t nf = frame_count_[s];
+      const Vec3& x0 = x[ids[0]];
       const Vec3* c = coords_.data() + s * frames * per_frame;
-      out->positions[s] = x0 + c[0];
-      out->normals[s] = c[1];
-      if (has_axes_) out->axes1[s] = c[2], out->axes2[s] = c[3];
-      continue;
+      if (nf == 0) {  // no frame: translate with x_0
+        out->positions[s] = x0 + c[0];
+        out->normals[s] = c[1];
+        if (has_axes_) out->axes1[s] = c[2], out->axes2[s] = c[3];
+        continue;
+      }
+      const Vec3 plane = planes[plane_set_[s]];
+      const uint8_t* slots = frame_slots_.data() + s * frames;
+      const double* weights = weights_.data() + s * frames;
+      Vec3 p = Vec3::Zero(), n = Vec3::Zero(), a1 = Vec3::Zero(), a2 = Vec3::Zero();
+      for (size_t q = 0; q < nf; ++q, c += per_frame) {  // (7.26), (7.28), (7.29)
+        const Vec3 e1 = x[ids[slots[q]]] - x0;
+        const double inv_l = 1.0 / e1.norm();
+        const Vec3 e2 = plane.cross(e1) * inv_l;
+        const Vec3 e3 = e2.cross(e1) * inv_l;
+        const double w = weights[q];
+        p += w * (c[0].x() * e1 + c[0].y() * e2 + c[0].z() * e3);
+        n += w * (c[1].x() * e1 + c[1].y() * e2 + c[1].z() * e3);
+        if (has_axes_) {
+          a1 += w * (c[2].x() * e1 + c[2].y() * e2 + c[2].z() * e3);
+          a2 += w * (c[3].x() * e1 + c[3].y() * e2 + c[3].z() * e3);
+        }
+      }
+      out->positions[s] = x0 + p;
+      out->normals[s] = n.normalized();
+      if (has_axes_) out->axes1[s] = a1, out->axes2[s] = a2;
     }
-    Vec3 reference = Vec3::Zero();
-    for (size_t j = 0; j < m; ++j) reference += fan[ids[j]];
-    const Vec3 plane = planeNormal(x, ids, m, reference);
-    Vec3 p = Vec3::Zero(), n = Vec3::Zero(), a1 = Vec3::Zero(), a2 = Vec3::Zero();
-    for (size_t q = 0; q < nf; ++q) {  // (7.28), (7.29)
-      const size_t slot = s * frames + q;
-      const Frame frame = makeFrame(x0, x[ids[frame_slots_[slot]]], plane);
-      const double w = weights_[slot];
-      const Vec3* c = coords_.data() + slot * per_frame;
-      p += w * toWorld(frame, c[0]);
-      n += w * toWorld(frame, c[1]);
-      if (has_axes_) a1 += w * toWorld(frame, c[2]), a2 += w * toWorld(frame, c[3]);
-    }
-    out->positions[s] = x0 + p;
-    out->normals[s] = n.normalized();
-    if (has_axes_) out->axes1[s] = a1, out->axes2[s] = a2;
   }
 }
 

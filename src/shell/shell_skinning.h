@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "core/surfel_cloud.h"
@@ -34,7 +36,8 @@ class ShellSkinning {
                 const ShellSkinningOptions& options = ShellSkinningOptions());
 
   /// Writes positions, normals and (if the rest cloud has them) axes of `out` for node positions x (size of
-  /// nodes). `out` keeps its other channels; it is resized to the rest cloud's size if it differs.
+  /// nodes). `out` keeps its other channels; it is resized to the rest cloud's size if it differs. Not
+  /// thread-safe on one object (per-call scratch); parallelises internally.
   void deform(const ShellNodes& nodes, const std::vector<Vec3>& x, SurfelCloud* out) const;
 
   /// Incremental re-binding after new cracks (7.3.2): `rest` is the bound cloud, possibly with surfels
@@ -55,6 +58,8 @@ class ShellSkinning {
   struct Binder;
   bool bindSurfel(const Binder& b, size_t s, uint32_t* ids, uint8_t* set_size, uint8_t* frame_count,
                   uint8_t* frame_slots, double* weights, Vec3* coords) const;
+  /// Points surfel s at the distinct node set of its P_p (added if new).
+  void assignPlaneSet(size_t s);
 
   size_t bound_cracks_ = 0;
   size_t last_rebound_ = 0;
@@ -67,6 +72,13 @@ class ShellSkinning {
   std::vector<uint8_t> frame_slots_;  ///< per frame (stride node_count_ - 1): index i of x_i in P_p
   std::vector<double> weights_;       ///< per frame, normalised
   std::vector<Vec3> coords_;          ///< per frame: position, normal[, axis1, axis2] coordinates
+  /// Distinct node sets P_p (sorted ids): the plane normal of a set is computed once per deform, not per
+  /// surfel (many surfels share their nearest nodes).
+  std::vector<uint32_t> plane_set_;                      ///< per surfel: index of its set
+  std::vector<uint32_t> set_ids_;                        ///< per set (stride node_count_): sorted node ids
+  std::vector<uint8_t> set_sizes_;                       ///< per set
+  std::unordered_map<std::string, uint32_t> set_index_;  ///< sorted ids (bytes) -> set
+  mutable std::vector<Vec3> set_normals_, fan_;          ///< deform() scratch
 };
 
 /// One pair of discontinuity surfels per crack (7.3.2, 4.3), in rest coordinates: centred on the crack disc,

@@ -174,6 +174,40 @@ TEST(ShellFastPaths, FusedFiberMeasureEqualsSeparateFunctions) {
   EXPECT_LT(err, 1e-12);
 }
 
+TEST(ShellFastPaths, FiberPairMeasureEqualsSingleMeasures) {
+  std::mt19937 rng(6);
+  std::normal_distribution<double> d(0.0, 1.0);
+  double err = 0.0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Vec3 e1[2], e2[2];
+    for (int k = 0; k < 2; ++k) {
+      e1[k] = Vec3(-1.0 + 0.3 * d(rng), 0.3 * d(rng), 0.3 * d(rng));
+      e2[k] = Vec3(1.0 + 0.3 * d(rng), 0.3 * d(rng), 0.3 * d(rng));
+    }
+    if (trial == 0) e1[1] = e2[1] = Vec3::Zero();  // degenerate fiber: zero norms give zero terms, no NaN
+    const Vec3 normal = Vec3(0.1 * d(rng), 0.1 * d(rng), 1.0).normalized();
+    for (bool gradients : {false, true}) {
+      FiberMeasure pair[2], single;
+      measureFiberPair(e1, e2, normal, gradients, pair);
+      for (int k = 0; k < 2; ++k) {
+        measureFiber(e1[k], e2[k], normal, gradients, &single);
+        ASSERT_TRUE(std::isfinite(pair[k].length) && std::isfinite(pair[k].angle));
+        err =
+            std::max({err, std::abs(pair[k].length - single.length), std::abs(pair[k].angle - single.angle)});
+        if (!gradients) continue;
+        for (int e = 0; e < 2; ++e) {
+          err = std::max({err, (pair[k].grad_length[e] - single.grad_length[e]).norm(),
+                          (pair[k].grad_angle[e] - single.grad_angle[e]).norm()});
+        }
+        err = std::max(err, (pair[k].grad_normal - single.grad_normal).norm());
+        ASSERT_TRUE(pair[k].grad_normal.allFinite() && pair[k].grad_angle[0].allFinite());
+      }
+    }
+  }
+  std::printf("fiber pair measure: max deviation from single measures %.2e\n", err);
+  EXPECT_LT(err, 1e-14);
+}
+
 TEST(ShellFastPaths, SolverFiberMeasuresFollowThePositions) {
   ShellSolver solver(sheetNodes(1.0, 0.05, 120), ShellMaterial(), ShellSolverOptions());
   solver.setPositions(wobble(solver.nodes().rest_positions, 0.01));
