@@ -36,4 +36,16 @@ HornRegistration hornRegistration(const Eigen::Ref<const Eigen::VectorXd>& rest,
                                   const Eigen::Ref<const Eigen::VectorXd>& current,
                                   const Eigen::Ref<const Eigen::VectorXd>& weights);
 
+/// The same rotation by Newton iterations from `guess` (an element's previous rotation, a warm start in the
+/// spirit of Mueller et al. 2016): R maximises tr(R^T A), A = S^T; with B = R^T A, gradient
+/// g = (B21 - B12, B02 - B20, B10 - B01), Hessian -(tr(B) I - sym(B)), R <- R exp([H^-1 g]x) until
+/// |step| <= 1e-9 (quadratic convergence, a few iterations; the result matches the eigen-solve to round-off).
+/// Falls back to the 4x4 eigen-solve for flat, collapsed or mirrored point sets (det A <= 1e-6 (|A|_F /
+/// sqrt 3)^3), an indefinite Newton matrix, or no convergence in 8 iterations; *used_eigen_solve tells which.
+/// eigenvalue_gap is Horn's: 2 (tr(B) - lambda_max(B)) / tr(B) at the optimum.
+HornRegistration warmStartedRegistration(const Eigen::Ref<const Eigen::VectorXd>& rest,
+                                         const Eigen::Ref<const Eigen::VectorXd>& current,
+                                         const Eigen::Ref<const Eigen::VectorXd>& weights,
+                                         const Eigen::Matrix3d& guess, bool* used_eigen_solve = nullptr);
+
 }  // namespace rc

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <numeric>
@@ -63,15 +64,89 @@ struct DisjointSets {
   }
 };
 
-using FaceUsers = std::map<std::vector<int>, std::vector<std::pair<int, int>>>;
+// Element faces grouped by node set: groups in lexicographic order of their sorted node ids (the order of
+// a std::map keyed by the sorted ids), each group's (element, face) users in element order. Flat arrays
+// sorted once (a 64-bit prefix of the first three ids decides most comparisons).
+class FaceGroups {
+ public:
+  explicit FaceGroups(const std::vector<ElementFaces>& elements) {
+    int num_faces = 0;
+    for (const ElementFaces& faces : elements) num_faces += static_cast<int>(faces.size());
+    std::vector<int> key_start(num_faces + 1, 0), key_pool;
+    std::vector<std::pair<int, int>> refs(num_faces);
+    std::vector<uint64_t> prefix(num_faces);
+    key_pool.reserve(4 * static_cast<size_t>(num_faces));
+    bool packable = true;
+    int g = 0;
+    for (size_t e = 0; e < elements.size(); ++e)
+      for (size_t f = 0; f < elements[e].size(); ++f, ++g) {
+        const Face& face = elements[e][f];
+        key_pool.insert(key_pool.end(), face.begin(), face.end());
+        std::sort(key_pool.end() - face.size(), key_pool.end());
+        key_start[g + 1] = static_cast<int>(key_pool.size());
+        refs[g] = {static_cast<int>(e), static_cast<int>(f)};
+        uint64_t packed = 0;
+        for (size_t k = 0; k < 3; ++k) {
+          const int v = k < face.size() ? key_pool[key_start[g] + k] + 1 : 0;  // 0: no id (shorter key)
+          packable = packable && v >= 0 && v < (1 << 21);
+          packed = (packed << 21) | static_cast<uint64_t>(v & ((1 << 21) - 1));
+        }
+        prefix[g] = packed;
+      }
+    if (!packable) std::fill(prefix.begin(), prefix.end(), 0);
+    // Sort by (prefix, face), then runs of equal prefix by the whole key (ties in element order).
+    std::vector<std::pair<uint64_t, int>> sorted(num_faces);
+    for (int x = 0; x < num_faces; ++x) sorted[x] = {prefix[x], x};
+    std::sort(sorted.begin(), sorted.end());
+    auto keyLess = [&](const std::pair<uint64_t, int>& p, const std::pair<uint64_t, int>& q) {
+      const int x = p.second, y = q.second;
+      const int *bx = key_pool.data() + key_start[x], *ex = key_pool.data() + key_start[x + 1],
+                *by = key_pool.data() + key_start[y], *ey = key_pool.data() + key_start[y + 1];
+      if (std::lexicographical_compare(bx, ex, by, ey)) return true;
+      if (std::lexicographical_compare(by, ey, bx, ex)) return false;
+      return x < y;  // equal keys in element order
+    };
+    std::vector<int> order(num_faces);
+    for (int k = 0; k < num_faces;) {
+      int end = k + 1;
+      while (end < num_faces && sorted[end].first == sorted[k].first) ++end;
+      if (end - k > 1 &&
+          !(end - k == 2 && key_start[sorted[k].second + 1] - key_start[sorted[k].second] == 3 &&
+            key_start[sorted[k + 1].second + 1] - key_start[sorted[k + 1].second] == 3))
+        std::sort(sorted.begin() + k, sorted.begin() + end, keyLess);  // two triangles: already in order
+      for (; k < end; ++k) order[k] = sorted[k].second;
+    }
+    users_.reserve(num_faces);
+    keys_.reserve(key_pool.size());
+    group_start_.reserve(num_faces / 2 + 2);
+    key_start_.reserve(num_faces / 2 + 2);
+    for (int k = 0; k < num_faces; ++k) {
+      const int x = order[k];
+      const bool same = k > 0 && prefix[x] == prefix[order[k - 1]] &&
+                        std::equal(key_pool.begin() + key_start[x], key_pool.begin() + key_start[x + 1],
+                                   key_pool.begin() + key_start[order[k - 1]],
+                                   key_pool.begin() + key_start[order[k - 1] + 1]);
+      if (!same) {
+        group_start_.push_back(static_cast<int>(users_.size()));
+        key_start_.push_back(static_cast<int>(keys_.size()));
+        keys_.insert(keys_.end(), key_pool.begin() + key_start[x], key_pool.begin() + key_start[x + 1]);
+      }
+      users_.push_back(refs[x]);
+    }
+    group_start_.push_back(static_cast<int>(users_.size()));
+    key_start_.push_back(static_cast<int>(keys_.size()));
+  }
 
-FaceUsers faceUsers(const std::vector<ElementFaces>& elements) {
-  FaceUsers users;
-  for (size_t e = 0; e < elements.size(); ++e)
-    for (size_t f = 0; f < elements[e].size(); ++f)
-      users[sortedFaceKey(elements[e][f])].emplace_back(int(e), int(f));
-  return users;
-}
+  int size() const { return static_cast<int>(group_start_.size()) - 1; }
+  int numUsers(int g) const { return group_start_[g + 1] - group_start_[g]; }
+  const std::pair<int, int>& user(int g, int k) const { return users_[group_start_[g] + k]; }
+  const int* keyBegin(int g) const { return keys_.data() + key_start_[g]; }
+  const int* keyEnd(int g) const { return keys_.data() + key_start_[g + 1]; }
+
+ private:
+  std::vector<std::pair<int, int>> users_;
+  std::vector<int> group_start_, keys_, key_start_;
+};
 
 }  // namespace
 
@@ -128,6 +203,7 @@ std::vector<PolygonCutStats> ProgressiveCutMesh::cutSurface(const std::vector<st
 }
 
 PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
+  components_.clear();
   // The cut shape: plane, in-plane frame (e1, e2, normal right-handed) and counter-clockwise 2D polygon.
   if (polygon.size() < 3)
     fail("the cut polygon needs at least 3 points, got " + std::to_string(polygon.size()));
@@ -275,11 +351,11 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
   // pieces (sequential clipping by the edge lines); pieces inside the polygon become crack faces.
   std::map<std::tuple<int, int, int>, int> clip_node;  // (segment end, segment end, line) -> node
   std::map<std::pair<int, int>, std::vector<std::pair<Face, char>>> replacement;  // (element, face)
-  const FaceUsers users = faceUsers(elements_);
-  for (const auto& entry : users) {
-    if (entry.second.size() != 2) continue;
-    const auto [e0, f0] = entry.second[0];
-    const auto [e1, f1] = entry.second[1];
+  const FaceGroups groups = FaceGroups(elements_);
+  for (int g = 0; g < groups.size(); ++g) {
+    if (groups.numUsers(g) != 2) continue;
+    const auto [e0, f0] = groups.user(g, 0);
+    const auto [e1, f1] = groups.user(g, 1);
     const Face face = elements_[e0][f0];
     bool in_plane = true;
     for (int v : face) in_plane = in_plane && side[v] == 0;
@@ -447,12 +523,14 @@ void ProgressiveCutMesh::duplicateSeparatedNodes(PolygonCutStats& stats) {
     return static_cast<int>(std::lower_bound(incident[v].begin(), incident[v].end(), e) -
                             incident[v].begin());
   };
-  for (const auto& entry : faceUsers(elements_)) {
-    if (entry.second.size() != 2) continue;
-    const auto [e0, f0] = entry.second[0];
-    const auto [e1, f1] = entry.second[1];
+  const FaceGroups faces = FaceGroups(elements_);
+  for (int g = 0; g < faces.size(); ++g) {
+    if (faces.numUsers(g) != 2) continue;
+    const auto [e0, f0] = faces.user(g, 0);
+    const auto [e1, f1] = faces.user(g, 1);
     if (crack_[e0][f0] || crack_[e1][f1]) continue;
-    for (int v : entry.first) groups[v].unite(position(v, e0), position(v, e1));
+    for (const int* v = faces.keyBegin(g); v != faces.keyEnd(g); ++v)
+      groups[*v].unite(position(*v, e0), position(*v, e1));
   }
   for (int v = 0; v < n; ++v) {
     std::map<int, int> copy_of_group;  // group root -> node
@@ -475,10 +553,11 @@ void ProgressiveCutMesh::duplicateSeparatedNodes(PolygonCutStats& stats) {
 
 int ProgressiveCutMesh::openClosedCracks() {
   int num_pockets = 0;
-  for (const auto& entry : faceUsers(elements_)) {
-    if (entry.second.size() != 2) continue;
-    const auto [e0, f0] = entry.second[0];
-    const auto [e1, f1] = entry.second[1];
+  const FaceGroups groups = FaceGroups(elements_);
+  for (int g = 0; g < groups.size(); ++g) {
+    if (groups.numUsers(g) != 2) continue;
+    const auto [e0, f0] = groups.user(g, 0);
+    const auto [e1, f1] = groups.user(g, 1);
     if (!crack_[e0][f0] || !crack_[e1][f1]) continue;
     const Face face = elements_[e0][f0];
     Vec3 centroid = Vec3::Zero();
@@ -486,7 +565,7 @@ int ProgressiveCutMesh::openClosedCracks() {
     centroid /= static_cast<double>(face.size());
     const int c = addNode(centroid, faceStencil(nodes_, face, centroid));
     ++num_pockets;
-    for (const auto& [e, f] : entry.second) {
+    for (const auto& [e, f] : {groups.user(g, 0), groups.user(g, 1)}) {
       const Face polygon = elements_[e][f];
       ElementFaces faces;
       std::vector<char> flags;
@@ -556,24 +635,26 @@ void ProgressiveCutMesh::validate() const {
   }
   std::map<std::pair<int, int>, int> boundary_edges;
   double enclosed = 0.0;
-  for (const auto& entry : faceUsers(elements_)) {
-    const auto& list = entry.second;
-    const std::string name =
-        "element " + std::to_string(list[0].first) + " face " + std::to_string(list[0].second);
-    if (list.size() > 2) error(name + " is used by more than two elements");
-    if (list.size() == 2) {
-      const Face& a = elements_[list[0].first][list[0].second];
-      const Face& b = elements_[list[1].first][list[1].second];
+  const FaceGroups groups = FaceGroups(elements_);
+  for (int g = 0; g < groups.size(); ++g) {
+    const std::pair<int, int> first = groups.user(g, 0);
+    auto name = [&]() {
+      return "element " + std::to_string(first.first) + " face " + std::to_string(first.second);
+    };
+    if (groups.numUsers(g) > 2) error(name() + " is used by more than two elements");
+    if (groups.numUsers(g) == 2) {
+      const std::pair<int, int> second = groups.user(g, 1);
+      const Face& a = elements_[first.first][first.second];
+      const Face& b = elements_[second.first][second.second];
       const int p = static_cast<int>(std::find(b.begin(), b.end(), a[0]) - b.begin());
       for (size_t j = 0; j < a.size(); ++j)
         if (b[(p - int(j) + int(b.size()) * 2) % b.size()] != a[j])
-          error(name + " and its neighbour do not use the face in opposite order");
-      const bool crack_a = crack_[list[0].first][list[0].second],
-                 crack_b = crack_[list[1].first][list[1].second];
-      if (crack_a || crack_b) error(name + " is a crack face whose two sides still share all nodes");
+          error(name() + " and its neighbour do not use the face in opposite order");
+      const bool crack_a = crack_[first.first][first.second], crack_b = crack_[second.first][second.second];
+      if (crack_a || crack_b) error(name() + " is a crack face whose two sides still share all nodes");
       continue;
     }
-    const Face& face = elements_[list[0].first][list[0].second];
+    const Face& face = elements_[first.first][first.second];
     for (size_t k = 0; k < face.size(); ++k) {
       const auto edge = std::make_pair(face[k], face[(k + 1) % face.size()]);
       if (++boundary_edges[edge] > 1)
@@ -593,18 +674,25 @@ void ProgressiveCutMesh::validate() const {
 }
 
 std::vector<int> ProgressiveCutMesh::elementComponents(int* num_components) const {
+  if (static_cast<int>(components_.size()) == numElements()) {  // unchanged since the last call
+    if (num_components) *num_components = num_components_;
+    return components_;
+  }
   DisjointSets sets(numElements());
-  for (const auto& entry : faceUsers(elements_)) {
-    if (entry.second.size() != 2) continue;
-    const auto [e0, f0] = entry.second[0];
-    const auto [e1, f1] = entry.second[1];
+  const FaceGroups groups = FaceGroups(elements_);
+  for (int g = 0; g < groups.size(); ++g) {
+    if (groups.numUsers(g) != 2) continue;
+    const auto [e0, f0] = groups.user(g, 0);
+    const auto [e1, f1] = groups.user(g, 1);
     if (!crack_[e0][f0] && !crack_[e1][f1]) sets.unite(e0, e1);
   }
   std::map<int, int> label;
   std::vector<int> component(numElements());
   for (int e = 0; e < numElements(); ++e)
     component[e] = label.emplace(sets.find(e), static_cast<int>(label.size())).first->second;
-  if (num_components) *num_components = static_cast<int>(label.size());
+  components_ = component;
+  num_components_ = static_cast<int>(label.size());
+  if (num_components) *num_components = num_components_;
   return component;
 }
 

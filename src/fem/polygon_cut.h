@@ -78,6 +78,7 @@ class ProgressiveCutMesh {
   /// Sum of element volumes.
   double volume() const;
   /// Connected components of elements (through shared non-crack faces); returns per element its component.
+  /// Cached until the next cut (componentMesh calls it; not for concurrent calls).
   std::vector<int> elementComponents(int* num_components = nullptr) const;
   int numComponents() const;
   /// A validated PolyhedralMesh for component c (its nodes renumbered in order of first use; node_ids
@@ -95,7 +96,9 @@ class ProgressiveCutMesh {
   std::vector<PolyhedralMesh::ElementFaces> elements_;
   std::vector<std::vector<char>> crack_;  // per element face
   std::vector<int> duplicate_of_;
-  std::vector<NodeStencil> stencils_;  // per node created after the input mesh's
+  std::vector<NodeStencil> stencils_;    // per node created after the input mesh's
+  mutable std::vector<int> components_;  // elementComponents() of the current mesh; empty after a cut
+  mutable int num_components_ = 0;
   int num_initial_nodes_ = 0;
   double snap_distance_ = 0.0, relative_tolerance_ = ConvexPolyhedron::kDefaultRelativeTolerance;
 };

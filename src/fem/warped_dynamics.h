@@ -1,6 +1,7 @@
 // Dynamics of a linear elastic polyhedral mesh with stiffness warping (thesis 9.1.4): lumped masses (9.21),
-// per-element rotations R_e by Horn's registration, corotational forces and linearised implicit Euler on
-// M U'' + D U' + K U = F (9.20), optional Rayleigh damping and ground contact by projection.
+// per-element rotations R_e by Horn's registration (warm-started Newton iterations, eigen-solve fallback),
+// corotational forces and linearised implicit Euler on M U'' + D U' + K U = F (9.20), optional Rayleigh
+// damping and ground contact by projection.
 //
 // With rest positions X, current positions x, element centroids C_e, c_e (registration weights) and
 // u_e = R_e^T (x_e - c_e) - (X_e - C_e):
