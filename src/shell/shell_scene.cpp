@@ -645,6 +645,7 @@ ShellRunStats runShellScene(const ShellScene& scene, const ShellRunOptions& opti
   if (write) {
     std::filesystem::create_directories(options.out_dir);
     stats.files += writeFrame(sim, options.out_dir, 0);
+    if (options.on_written_frame) options.on_written_frame(sim, 0);
   }
   try {
     for (int f = 1; f <= scene.frame_count; ++f) {
@@ -653,7 +654,10 @@ ShellRunStats runShellScene(const ShellScene& scene, const ShellRunOptions& opti
       stats.material_ms += r.material_ms;
       stats.surface_ms += r.surface_ms;
       stats.frames = f;
-      if (write && f % scene.output.every == 0) stats.files += writeFrame(sim, options.out_dir, f);
+      if (write && f % scene.output.every == 0) {
+        stats.files += writeFrame(sim, options.out_dir, f);
+        if (options.on_written_frame) options.on_written_frame(sim, f);
+      }
       if (options.on_frame) options.on_frame(r);
     }
   } catch (const ShellInstabilityError& e) {

@@ -158,6 +158,8 @@ struct ShellRunOptions {
   std::string out_dir = ".";
   bool write_files = true;
   std::function<void(const ShellFrameReport&)> on_frame;
+  /// Called after each written output frame (frame 0 included) with the simulation (e.g. to render it).
+  std::function<void(const ShellSimulation&, int frame)> on_written_frame;
 };
 
 struct ShellRunStats {

@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "io/cloud_io.h"
+#include "render/framing_camera.h"
 #include "render/image_io.h"
 #include "render/scene_renderer.h"
 
@@ -49,11 +50,7 @@ rc::Scene sceneFromSurfelFiles(const std::vector<std::string>& files, const std:
   scene.csg_expression = scene.geometry_expression = csg;
   Vec3 lo, hi;
   scene.surfels.bounds(&lo, &hi);
-  rc::SceneCamera camera{"fit", rc::Camera::perspective(640, 480, 40 * M_PI / 180)};
-  const Vec3 centre = 0.5 * (lo + hi);
-  const double extent = (hi - lo).norm();
-  camera.camera.lookAt(centre + extent * Vec3(0.8, -1.1, 0.7), centre);
-  scene.cameras.push_back(camera);
+  scene.cameras.push_back(rc::SceneCamera{"fit", rc::framingCamera(lo, hi, 640, 480)});
   return scene;
 }
 
