@@ -639,6 +639,7 @@ ShellRunStats runShellScene(const ShellScene& scene, const ShellRunOptions& opti
   ShellSimulation sim(scene);
   stats.setup_ms = msSince(t0);
   stats.nodes = sim.solver().nodes().size();
+  stats.sampling = sim.solver().nodes().sampling;
   stats.surfels = scene.surfels.size();
   stats.mean_radius_start = sim.meanRadius();
   const bool write = options.write_files && scene.output.every > 0;

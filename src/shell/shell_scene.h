@@ -172,7 +172,8 @@ struct ShellRunStats {
   double setup_ms = 0.0;
   double mean_radius_start = 0.0, mean_radius_end = 0.0;
   size_t files = 0;
-  std::string instability;  ///< the ShellInstabilityError message, if the run stopped on one
+  std::string instability;      ///< the ShellInstabilityError message, if the run stopped on one
+  ShellSamplingStats sampling;  ///< anisotropy of the node sampling (ShellNodes::sampling)
 };
 
 /// Builds the simulation, runs all frames, writes the outputs. An instability ends the run and is reported

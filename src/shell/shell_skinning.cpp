@@ -68,6 +68,15 @@ struct ShellSkinning::Binder {
   const Attribute* roles;
   size_t candidates;
   double offset;
+  Binder(const SurfelCloud& rest_, const ShellNodes& nodes_, const std::vector<ShellCrack>& cracks_,
+         const KdTree& tree_, size_t node_count)
+      : rest(rest_),
+        nodes(nodes_),
+        cracks(cracks_),
+        tree(tree_),
+        roles(rest_.attributes.find("surfel_role")),
+        candidates(std::min(nodes_.size(), 4 * node_count)),
+        offset(1e-6 * std::max(nodes_.spacing, 1e-12)) {}
   /// Point a surfel is bound from: discontinuity surfels on their material side, behind the normal.
   Vec3 bindPoint(size_t s) const {
     const Vec3& p = rest.positions[s];
@@ -157,13 +166,7 @@ ShellSkinning::ShellSkinning(const SurfelCloud& rest, const ShellNodes& nodes,
   frame_slots_.assign(surfel_count_ * frames, 0);
   set_size_.assign(surfel_count_, 0);
   const KdTree tree(nodes.rest_positions);
-  const Binder binder{rest,
-                      nodes,
-                      cracks,
-                      tree,
-                      rest.attributes.find("surfel_role"),
-                      std::min(nodes.size(), 4 * node_count_),
-                      1e-6 * std::max(nodes.spacing, 1e-12)};
+  const Binder binder(rest, nodes, cracks, tree, node_count_);
   std::vector<char> isolated(surfel_count_, 0);
 #pragma omp parallel for schedule(static) if (surfel_count_ >= kParallelSurfels)
   for (size_t s = 0; s < surfel_count_; ++s) {
@@ -209,13 +212,7 @@ size_t ShellSkinning::rebind(const SurfelCloud& rest, const ShellNodes& nodes,
   const size_t old_count = surfel_count_, count = rest.size();
   const size_t frames = node_count_ - 1, per_frame = has_axes_ ? 4 : 2;
   const KdTree tree(nodes.rest_positions);
-  const Binder binder{rest,
-                      nodes,
-                      cracks,
-                      tree,
-                      rest.attributes.find("surfel_role"),
-                      std::min(nodes.size(), 4 * node_count_),
-                      1e-6 * std::max(nodes.spacing, 1e-12)};
+  const Binder binder(rest, nodes, cracks, tree, node_count_);
   // Surfels cut from one of their nodes by a new crack (the rest keep P_p exactly), then appended ones.
   const std::vector<Vec3>& xr = nodes.rest_positions;
   std::vector<char> affected(old_count, 0);

@@ -24,7 +24,6 @@
 #include "render/framing_camera.h"
 #include "render/image_io.h"
 #include "render/surfel_renderer.h"
-#include "shell/shell_nodes.h"
 #include "shell/shell_scene.h"
 
 namespace {
@@ -140,17 +139,6 @@ int main(int argc, char** argv) {
   }
   if (frames > 0) scene.frame_count = frames;
 
-  // The simulation samples the same nodes (deterministic); measured here because the run stats carry no
-  // nodes.
-  rc::ShellSamplingStats sampling;
-  try {
-    sampling = rc::selectShellNodes(scene.surfels, scene.nodes).sampling;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "rc_shell: %s: node sampling: %s\n", scene_path.c_str(), e.what());
-    return 2;
-  }
-  if (!sampling.warning.empty()) std::fprintf(stderr, "rc_shell: warning: %s\n", sampling.warning.c_str());
-
   rc::Camera camera;
   if (render) {
     if (scene.output.every <= 0) {
@@ -193,6 +181,8 @@ int main(int argc, char** argv) {
   try {
     const rc::ShellRunStats stats = rc::runShellScene(scene, options);
     if (!quiet && tty && stats.frames < stats.frame_count) std::fprintf(stderr, "\n");
+    const rc::ShellSamplingStats& sampling = stats.sampling;
+    if (!sampling.warning.empty()) std::fprintf(stderr, "rc_shell: warning: %s\n", sampling.warning.c_str());
     std::string json = rc::shellRunStatsJson(stats);
     auto number = [](double v) {
       char text[32];
