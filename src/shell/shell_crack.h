@@ -19,6 +19,7 @@ struct ShellCrack {
   uint32_t node = 0;    ///< node the crack started at
   uint32_t fiber = 0;   ///< index of the broken fiber at the time of the crack
   bool stretch = true;  ///< broke by tensile stretch (7.24 first line), else by bending
+  double time = 0.0;    ///< simulation time at which the crack was made
 };
 
 /// Side of point p with respect to the crack plane: +1 where (p - c) . n >= 0, else -1 (a node on the plane,

@@ -91,10 +91,11 @@ ShellMaterialModel::ShellMaterialModel(const ShellNodes& nodes, const ShellFiber
   const ShellFracture& fr = options.fracture;
   if (!(p.stretch_yield >= 0.0) || !(p.bend_yield >= 0.0) || !(p.stretch_creep >= 0.0) ||
       !(p.bend_creep >= 0.0) || !(p.weakening >= 0.0) || !(fr.stretch_threshold > 0.0) ||
-      !(fr.bend_threshold > 0.0) || fr.max_cracks_per_step < 1 || !(fr.min_fiber_length >= 0.0)) {
+      !(fr.bend_threshold > 0.0) || fr.max_cracks_per_step < 1 || !(fr.min_fiber_length >= 0.0) ||
+      !(fr.max_crack_speed > 0.0)) {
     throw std::invalid_argument(
         "ShellMaterialOptions: yields, creeps, weakening and min_fiber_length must be >= 0, fracture "
-        "thresholds > 0, max_cracks_per_step >= 1");
+        "thresholds and max_crack_speed > 0, max_cracks_per_step >= 1");
   }
   if (fibers.node_offsets.size() != nodes.size() + 1) {
     throw std::invalid_argument("ShellMaterialModel: the fibers were built for another node set");
@@ -170,17 +171,34 @@ bool ShellMaterialModel::anyOverloaded(const ShellFibers& fibers, const std::vec
 }
 
 ShellMaterialReport ShellMaterialModel::updateFracture(ShellNodes& nodes, ShellFibers& fibers,
-                                                       const std::vector<Vec3>& x) {
+                                                       const std::vector<Vec3>& x, double time) {
   if (states_.size() != fibers.size()) {
     throw std::invalid_argument("ShellMaterialModel: fiber count differs from the material state");
   }
   measureFibers(nodes, fibers, x, &length_, &angle_);
-  const std::vector<double> length = length_, angle = angle_;
-  return fracture(nodes, fibers, length, angle);
+  ShellMaterialReport report;
+  report.new_cracks = selectCracks(nodes, fibers, length_, angle_, time);
+  if (report.new_cracks > 0) rebuildAfterCracks(nodes, fibers, cracks_.size() - report.new_cracks, &report);
+  return report;
+}
+
+bool ShellMaterialModel::withinCrackSpeed(const ShellCrack& crack, double time) const {
+  const double speed = options_.fracture.max_crack_speed;
+  if (!std::isfinite(speed)) return true;
+  // Cracks are appended in time order: only the recent ones can be too young.
+  for (size_t c = cracks_.size(); c-- > 0;) {
+    const ShellCrack& e = cracks_[c];
+    const double reach = 2.0 * std::max(e.radius, crack.radius);
+    if (time - e.time >= reach / speed) break;
+    const double d = (e.center - crack.center).norm();
+    if (d < reach && time - e.time < d / speed) return false;
+  }
+  return true;
 }
 
 size_t ShellMaterialModel::selectCracks(const ShellNodes& nodes, const ShellFibers& fibers,
-                                        const std::vector<double>& length, const std::vector<double>& angle) {
+                                        const std::vector<double>& length, const std::vector<double>& angle,
+                                        double time) {
   std::vector<std::pair<double, uint32_t>> overloaded;  // (load / threshold, fiber), (7.24)
   std::vector<char> by_stretch(fibers.size(), 0);
   for (size_t q = 0; q < fibers.size(); ++q) {
@@ -204,6 +222,7 @@ size_t ShellMaterialModel::selectCracks(const ShellNodes& nodes, const ShellFibe
     crack.node = f.center;
     crack.fiber = entry.second;
     crack.stretch = by_stretch[entry.second] != 0;
+    crack.time = time;
     crack.center = rest[f.center];
     crack.normal = restDirection(nodes, f);  // spline tangent at the centre: (x2 - x1) / 2 (B.3)
     const uint32_t* nb = nodes.neighborsOf(f.center);
@@ -214,20 +233,11 @@ size_t ShellMaterialModel::selectCracks(const ShellNodes& nodes, const ShellFibe
     for (size_t c = first_new; c < cracks_.size(); ++c) {
       near = near || (cracks_[c].center - crack.center).norm() < cracks_[c].radius;
     }
-    if (near) continue;
+    if (near || !withinCrackSpeed(crack, time)) continue;
     cracks_.push_back(crack);
     crack_nodes_.insert(f.center);
   }
   return cracks_.size() - first_new;
-}
-
-ShellMaterialReport ShellMaterialModel::fracture(ShellNodes& nodes, ShellFibers& fibers,
-                                                 const std::vector<double>& length,
-                                                 const std::vector<double>& angle) {
-  ShellMaterialReport report;
-  report.new_cracks = selectCracks(nodes, fibers, length, angle);
-  if (report.new_cracks > 0) rebuildAfterCracks(nodes, fibers, cracks_.size() - report.new_cracks, &report);
-  return report;
 }
 
 void ShellMaterialModel::rebuildAfterCracks(ShellNodes& nodes, ShellFibers& fibers, size_t first_new,
@@ -285,8 +295,8 @@ ShellMaterialReport ShellMaterialModel::update(ShellSolver& solver, double dt) {
                            });
   if (fracture_on && anyOverloaded(solver.fibers(), solver.fiberLengths(), solver.fiberAngles())) {
     // Cracks are chosen on the solver's own arrays; nodes and fibers are copied only when one is made.
-    report.new_cracks =
-        selectCracks(solver.nodes(), solver.fibers(), solver.fiberLengths(), solver.fiberAngles());
+    report.new_cracks = selectCracks(solver.nodes(), solver.fibers(), solver.fiberLengths(),
+                                     solver.fiberAngles(), solver.time());
     if (report.new_cracks > 0) {
       ShellNodes nodes = solver.nodes();
       ShellFibers fibers = solver.fibers();

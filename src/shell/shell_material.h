@@ -44,6 +44,12 @@ struct ShellFracture {
   size_t max_cracks_per_step =
       1;  ///< most-overloaded fibers first, at least a crack radius apart, one per node
   double min_fiber_length = 0.5;  ///< new fibers shorter than this times the node spacing are dropped
+  /// Crack speed limit (rest-length units per second): a crack is not placed within two crack radii of a
+  /// crack made less than (distance / max_crack_speed) earlier, so a tear grows no faster than this (a real
+  /// crack front stays below the Rayleigh wave speed, here about sqrt(K_s / rho)). Infinity: one crack per
+  /// tip and step, however short the step. Cracks away from all recent ones (new initiations) are not
+  /// limited.
+  double max_crack_speed = std::numeric_limits<double>::infinity();
 };
 
 struct ShellMaterialOptions {
@@ -104,9 +110,11 @@ class ShellMaterialModel {
   ShellMaterialReport updatePlasticity(const ShellNodes& nodes, ShellFibers& fibers,
                                        const std::vector<Vec3>& x, double dt);
 
-  /// Fracture test (7.24) at positions x: adds crack planes for the most overloaded fibers, recomputes the
-  /// neighbourhoods under the visibility rule and rebuilds the fibers of the recomputed nodes.
-  ShellMaterialReport updateFracture(ShellNodes& nodes, ShellFibers& fibers, const std::vector<Vec3>& x);
+  /// Fracture test (7.24) at positions x and simulation time `time`: adds crack planes for the most
+  /// overloaded fibers, recomputes the neighbourhoods under the visibility rule and rebuilds the fibers of
+  /// the recomputed nodes.
+  ShellMaterialReport updateFracture(ShellNodes& nodes, ShellFibers& fibers, const std::vector<Vec3>& x,
+                                     double time = 0.0);
 
   /// Both on a solver after its step of length dt (fracture replaces the solver's topology).
   ShellMaterialReport update(ShellSolver& solver, double dt);
@@ -121,11 +129,11 @@ class ShellMaterialModel {
                                       const std::vector<double>& angle, double dt);
   bool anyOverloaded(const ShellFibers& fibers, const std::vector<double>& length,
                      const std::vector<double>& angle) const;
-  ShellMaterialReport fracture(ShellNodes& nodes, ShellFibers& fibers, const std::vector<double>& length,
-                               const std::vector<double>& angle);
-  /// Appends the cracks of the most overloaded fibers (7.24) to cracks_; returns how many.
+  /// Appends the cracks of the most overloaded fibers (7.24) made at `time` to cracks_; returns how many.
   size_t selectCracks(const ShellNodes& nodes, const ShellFibers& fibers, const std::vector<double>& length,
-                      const std::vector<double>& angle);
+                      const std::vector<double>& angle, double time);
+  /// False if `crack` lies within two crack radii of a crack too young for max_crack_speed at `time`.
+  bool withinCrackSpeed(const ShellCrack& crack, double time) const;
   /// Re-neighbouring and fiber rebuild for cracks_[first_new ..] (fills recomputed_nodes, fiber_delta).
   void rebuildAfterCracks(ShellNodes& nodes, ShellFibers& fibers, size_t first_new, ShellMaterialReport* out);
 

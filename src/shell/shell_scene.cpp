@@ -252,7 +252,8 @@ class SceneReader {
   }
 
   void readMaterial(const YAML::Node& node) {
-    src_.allowKeys(node, {"stretch_stiffness", "bending_stiffness", "density", "damping"}, "material");
+    src_.allowKeys(node, {"stretch_stiffness", "bending_stiffness", "density", "damping", "balance_membrane"},
+                   "material");
     ShellMaterial& m = scene_.material;
     m.stretch_stiffness =
         src_.nonNegative(src_.require(node, "stretch_stiffness", "material"), "material.stretch_stiffness");
@@ -262,6 +263,8 @@ class SceneReader {
       src_.fail(node, "material: stretch_stiffness and bending_stiffness are both 0");
     if (node["density"]) m.areal_density = src_.positive(node["density"], "material.density");
     if (node["damping"]) m.damping = src_.nonNegative(node["damping"], "material.damping");
+    if (node["balance_membrane"])
+      scene_.balance_membrane = src_.boolean(node["balance_membrane"], "material.balance_membrane");
   }
 
   void readPlasticity(const YAML::Node& node) {
@@ -279,8 +282,10 @@ class SceneReader {
   }
 
   void readFracture(const YAML::Node& node) {
-    src_.allowKeys(node, {"stretch_threshold", "bend_threshold", "max_cracks_per_step", "min_fiber_length"},
-                   "fracture");
+    src_.allowKeys(
+        node,
+        {"stretch_threshold", "bend_threshold", "max_cracks_per_step", "min_fiber_length", "max_crack_speed"},
+        "fracture");
     ShellFracture& f = scene_.material_options.fracture;
     if (!node["stretch_threshold"] && !node["bend_threshold"])
       src_.fail(node, "fracture: give stretch_threshold and / or bend_threshold");
@@ -293,6 +298,8 @@ class SceneReader {
           size_t(src_.integer(node["max_cracks_per_step"], "fracture.max_cracks_per_step", 1, 100000));
     if (node["min_fiber_length"])
       f.min_fiber_length = src_.nonNegative(node["min_fiber_length"], "fracture.min_fiber_length");
+    if (node["max_crack_speed"])
+      f.max_crack_speed = src_.positive(node["max_crack_speed"], "fracture.max_crack_speed");
     scene_.fracture = true;
   }
 
@@ -379,12 +386,13 @@ class SceneReader {
   }
 
   void readBalloon(const YAML::Node& node) {
-    src_.allowKeys(node, {"pressure", "start_pressure", "ramp_time"}, "balloon");
+    src_.allowKeys(node, {"pressure", "start_pressure", "ramp_time", "vent_time"}, "balloon");
     ShellSceneBalloon& b = scene_.balloon;
     b.pressure = src_.number(src_.require(node, "pressure", "balloon"), "balloon.pressure");
     if (node["start_pressure"])
       b.start_pressure = src_.number(node["start_pressure"], "balloon.start_pressure");
     if (node["ramp_time"]) b.ramp_time = src_.nonNegative(node["ramp_time"], "balloon.ramp_time");
+    if (node["vent_time"]) b.vent_time = src_.nonNegative(node["vent_time"], "balloon.vent_time");
     b.enabled = true;
   }
 
@@ -416,6 +424,11 @@ double ShellSceneBalloon::pressureAt(double t) const {
   if (!enabled) return 0.0;
   if (ramp_time <= 0.0 || t >= ramp_time) return pressure;
   return start_pressure + (pressure - start_pressure) * t / ramp_time;
+}
+
+double ShellSceneBalloon::pressureAt(double t, double tear_time) const {
+  if (vent_time <= 0.0 || tear_time < 0.0 || t <= tear_time) return pressureAt(t);
+  return pressureAt(tear_time) * std::exp(-(t - tear_time) / vent_time);
 }
 
 ShellScene parseShellScene(const std::string& yaml_text, const std::string& source_name) {
@@ -474,6 +487,10 @@ ShellSimulation::ShellSimulation(const ShellScene& scene) : scene_(scene) {
     setFiberStiffness(nodes, solver_->mutableFibers(), field);
     solver_->refreshForces();
   }
+  if (scene_.balance_membrane) {
+    membrane_balance_ = balanceMembraneStiffness(nodes, solver_->mutableFibers());
+    solver_->refreshForces();
+  }
   if (scene_.plasticity || scene_.fracture) {
     model_ = std::make_unique<ShellMaterialModel>(nodes, solver_->fibers(), scene_.material_options);
     if (field) model_->setStiffnessField(field);
@@ -512,7 +529,8 @@ ShellSimulation::ShellSimulation(const ShellScene& scene) : scene_(scene) {
 }
 
 void ShellSimulation::takeStep(ShellFrameReport* report) {
-  if (pressure_) *pressure_ = scene_.balloon.pressureAt(solver_->time());
+  if (tear_time_ < 0.0 && crackCount() > 0) tear_time_ = model_->cracks().front().time;
+  if (pressure_) *pressure_ = scene_.balloon.pressureAt(solver_->time(), tear_time_);
   Clock::time_point t0 = Clock::now();
   const ShellStepReport r = solver_->step();
   report->forces_ms += msSince(t0);
@@ -642,6 +660,10 @@ ShellRunStats runShellScene(const ShellScene& scene, const ShellRunOptions& opti
   stats.sampling = sim.solver().nodes().sampling;
   stats.surfels = scene.surfels.size();
   stats.mean_radius_start = sim.meanRadius();
+  if (sim.membraneBalance()) {
+    stats.membrane_balanced = true;
+    stats.membrane_balance = *sim.membraneBalance();
+  }
   const bool write = options.write_files && scene.output.every > 0;
   if (write) {
     std::filesystem::create_directories(options.out_dir);
@@ -674,6 +696,11 @@ ShellRunStats runShellScene(const ShellScene& scene, const ShellRunOptions& opti
   stats.steps = sim.solver().stepCount();
   stats.time = sim.solver().time();
   stats.mean_radius_end = sim.meanRadius();
+  if (sim.crackCount() > 0) {
+    stats.first_crack_time = sim.material()->cracks().front().time;
+    stats.last_crack_time = sim.material()->cracks().back().time;
+    if (scene.balloon.enabled) stats.tear_pressure = scene.balloon.pressureAt(stats.first_crack_time);
+  }
   return stats;
 }
 
@@ -693,7 +720,23 @@ std::string shellRunStatsJson(const ShellRunStats& s) {
       s.name.c_str(), s.nodes, s.fibers, s.surfels, s.cracks, s.frames, s.frame_count, s.steps, s.time,
       s.setup_ms, s.forces_ms, s.material_ms, s.surface_ms, s.forces_ms + s.material_ms + s.surface_ms,
       s.mean_radius_start, s.mean_radius_end, s.files);
-  return std::string(buf) + (s.instability.empty() ? "null" : "\"" + instability + "\"") + "}";
+  char tail[512];
+  std::snprintf(tail, sizeof tail,
+                ", \"cracks_at\": {\"first\": %.6g, \"last\": %.6g, \"tear_pressure\": %.6g}",
+                s.first_crack_time, s.last_crack_time, s.tear_pressure);
+  std::string balance = ", \"membrane_balance\": null";
+  if (s.membrane_balanced) {
+    char b[256];
+    const ShellMembraneBalanceReport& m = s.membrane_balance;
+    std::snprintf(b, sizeof b,
+                  ", \"membrane_balance\": {\"constrained_nodes\": %zu, \"residual_before\": %.4g, "
+                  "\"residual_after\": %.4g, \"clamped_fibers\": %zu, \"factors\": [%.4g, %.4g]}",
+                  m.constrained_nodes, m.residual_before, m.residual_after, m.clamped_fibers, m.min_factor,
+                  m.max_factor);
+    balance = b;
+  }
+  return std::string(buf) + (s.instability.empty() ? "null" : "\"" + instability + "\"") + tail + balance +
+         "}";
 }
 
 }  // namespace rc

@@ -16,6 +16,7 @@
 
 #include "core/surfel_cloud.h"
 #include "shell/shell_material.h"
+#include "shell/shell_membrane_balance.h"
 #include "shell/shell_nodes.h"
 #include "shell/shell_skinning.h"
 #include "shell/shell_solver.h"
@@ -35,13 +36,18 @@ struct ShellScenePin {
 };
 
 /// Inflation of a closed shell (key balloon): pressure rises linearly from `start_pressure` to `pressure`
-/// over `ramp_time` seconds (0: the full pressure at once), then stays.
+/// over `ramp_time` seconds (0: the full pressure at once), then stays. With `vent_time` > 0 the gas escapes
+/// once the shell has torn: from the first crack on the pump stops and the pressure decays as
+/// p_tear exp(-(t - t_tear) / vent_time).
 struct ShellSceneBalloon {
   bool enabled = false;
   double pressure = 0.0;
   double start_pressure = 0.0;
   double ramp_time = 0.0;
+  double vent_time = 0.0;  ///< 0: the pressure ignores tears
   double pressureAt(double t) const;
+  /// Pressure at time t when the first crack was made at `tear_time` (negative: not torn yet).
+  double pressureAt(double t, double tear_time) const;
 };
 
 /// Fibers centred at nodes within `radius` of `center` (rest positions) get these fracture thresholds.
@@ -76,6 +82,9 @@ struct ShellScene {
   SurfelCloud surfels;  ///< rest surfels (positions, unit normals; colours / radii if the source has them)
   ShellNodeOptions nodes;
   ShellMaterial material;
+  /// material.balance_membrane: calibrate the fiber stretch factors so a uniform stretch is in tangential
+  /// equilibrium (balanceMembraneStiffness), e.g. for a pressurised balloon.
+  bool balance_membrane = false;
   bool plasticity = false, fracture = false;  ///< blocks present
   ShellMaterialOptions material_options;
   ShellSceneAnisotropy anisotropy;
@@ -126,6 +135,12 @@ class ShellSimulation {
   /// The solver, e.g. to push nodes (velocities) between frames.
   ShellSolver& mutableSolver() { return *solver_; }
   const ShellMaterialModel* material() const { return model_.get(); }
+  /// The membrane calibration made at construction (null unless the scene asks for balance_membrane).
+  const ShellMembraneBalanceReport* membraneBalance() const {
+    return scene_.balance_membrane ? &membrane_balance_ : nullptr;
+  }
+  /// Time of the first crack (balloon: the tear), negative before.
+  double tearTime() const { return tear_time_; }
   size_t crackCount() const { return model_ ? model_->cracks().size() : 0; }
   size_t fiberCount() const { return solver_->fibers().size(); }
   const SurfelCloud& surfels() const { return surfels_; }      ///< deformed dense surfels
@@ -147,6 +162,8 @@ class ShellSimulation {
   std::unique_ptr<ShellSolver> solver_;
   std::unique_ptr<ShellMaterialModel> model_;
   std::shared_ptr<double> pressure_;
+  double tear_time_ = -1.0;  ///< time of the first crack, negative before
+  ShellMembraneBalanceReport membrane_balance_;
   std::unique_ptr<ShellSkinning> skinning_, crack_skinning_;
   size_t bound_cracks_ = 0;
   size_t skinning_fallbacks_ = 0;
@@ -171,6 +188,11 @@ struct ShellRunStats {
   double forces_ms = 0.0, material_ms = 0.0, surface_ms = 0.0;  ///< per frame (mean)
   double setup_ms = 0.0;
   double mean_radius_start = 0.0, mean_radius_end = 0.0;
+  /// Simulation times of the first and the last crack and the pressure when the first one was made (balloon);
+  /// negative without cracks.
+  double first_crack_time = -1.0, last_crack_time = -1.0, tear_pressure = -1.0;
+  bool membrane_balanced = false;
+  ShellMembraneBalanceReport membrane_balance;
   size_t files = 0;
   std::string instability;      ///< the ShellInstabilityError message, if the run stopped on one
   ShellSamplingStats sampling;  ///< anisotropy of the node sampling (ShellNodes::sampling)

@@ -7,9 +7,19 @@
 #include <vector>
 
 #include "core/surfel_cloud.h"
+#include "shell/shell_energy.h"
 #include "shell/shell_nodes.h"
 
 namespace rc::shell_test {
+
+/// Material with stiffnesses K_s, K_b and damping D (density 1).
+inline ShellMaterial material(double ks, double kb, double damping) {
+  ShellMaterial m;
+  m.stretch_stiffness = ks;
+  m.bending_stiffness = kb;
+  m.damping = damping;
+  return m;
+}
 
 /// Fibonacci sampling of a sphere of radius r about the origin, outward normals.
 inline SurfelCloud sphereCloud(double r, size_t count) {

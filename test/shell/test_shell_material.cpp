@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numeric>
 
 #include "shell/shell_material.h"
@@ -16,16 +17,9 @@ namespace rc {
 namespace {
 
 using shell_test::bendOntoCylinder;
+using shell_test::material;
 using shell_test::sheetNodes;
 using shell_test::sphereNodes;
-
-ShellMaterial material(double ks, double kb, double damping) {
-  ShellMaterial m;
-  m.stretch_stiffness = ks;
-  m.bending_stiffness = kb;
-  m.damping = damping;
-  return m;
-}
 
 // Nodes at least `margin` inside the square [-size/2, size/2]^2.
 std::vector<size_t> interiorNodes(const ShellNodes& nodes, double size, double margin) {
@@ -383,11 +377,76 @@ TEST(ShellMaterial, ShortFibersAreDroppedWhenFibersAreRebuilt) {
   EXPECT_NEAR(weights, 1.0, 1e-12);
 }
 
+// A step in y across the line y = 0 overloads the fibers crossing it everywhere along the line at once. With
+// max_crack_speed v no crack is placed within two crack radii of one made less than distance / v earlier;
+// the line still ends up cut. Without the limit the cracks along the line come in far fewer calls.
+TEST(ShellMaterial, CrackSpeedLimitSpacesNeighbouringCracksInTime) {
+  const ShellNodes rest_nodes = sheetNodes(1.0, 0.07);
+  std::vector<Vec3> x = rest_nodes.rest_positions;
+  for (Vec3& p : x) p.y() += p.y() > 0.0 ? 0.01 : 0.0;
+  struct Run {
+    std::vector<ShellCrack> cracks;
+    int calls_until_done = 0;
+  };
+  const double dt = 0.005;
+  auto run = [&](double speed) {
+    ShellNodes nodes = rest_nodes;
+    ShellFibers fibers = buildShellFibers(nodes);
+    ShellMaterialOptions mo;
+    mo.fracture.stretch_threshold = 0.02;
+    mo.fracture.max_cracks_per_step = 1000;
+    mo.fracture.max_crack_speed = speed;
+    ShellMaterialModel model(nodes, fibers, mo);
+    Run out;
+    int idle = 0;
+    for (int call = 0; call < 2000 && idle < 100; ++call) {
+      const size_t made = model.updateFracture(nodes, fibers, x, call * dt).new_cracks;
+      idle = made > 0 ? 0 : idle + 1;
+      if (made > 0) out.calls_until_done = call + 1;
+    }
+    out.cracks = model.cracks();
+    return out;
+  };
+  const double speed = 0.5;
+  const Run limited = run(speed), free = run(std::numeric_limits<double>::infinity());
+  auto violations = [speed](const std::vector<ShellCrack>& cracks) {
+    size_t n = 0;
+    for (size_t b = 0; b < cracks.size(); ++b) {
+      for (size_t a = 0; a < b; ++a) {
+        const double d = (cracks[a].center - cracks[b].center).norm();
+        if (d < 2.0 * std::max(cracks[a].radius, cracks[b].radius) &&
+            cracks[b].time - cracks[a].time < d / speed - 1e-12)
+          ++n;
+      }
+    }
+    return n;
+  };
+  std::printf(
+      "crack speed %.2f: %zu cracks over %d calls (%zu too close in time); unlimited: %zu cracks in %d "
+      "calls (%zu would be too close)\n",
+      speed, limited.cracks.size(), limited.calls_until_done, violations(limited.cracks), free.cracks.size(),
+      free.calls_until_done, violations(free.cracks));
+  EXPECT_EQ(violations(limited.cracks), 0u);
+  EXPECT_GT(violations(free.cracks), 0u);
+  EXPECT_GT(limited.calls_until_done, 4 * free.calls_until_done);
+  // Both cut the whole line: the cracks span it.
+  for (const Run* r : {&limited, &free}) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const ShellCrack& c : r->cracks) lo = std::min(lo, c.center.x()), hi = std::max(hi, c.center.x());
+    EXPECT_GT(hi - lo, 0.8);
+  }
+  for (size_t c = 1; c < limited.cracks.size(); ++c)
+    EXPECT_GE(limited.cracks[c].time, limited.cracks[c - 1].time);  // made in time order
+}
+
 TEST(ShellMaterial, RejectsBadOptions) {
   const ShellNodes nodes = sheetNodes(1.0, 0.2);
   ShellFibers fibers = buildShellFibers(nodes);
   ShellMaterialOptions mo;
   mo.plasticity.bend_creep = -1.0;
+  EXPECT_THROW(ShellMaterialModel(nodes, fibers, mo), std::invalid_argument);
+  mo = ShellMaterialOptions();
+  mo.fracture.max_crack_speed = 0.0;
   EXPECT_THROW(ShellMaterialModel(nodes, fibers, mo), std::invalid_argument);
   mo = ShellMaterialOptions();
   mo.plasticity.bend_yield = 0.0;
