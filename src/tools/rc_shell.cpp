@@ -5,8 +5,9 @@
 // progress line per frame on stderr and one JSON line of run statistics on stdout (nodes, fibers, surfels,
 // cracks, milliseconds per frame for forces / integration, material / fracture and surface animation, and
 // the node sampling anisotropy of ShellNodes: median, worst, fraction above the threshold). Highly irregular
-// node sampling (thesis 7.6) is reported as a warning on stderr. With --render, each written frame (dense and
-// crack surfels together) is also EWA-splatted (thesis 3.2) to DIR/<name>_NNNN.png by a camera framing the
+// node sampling (thesis 7.6) is reported as a warning on stderr. With --render, each written frame (the dense
+// surfels, cut at cracks by the crack discontinuity surfels, 4.3) is also EWA-splatted (thesis 3.2) to
+// DIR/<name>_NNNN.png by a camera framing the
 // rest bounding box from a fixed direction, and the JSON line gets a "render" phase (ms per image). Exit
 // codes: 0 ok, 1 other error (I/O, arguments), 2 bad scene file, 3 the simulation became unstable.
 #include <unistd.h>
@@ -21,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "render/discontinuity_clipper.h"
 #include "render/framing_camera.h"
 #include "render/image_io.h"
 #include "render/surfel_renderer.h"
@@ -50,7 +52,8 @@ void addNormalsAndRadiiFromAxes(rc::SurfelCloud* cloud) {
   }
 }
 
-/// Renders frames (dense and crack surfels together) to <out>/<name>_NNNN.png with a fixed camera.
+/// Renders frames (dense surfels, cut by the crack discontinuity surfels) to <out>/<name>_NNNN.png with a
+/// fixed camera.
 class FrameRenderer {
  public:
   FrameRenderer(const rc::Camera& camera, std::string out_dir)
@@ -61,20 +64,20 @@ class FrameRenderer {
 
   void operator()(const rc::ShellSimulation& sim, int frame) {
     Clock::time_point t0 = Clock::now();
-    // SurfelCloud::append keeps only the channels both clouds have: crack surfels (no colours, attribute
-    // columns of their own) get the renderer's default colour where the dense surfels are coloured.
-    rc::SurfelCloud cloud = sim.surfels();
+    const rc::SurfelCloud& cloud = sim.surfels();
+    if (cloud.empty()) return;
+    // Crack surfels are discontinuity surfels (4.3): invisible, they cut the dense surfels at the crack.
+    // Skinned, each sits a quarter radius inside its material; its clip plane is the crack plane.
+    std::unique_ptr<rc::DiscontinuityClipper> clipper;
     if (sim.crackCount() > 0 && !sim.crackSurfels().empty()) {
       rc::SurfelCloud cracks = sim.crackSurfels();
-      cloud.attributes = rc::AttributeSet();
-      cracks.attributes = rc::AttributeSet();
       addNormalsAndRadiiFromAxes(&cracks);
-      if (cloud.hasColors() && !cracks.hasColors())
-        cracks.colors.assign(cracks.size(), config_.default_color);
-      cloud.append(cracks);
+      for (size_t k = 0; k < cracks.size(); ++k)
+        cracks.positions[k] += 0.25 * cracks.radii[k] * cracks.normals[k].normalized();
+      clipper = std::make_unique<rc::DiscontinuityClipper>(cloud, cracks);
+      clipper->prepare();
     }
-    if (cloud.empty()) return;
-    renderer_->render(cloud, camera_, &images_);
+    renderer_->render(cloud, camera_, &images_, clipper.get());
     splat_ms_ += msSince(t0);
     t0 = Clock::now();
     char name[32];
