@@ -15,6 +15,7 @@
 #include "io/cloud_io.h"
 #include "io/yaml_reader.h"
 #include "surface/analytic_shapes.h"
+#include "surface/radius_estimation.h"
 
 namespace rc {
 
@@ -67,7 +68,11 @@ SurfelCloud sampleMesh(const TriangleMesh& mesh, const std::vector<Vec3>& normal
     Vec3 n = w0 * normals[t[0]] + r1 * normals[t[1]] + r2 * normals[t[2]];
     cloud.normals.push_back(n.norm() > 0 ? Vec3(n.normalized()) : normals[t[0]]);
   }
-  cloud.radii.assign(count, std::sqrt(total / (M_PI * count)) * 1.5);
+  // Random samples leave voids wider than the mean spacing: radii that cover the gaps between neighbours
+  // (3.3) keep the rendered surface hole-free; capped at 2.5 mean spacings (isolated samples at sharp edges).
+  RadiusEstimationConfig radii;
+  radii.max_radius = 2.5 * std::sqrt(total / count);
+  estimateRadii(cloud, radii);
   return cloud;
 }
 

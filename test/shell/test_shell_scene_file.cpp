@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 
+#include "core/kd_tree.h"
 #include "shell/shell_scene.h"
 
 using namespace rc;
@@ -142,6 +143,39 @@ TEST(ShellSceneFile, BadFilesNameFileLineAndProblem) {
   balance.replace(balance.find("bending_stiffness: 10}"), 22, "bending_stiffness: 10, balance_membrane: 3}");
   EXPECT_NE(errorOf(balance).find("material.balance_membrane"), std::string::npos) << errorOf(balance);
   EXPECT_THROW(loadShellScene("/nonexistent/scene.yaml"), ShellSceneError);
+}
+
+// Mesh sources are sampled at random: the radii cover the gaps between neighbouring surfels (3.3), so the
+// rendered surface has no holes. Probes: the midpoints between each surfel and its 6 nearest neighbours.
+TEST(ShellSceneFile, MeshSurfelsCoverTheGapsBetweenNeighbours) {
+  if (!dataPresent()) GTEST_SKIP() << "shared data missing";
+  const ShellScene scene = loadShellScene(scenePath("fig7_5_bust"));
+  const SurfelCloud& c = scene.surfels;
+  ASSERT_EQ(c.radii.size(), c.size());
+  const double max_r = *std::max_element(c.radii.begin(), c.radii.end());
+  const double min_r = *std::min_element(c.radii.begin(), c.radii.end());
+  const KdTree tree(c.positions);
+  std::vector<Neighbor> knn(7), near;
+  size_t probes = 0, uncovered = 0;
+  for (size_t i = 0; i < c.size(); ++i) {
+    tree.knn(c.positions[i], 7, knn.data());
+    for (size_t m = 1; m < 7; ++m) {
+      const Vec3 y = 0.5 * (c.positions[i] + c.positions[knn[m].index]);
+      tree.radius(y, max_r * 1.01, near);
+      bool covered = false;
+      for (const Neighbor& nb : near) {
+        const Vec3 d = y - c.positions[nb.index];
+        const Vec3& n = c.normals[nb.index];
+        covered = covered || (d - n * n.dot(d)).norm() <= c.radii[nb.index];
+      }
+      ++probes;
+      uncovered += !covered;
+    }
+  }
+  std::printf("bust surfels: radii %.3f .. %.3f, %zu of %zu neighbour midpoints uncovered\n", min_r, max_r,
+              uncovered, probes);
+  EXPECT_EQ(uncovered, 0u);
+  EXPECT_GT(max_r, 1.5 * min_r);  // per-surfel radii, larger in the voids of the random sampling
 }
 
 TEST(ShellSceneFile, ShortRunsOfEverySceneStayFinite) {
