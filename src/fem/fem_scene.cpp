@@ -183,7 +183,10 @@ class SceneReader {
       const YAML::Node c = node[i];
       FemSceneCut cut;
       if (c.IsMap() && (c["polygons"] || c["blade"])) {
-        src_.allowKeys(c, {"time", "duration", "polygons", "blade", "path", "snap_relative_distance"}, where);
+        src_.allowKeys(c,
+                       {"time", "duration", "polygons", "blade", "path", "snap_relative_distance",
+                        "sliver_relative_thickness"},
+                       where);
         cut.time = src_.nonNegative(src_.require(c, "time", where), where + ".time");
         if (c["duration"]) cut.duration = src_.nonNegative(c["duration"], where + ".duration");
         if (const YAML::Node polygons = c["polygons"]) {
@@ -221,7 +224,10 @@ class SceneReader {
               src_.fail(c, where + ": polygon " + std::to_string(k) + " is not planar");
         }
       } else {
-        src_.allowKeys(c, {"time", "point", "normal", "region", "separate", "snap_relative_distance"}, where);
+        src_.allowKeys(c,
+                       {"time", "point", "normal", "region", "separate", "snap_relative_distance",
+                        "sliver_relative_thickness"},
+                       where);
         cut.time = src_.nonNegative(src_.require(c, "time", where), where + ".time");
         cut.point = src_.vec3(src_.require(c, "point", where), where + ".point");
         const YAML::Node n = src_.require(c, "normal", where);
@@ -239,6 +245,12 @@ class SceneReader {
       if (c["snap_relative_distance"])
         cut.snap_relative_distance =
             src_.nonNegative(c["snap_relative_distance"], where + ".snap_relative_distance");
+      if (const YAML::Node t = c["sliver_relative_thickness"]) {
+        const double value = src_.nonNegative(t, where + ".sliver_relative_thickness");
+        if (!(value < 1.0)) src_.fail(t, where + ".sliver_relative_thickness must be below 1 (0: off)");
+        cut.slivers.enabled = value > 0.0;
+        cut.slivers.relative_thickness = value;
+      }
       scene_.cuts.push_back(cut);
     }
     std::stable_sort(scene_.cuts.begin(), scene_.cuts.end(),
@@ -574,6 +586,12 @@ std::vector<Vec3> interpolateCutValues(const PolyhedralMesh& mesh, const PlaneCu
     throw std::invalid_argument("interpolateCutValues: " + std::to_string(values.size()) + " values for " +
                                 std::to_string(mesh.numNodes()) + " nodes");
   const PolyhedralMesh& out_mesh = cut.mesh;
+  if (static_cast<int>(cut.node_stencils.size()) == out_mesh.numNodes()) {
+    std::vector<Vec3> out(out_mesh.numNodes(), Vec3::Zero());
+    for (int v = 0; v < out_mesh.numNodes(); ++v)
+      for (const auto& [u, w] : cut.node_stencils[v]) out[v] += w * values[u];
+    return out;
+  }
   const int old_nodes = mesh.numNodes();
   std::vector<Vec3> out(out_mesh.numNodes());
   std::copy(values.begin(), values.end(), out.begin());
@@ -702,7 +720,7 @@ double FemSimulation::minGroundDistance() const {
 }
 
 FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>>& polygons,
-                                             double snap_relative_distance) {
+                                             double snap_relative_distance, const CutSliverOptions& slivers) {
   FemCutReport report;
   report.polygons = static_cast<int>(polygons.size());
   polygons_applied_ += report.polygons;
@@ -717,6 +735,7 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
   }
   PolygonCutOptions options;
   options.snap_relative_distance = snap_relative_distance;
+  options.slivers = slivers;
   std::vector<std::unique_ptr<WarpedDynamics>> next;
   for (auto& body : bodies_) {
     Clock::time_point start = Clock::now();
@@ -759,6 +778,8 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
       total.num_new_nodes += s.num_new_nodes + s.num_pocket_nodes;
       total.num_duplicated_nodes += s.num_duplicated_nodes;
       total.num_new_crack_faces += s.num_new_crack_faces;
+      report.slivers_removed += s.slivers.num_removed;
+      report.slivers_kept += s.slivers.num_rejected;
     }
     if (total.num_split_elements == 0 && total.num_new_nodes == 0 && total.num_new_crack_faces == 0) {
       times_.topology += secondsSince(start);
@@ -793,16 +814,19 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
   bodies_ = std::move(next);
   recomputed_elements_ += report.recomputed_elements;
   reused_elements_ += report.reused_elements;
+  slivers_removed_ += report.slivers_removed;
+  slivers_kept_ += report.slivers_kept;
   return report;
 }
 
 FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
-  if (cut.isPolygonCut()) return applyPolygonCuts(cut.polygons, cut.snap_relative_distance);
+  if (cut.isPolygonCut()) return applyPolygonCuts(cut.polygons, cut.snap_relative_distance, cut.slivers);
   FemCutReport report;
   std::vector<std::unique_ptr<WarpedDynamics>> next;
   PlaneCutOptions options;
   options.region = cut.region;
   options.snap_relative_distance = cut.snap_relative_distance;
+  options.slivers = cut.slivers;
   for (auto& body : bodies_) {
     Clock::time_point start = Clock::now();
     const PolyhedralMesh& mesh = body->model().mesh();
@@ -840,6 +864,8 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
     ++report.bodies_cut;
     report.split_elements += result.num_split_elements;
     report.new_nodes += result.num_new_nodes;
+    report.slivers_removed += result.slivers.num_removed;
+    report.slivers_kept += result.slivers.num_rejected;
     const std::vector<Vec3> cut_velocities = interpolateCutValues(mesh, result, v);
     if (cut.separate && side_negative && side_positive && !crossed_whole) {
       const SeparatedMesh separated = separateAlongPlane(result);
@@ -867,6 +893,8 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
   bodies_ = std::move(next);
   recomputed_elements_ += report.recomputed_elements;
   reused_elements_ += report.reused_elements;
+  slivers_removed_ += report.slivers_removed;
+  slivers_kept_ += report.slivers_kept;
   return report;
 }
 
@@ -876,11 +904,12 @@ void FemSimulation::step() {
   // Polygons due now are applied together (one ProgressiveCutMesh per body and step).
   std::vector<std::vector<Vec3>> batch;
   double batch_snap = 0.0;
+  CutSliverOptions batch_slivers;
   int batch_cut = -1;
   auto flush = [&]() {
     if (batch.empty()) return;
     try {
-      applyPolygonCuts(batch, batch_snap);
+      applyPolygonCuts(batch, batch_snap, batch_slivers);
     } catch (const std::exception& e) {
       throw std::runtime_error("cut " + std::to_string(batch_cut) +
                                " (polygons due at t = " + formatNumber(time_) + "): " + e.what());
@@ -901,10 +930,14 @@ void FemSimulation::step() {
       ++next_cut_;
       continue;
     }
-    if (!batch.empty() && batch_snap != cut.snap_relative_distance) flush();
+    if (!batch.empty() &&
+        (batch_snap != cut.snap_relative_distance || batch_slivers.enabled != cut.slivers.enabled ||
+         batch_slivers.relative_thickness != cut.slivers.relative_thickness))
+      flush();
     while (next_polygon_ < static_cast<int>(cut.polygons.size()) && cut.polygonTime(next_polygon_) <= now) {
       if (batch.empty()) {
         batch_snap = cut.snap_relative_distance;
+        batch_slivers = cut.slivers;
         batch_cut = next_cut_;
       }
       batch.push_back(cut.polygons[next_polygon_++]);
@@ -1006,6 +1039,8 @@ FemRunStats runFemScene(const FemScene& scene, const FemRunOptions& options) {
   stats.bodies = sim.numBodies();
   stats.cuts = sim.cutsApplied();
   for (int b = 0; b < sim.numBodies(); ++b) stats.crack_faces += sim.body(b).model().mesh().numCrackFaces();
+  stats.slivers_removed = sim.sliversRemoved();
+  stats.slivers_kept = sim.sliversKept();
   stats.steps = sim.steps();
   stats.simulated_time = sim.time();
   stats.times = sim.phaseTimes();
@@ -1025,7 +1060,8 @@ std::string femRunStatsJson(const FemRunStats& s) {
   j << "{\"scene\":" << jsonString(s.scene) << ",\"nodes_start\":" << s.nodes_start
     << ",\"elements_start\":" << s.elements_start << ",\"nodes\":" << s.nodes
     << ",\"elements\":" << s.elements << ",\"bodies\":" << s.bodies << ",\"cuts\":" << s.cuts
-    << ",\"crack_faces\":" << s.crack_faces << ",\"frames\":" << s.frames
+    << ",\"crack_faces\":" << s.crack_faces << ",\"slivers_removed\":" << s.slivers_removed
+    << ",\"slivers_kept\":" << s.slivers_kept << ",\"frames\":" << s.frames
     << ",\"frame_count\":" << s.frame_count << ",\"steps\":" << s.steps
     << ",\"simulated_time\":" << formatNumber(s.simulated_time)
     << ",\"ms\":{\"integration\":" << formatNumber(1e3 * s.times.integration)

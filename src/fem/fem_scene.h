@@ -63,12 +63,17 @@ struct FemMeshSource {
 /// ProgressiveCutMesh, polygon k (of n) at time + duration * k / n. Partial cuts leave internal cracks (the
 /// body stays one mesh with crack faces); a body falling apart becomes several bodies. point, normal, region
 /// and separate are unused then.
+///
+/// Key sliver_relative_thickness (default 0.01, 0: off): thin elements the cut creates (relative thickness
+/// below it, CutSliverOptions) are merged into their neighbours after the cut; off keeps them (the behaviour
+/// before automatic removal).
 struct FemSceneCut {
   double time = 0.0;
   Vec3 point = Vec3::Zero(), normal = Vec3::UnitX();
   std::vector<Vec3> region;
   bool separate = true;
   double snap_relative_distance = 1e-6;
+  CutSliverOptions slivers;
   std::vector<std::vector<Vec3>> polygons;
   double duration = 0.0;
   bool isPolygonCut() const { return !polygons.empty(); }
@@ -124,9 +129,9 @@ PolyhedralMesh buildFemMesh(const FemMeshSource& source);
 PolyhedralMesh randomElementSplits(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz, int num_splits,
                                    unsigned seed, double min_relative_gap = 0.02);
 
-/// Values at the nodes of cut.mesh from values at the nodes of `mesh` (the cut's input): old nodes keep
-/// theirs, a new node on edge (a, b) of its parent element gets the linear interpolation (as
-/// PlaneCutResult::displacements).
+/// Values at the nodes of cut.mesh from values at the nodes of `mesh` (the cut's input) through
+/// PlaneCutResult::node_stencils (old nodes keep theirs, a new node on edge (a, b) gets the linear
+/// interpolation, nodes of merged slivers theirs); without stencils, along the parent element's edges.
 std::vector<Vec3> interpolateCutValues(const PolyhedralMesh& mesh, const PlaneCutResult& cut,
                                        const std::vector<Vec3>& values);
 
@@ -146,8 +151,9 @@ struct FemCutReport {
   int bodies_cut = 0;        ///< bodies whose elements were split or separated
   int bodies_separated = 0;  ///< of these, the ones separated into two
   int split_elements = 0, new_nodes = 0, duplicated_nodes = 0;
-  int crack_faces = 0;  ///< polygon cuts: element faces that became crack faces
-  int polygons = 0;     ///< polygon cuts: polygons applied
+  int crack_faces = 0;                        ///< polygon cuts: element faces that became crack faces
+  int polygons = 0;                           ///< polygon cuts: polygons applied
+  int slivers_removed = 0, slivers_kept = 0;  ///< thin cut elements merged / kept (CutSliverStats)
   /// Elements of the new bodies integrated anew (changed by the cut) / sharing the cut body's integration
   /// data (unchanged rest geometry, LinearElasticModel donor).
   int recomputed_elements = 0, reused_elements = 0;
@@ -178,12 +184,16 @@ class FemSimulation {
   /// Progressive polygon cuts (ProgressiveCutMesh, rest frame) on every body whose rest bounding box meets a
   /// polygon's; each cut body is replaced by one body per connected component (crack faces kept).
   FemCutReport applyPolygonCuts(const std::vector<std::vector<Vec3>>& polygons,
-                                double snap_relative_distance = 1e-6);
+                                double snap_relative_distance = 1e-6,
+                                const CutSliverOptions& slivers = CutSliverOptions());
   /// Polygons of polygon cuts applied so far (all cuts).
   long polygonsApplied() const { return polygons_applied_; }
   /// Elements integrated anew after cuts / reused from the cut body (FemCutReport), all cuts so far.
   long recomputedElements() const { return recomputed_elements_; }
   long reusedElements() const { return reused_elements_; }
+  /// Thin cut elements merged / kept after cuts (FemCutReport), all cuts so far.
+  long sliversRemoved() const { return slivers_removed_; }
+  long sliversKept() const { return slivers_kept_; }
 
   const FemPhaseTimes& phaseTimes() const { return times_; }
   FemPhaseTimes& phaseTimes() { return times_; }
@@ -206,6 +216,7 @@ class FemSimulation {
   long steps_ = 0;
   int next_cut_ = 0, next_polygon_ = 0;  // next_polygon_: of cut next_cut_
   long polygons_applied_ = 0, recomputed_elements_ = 0, reused_elements_ = 0;
+  long slivers_removed_ = 0, slivers_kept_ = 0;
   FemPhaseTimes times_;
   long solver_iterations_ = 0, unconverged_ = 0;
   int max_step_iterations_ = 0;
@@ -231,7 +242,8 @@ struct FemRunStats {
   std::string scene;
   int nodes_start = 0, elements_start = 0;
   int nodes = 0, elements = 0, bodies = 0, cuts = 0;
-  int crack_faces = 0;  ///< at the end, all bodies
+  int crack_faces = 0;                         ///< at the end, all bodies
+  long slivers_removed = 0, slivers_kept = 0;  ///< thin cut elements merged / kept, all cuts
   int frames = 0, frame_count = 0;
   long steps = 0;
   double simulated_time = 0.0;

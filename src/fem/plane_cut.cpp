@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -17,6 +18,76 @@ namespace {
 
 [[noreturn]] void fail(const std::string& what) {
   throw std::invalid_argument("cutMeshByPlane: " + what);
+}
+
+// Merges the thin elements among the split parts (removeCutSlivers) and drops the merged nodes; node sides
+// follow the nodes (a node that absorbed one on the plane lies on it: the cut snapped to it, 9.3.1).
+void mergeCutSlivers(std::vector<Vec3>& nodes, std::vector<Vec3>& disp,
+                     std::vector<PolyhedralMesh::ElementFaces>& elements, PlaneCutResult& result,
+                     const std::vector<int>& split_parts, int num_input_nodes, const Vec3& plane_point,
+                     const Vec3& normal, double snap, double relative_tolerance,
+                     const CutSliverOptions& options) {
+  EditableMesh edit{std::move(nodes), std::move(disp), std::move(elements), {}};
+  CutSliverEdits edits;
+  const int num_cut_nodes = static_cast<int>(edit.nodes.size());
+  result.slivers = removeCutSlivers(edit, split_parts, num_input_nodes, relative_tolerance, options, &edits);
+  nodes = std::move(edit.nodes);
+  disp = std::move(edit.displacements);
+  elements = std::move(edit.elements);
+  if (result.slivers.num_removed == 0) return;
+  std::vector<int> parent, element_side;
+  for (int e : edits.kept_elements) {
+    parent.push_back(result.parent_element[e]);
+    element_side.push_back(result.element_side[e]);
+  }
+  result.parent_element = std::move(parent);
+  result.element_side = std::move(element_side);
+  // Sides and stencils of all nodes (appended ones: from their stencils over earlier nodes).
+  std::vector<int>& side = result.node_side;
+  std::vector<NodeStencil>& stencils = result.node_stencils;
+  for (const NodeStencil& local : edits.new_node_stencils) {
+    std::map<int, double> combined;
+    for (const auto& [v, w] : local)
+      for (const auto& [u, x] : stencils[v]) combined[u] += w * x;
+    stencils.emplace_back(combined.begin(), combined.end());
+  }
+  side.resize(nodes.size());
+  for (size_t v = num_cut_nodes; v < nodes.size(); ++v) {
+    const double d = normal.dot(nodes[v] - plane_point);
+    side[v] = std::abs(d) <= snap ? 0 : (d > 0.0 ? 1 : -1);
+  }
+  for (int v = 0; v < num_cut_nodes; ++v) {
+    const int kept = edits.node_replacement[v];
+    if (kept != v && side[v] == 0) side[kept] = 0;
+  }
+  for (int v = 0; v < num_cut_nodes; ++v)
+    if (edits.node_replacement[v] == v && side[v] != 0) {
+      const double d = normal.dot(nodes[v] - plane_point);
+      if (std::abs(d) <= snap) side[v] = 0;
+    }
+  // Drop the nodes no element uses any more (the others keep their order).
+  std::vector<int> new_id(nodes.size(), -1);
+  for (const auto& faces : elements)
+    for (const auto& face : faces)
+      for (int v : face) new_id[v] = 0;
+  std::vector<Vec3> used_nodes, used_disp;
+  std::vector<int> used_side;
+  std::vector<NodeStencil> used_stencils;
+  for (size_t v = 0; v < nodes.size(); ++v) {
+    if (new_id[v] < 0) continue;
+    new_id[v] = static_cast<int>(used_nodes.size());
+    used_nodes.push_back(nodes[v]);
+    if (!disp.empty()) used_disp.push_back(disp[v]);
+    used_side.push_back(side[v]);
+    used_stencils.push_back(std::move(stencils[v]));
+  }
+  for (auto& faces : elements)
+    for (auto& face : faces)
+      for (int& v : face) v = new_id[v];
+  nodes = std::move(used_nodes);
+  disp = std::move(used_disp);
+  side = std::move(used_side);
+  stencils = std::move(used_stencils);
 }
 
 }  // namespace
@@ -39,7 +110,9 @@ PlaneCutResult cutMeshByPlane(const PolyhedralMesh& mesh, const std::vector<Vec3
   const bool has_disp = !disp.empty();
   const double snap = options.snap_relative_distance * boundingDiagonal(nodes);
 
-  PlaneCutResult result{mesh, {}, {}, {}, {}, 0, 0, 0};
+  PlaneCutResult result{mesh, {}, {}, {}, {}, 0, 0, 0, {}, {}};
+  std::vector<NodeStencil>& stencils = result.node_stencils;
+  for (int v = 0; v < mesh.numNodes(); ++v) stencils.push_back({{v, 1.0}});
   std::vector<double> distance(nodes.size());
   std::vector<int>& side = result.node_side;
   side.resize(nodes.size());
@@ -54,6 +127,7 @@ PlaneCutResult cutMeshByPlane(const PolyhedralMesh& mesh, const std::vector<Vec3
     if (has_disp) disp.push_back((1.0 - t) * disp[a] + t * disp[b]);
     distance.push_back(0.0);
     side.push_back(0);
+    stencils.push_back({{a, 1.0 - t}, {b, t}});
     return static_cast<int>(nodes.size()) - 1;
   });
 
@@ -149,7 +223,10 @@ PlaneCutResult cutMeshByPlane(const PolyhedralMesh& mesh, const std::vector<Vec3
   }
 
   std::vector<PolyhedralMesh::ElementFaces> elements;
+  std::vector<int> split_parts;  // elements the split created (sliver candidates)
   for (int e = 0; e < num_elements; ++e) {
+    if (parts[e].size() == 2)
+      for (int k = 0; k < 2; ++k) split_parts.push_back(static_cast<int>(elements.size()) + k);
     if (parts[e].empty()) {
       elements.push_back(mesh.elementFaces(e));
       result.parent_element.push_back(e);
@@ -170,6 +247,25 @@ PlaneCutResult cutMeshByPlane(const PolyhedralMesh& mesh, const std::vector<Vec3
     relative_tolerance = std::max(relative_tolerance, element.tolerance() / element.scale());
   if (max_snapped_distance > 0.0)
     relative_tolerance = std::max(relative_tolerance, 4.0 * max_snapped_distance / min_part_scale);
+  if (options.slivers.enabled && !split_parts.empty()) {
+    mergeCutSlivers(nodes, disp, elements, result, split_parts, mesh.numNodes(), plane_point, normal, snap,
+                    relative_tolerance, options.slivers);
+    if (result.slivers.num_removed > 0) {
+      try {
+        result.mesh = PolyhedralMesh(std::move(nodes), std::move(elements),
+                                     std::max(relative_tolerance, result.slivers.relative_tolerance));
+        result.displacements = std::move(disp);
+        return result;
+      } catch (const std::invalid_argument&) {  // validity first: the cut as split, slivers kept
+        PlaneCutOptions split_only = options;
+        split_only.slivers.enabled = false;
+        PlaneCutResult split = cutMeshByPlane(mesh, displacements, plane_point, plane_normal, split_only);
+        split.slivers.num_candidates = result.slivers.num_candidates;
+        split.slivers.num_thin = split.slivers.num_rejected = result.slivers.num_thin;
+        return split;
+      }
+    }
+  }
   result.mesh = PolyhedralMesh(std::move(nodes), std::move(elements), relative_tolerance);
   result.displacements = std::move(disp);
   return result;

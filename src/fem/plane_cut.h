@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "fem/polyhedral_mesh.h"
+#include "fem/sliver_removal.h"
 
 namespace rc {
 
@@ -18,6 +19,8 @@ struct PlaneCutOptions {
   /// elements whose section with the plane overlaps it are split; crossed neighbours left whole get the new
   /// nodes on their edges and faces shared with split elements split alike (T-junctions, 9.3.1).
   std::vector<Vec3> region;
+  /// Thin elements the cut creates are merged into their neighbours (removeCutSlivers); off: they are kept.
+  CutSliverOptions slivers;
 };
 
 /// The split mesh: every element with nodes strictly on both sides of the plane is replaced by its two
@@ -34,6 +37,12 @@ struct PlaneCutResult {
   int num_split_elements = 0;
   int num_new_nodes = 0;      // edge intersection nodes
   int num_snapped_nodes = 0;  // existing nodes with 0 < |distance| <= snap distance, treated as on the plane
+  /// Per node of mesh: weights over the input mesh's nodes that give its values (a crossing node: linear on
+  /// its edge; a sliver-plane node: the mean along its two edges; kept nodes: themselves).
+  std::vector<NodeStencil> node_stencils;
+  /// Thin cut elements merged after the cut (PlaneCutOptions::slivers). Element and node counts above are
+  /// the split's; the mesh has num_removed fewer elements and the merged nodes dropped.
+  CutSliverStats slivers;
 };
 
 /// Splits every element of mesh crossed by the plane through plane_point with normal plane_normal (any

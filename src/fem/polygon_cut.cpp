@@ -152,7 +152,10 @@ class FaceGroups {
 
 ProgressiveCutMesh::ProgressiveCutMesh(const PolyhedralMesh& mesh, std::vector<Vec3> displacements,
                                        const PolygonCutOptions& options)
-    : nodes_(mesh.nodes()), displacements_(std::move(displacements)), num_initial_nodes_(mesh.numNodes()) {
+    : nodes_(mesh.nodes()),
+      displacements_(std::move(displacements)),
+      num_initial_nodes_(mesh.numNodes()),
+      slivers_(options.slivers) {
   if (!displacements_.empty() && static_cast<int>(displacements_.size()) != mesh.numNodes())
     fail("displacements has " + std::to_string(displacements_.size()) + " entries, the mesh has " +
          std::to_string(mesh.numNodes()) + " nodes");
@@ -237,6 +240,7 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
 
   PolygonCutStats stats;
   const double snap = snap_distance_;
+  const int first_new_node = numNodes();
 
   // 9.3.1 split of every element crossed by the plane whose section overlaps the cut shape.
   std::vector<double> distance(nodes_.size());
@@ -501,6 +505,25 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
   duplicateSeparatedNodes(stats);
   stats.num_pocket_nodes = openClosedCracks();
   if (stats.num_pocket_nodes > 0) duplicateSeparatedNodes(stats);
+
+  // Thin parts of the split elements are merged into their neighbours (9.2, local to the cut).
+  if (slivers_.enabled && stats.num_split_elements > 0) {
+    std::vector<int> candidates;
+    for (size_t e = 0; e < parent.size(); ++e)
+      if (selected[parent[e]]) candidates.push_back(static_cast<int>(e));
+    EditableMesh edit{std::move(nodes_), std::move(displacements_), std::move(elements_), std::move(crack_)};
+    CutSliverEdits edits;
+    stats.slivers = removeCutSlivers(edit, candidates, first_new_node, relative_tolerance_, slivers_, &edits);
+    nodes_ = std::move(edit.nodes);
+    displacements_ = std::move(edit.displacements);
+    elements_ = std::move(edit.elements);
+    crack_ = std::move(edit.crack_faces);
+    for (NodeStencil& stencil : edits.new_node_stencils) {
+      stencils_.push_back(std::move(stencil));
+      duplicate_of_.push_back(-1);
+    }
+    relative_tolerance_ = std::max(relative_tolerance_, stats.slivers.relative_tolerance);
+  }
   return stats;
 }
 

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "fem/polyhedral_mesh.h"
+#include "fem/sliver_removal.h"
 
 namespace rc {
 
@@ -17,6 +18,9 @@ struct PolygonCutOptions {
   /// Needle avoidance (9.2): nodes closer than this (relative to the initial mesh bounding-box diagonal) to
   /// a cutting plane or a polygon edge line count as lying on it (no new node next to them).
   double snap_relative_distance = 1e-6;
+  /// Thin elements a polygon's split creates are merged into their neighbours after the polygon
+  /// (removeCutSlivers; crack faces stay crack faces); off: they are kept.
+  CutSliverOptions slivers;
 };
 
 /// What one polygon did.
@@ -26,10 +30,8 @@ struct PolygonCutStats {
   int num_pocket_nodes = 0;      // centroid nodes of crack faces that could not open otherwise
   int num_duplicated_nodes = 0;  // node copies created to open the crack
   int num_new_crack_faces = 0;   // element faces that became crack faces
+  CutSliverStats slivers;        // thin split elements merged after the polygon (merged nodes stay unused)
 };
-
-/// Weights (node, weight) that give a derived node's value from earlier nodes' values.
-using NodeStencil = std::vector<std::pair<int, double>>;
 
 /// A polyhedral mesh with internal cracks. Elements are closed polygon surfaces over node ids (outward,
 /// counter-clockwise); two elements are connected through a face when both use the same node set and
@@ -101,6 +103,7 @@ class ProgressiveCutMesh {
   mutable int num_components_ = 0;
   int num_initial_nodes_ = 0;
   double snap_distance_ = 0.0, relative_tolerance_ = ConvexPolyhedron::kDefaultRelativeTolerance;
+  CutSliverOptions slivers_;
 };
 
 }  // namespace rc

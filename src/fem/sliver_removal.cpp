@@ -65,18 +65,42 @@ std::pair<int, int> edgeKey(int a, int b) {
   return {std::min(a, b), std::max(a, b)};
 }
 
-// Mesh under modification: raw arrays; parent element and node origin tracked across removals.
+// Mesh under modification: raw arrays; parent element and node origin tracked across removals. Deleted
+// elements are left empty until compaction; adjacency lists the live elements using each node.
 struct MeshState {
   std::vector<Vec3> nodes;
   std::vector<Vec3> displacements;
   std::vector<ElementFaces> elements;
-  std::vector<int> parent;    // per element
-  std::vector<int> node_map;  // per input node: current node
+  std::vector<std::vector<char>> crack;  // empty or per element face
+  std::vector<int> parent;               // per element
+  std::vector<int> node_map;             // per input node: current node
+  std::vector<std::vector<int>> adjacency;
+  std::vector<int> replacement;           // per node: the node it was merged into (itself if kept)
+  std::vector<NodeStencil> new_stencils;  // per node appended after num_input_nodes
+  int num_input_nodes = 0;
 };
 
 struct RemovalCounts {
   int new_nodes = 0, merged_nodes = 0, collapsed = 0;
   double max_projection = 0.0;
+};
+
+// Local mode (after cuts): the plane keeps the boundary, merged nodes keep an on-plane node's position,
+// elements are not compacted and the adjacency is kept up to date.
+struct RemovalSettings {
+  double merge_relative_distance = 0.1, thin_relative = 0.05;
+  bool local = false;
+  int first_new_node = 0;  // local: nodes below existed before the cut
+};
+
+// Saved state of the elements a removal touches (local mode: undo of a rejected removal).
+struct RemovalUndo {
+  std::vector<int> elements;
+  std::vector<ElementFaces> faces;
+  std::vector<std::vector<char>> crack;
+  std::vector<std::vector<int>> element_nodes;
+  size_t num_nodes = 0;
+  std::vector<std::pair<int, Vec3>> positions, displacements;
 };
 
 std::vector<int> elementNodes(const ElementFaces& faces) {
@@ -143,32 +167,136 @@ Plane sliverPlane(const std::vector<Vec3>& nodes, const std::vector<int>& ids,
   return plane;
 }
 
+std::vector<std::vector<int>> buildAdjacency(const MeshState& state) {
+  std::vector<std::vector<int>> adjacency(state.nodes.size());
+  for (size_t e = 0; e < state.elements.size(); ++e)
+    for (int v : elementNodes(state.elements[e])) adjacency[v].push_back(static_cast<int>(e));
+  for (auto& list : adjacency) std::sort(list.begin(), list.end());
+  return adjacency;
+}
+
+// (element, face) users of face's node set.
+std::vector<std::pair<int, int>> faceUsers(const MeshState& state, const Face& face) {
+  std::vector<std::pair<int, int>> users;
+  const std::vector<int> key = sortedKey(face);
+  for (int e : state.adjacency[face[0]])
+    for (size_t f = 0; f < state.elements[e].size(); ++f)
+      if (state.elements[e][f].size() == face.size() && sortedKey(state.elements[e][f]) == key)
+        users.emplace_back(e, static_cast<int>(f));
+  return users;
+}
+
+bool isCrack(const MeshState& state, int e, int f) {
+  return !state.crack.empty() && state.crack[e][f] != 0;
+}
+
+// Local mode: the plane of the group's large faces on the boundary (mesh surface or crack) when only one
+// side has neighbours, else the plane of the nodes that existed before the cut if they are coplanar, else
+// least squares. Throws if neither large side has a neighbour (a free thin sheet: nothing to merge into).
+Plane localSliverPlane(const MeshState& state, const std::vector<int>& group,
+                       const std::vector<char>& in_group, const std::vector<int>& ids, int first_new_node,
+                       double eps, double thin_distance) {
+  std::vector<Vec3> all;
+  for (int v : ids) all.push_back(state.nodes[v]);
+  const Plane fit = fitPlane(all);
+  std::vector<int> side_nodes[2];
+  bool has_neighbour[2] = {false, false};
+  for (int g : group)
+    for (size_t f = 0; f < state.elements[g].size(); ++f) {
+      const Face& face = state.elements[g][f];
+      const std::vector<std::pair<int, int>> users = faceUsers(state, face);
+      bool internal = false, neighbour = false;
+      for (const auto& user : users)
+        if (user.first != g) (in_group[user.first] ? internal : neighbour) = true;
+      if (internal) continue;
+      const double alignment = newellNormal(state.nodes, face).normalized().dot(fit.normal);
+      if (std::abs(alignment) < 0.5) continue;  // rim face
+      const int side = alignment > 0.0 ? 1 : 0;
+      has_neighbour[side] = has_neighbour[side] || (neighbour && !isCrack(state, g, static_cast<int>(f)));
+      for (int v : face)
+        if (std::find(side_nodes[side].begin(), side_nodes[side].end(), v) == side_nodes[side].end())
+          side_nodes[side].push_back(v);
+    }
+  if (!has_neighbour[0] && !has_neighbour[1])
+    throw std::runtime_error("thin element without neighbours on its large faces (free sheet)");
+  auto planeThrough = [&](const std::vector<int>& nodes, Plane* plane) {
+    std::vector<Vec3> points;
+    for (int v : nodes) points.push_back(state.nodes[v]);
+    if (points.size() < 3) return false;
+    *plane = fitPlane(points);
+    double area = 0.0;
+    for (size_t i = 1; i + 1 < points.size(); ++i)
+      for (size_t j = i + 1; j < points.size(); ++j)
+        area = std::max(area, (points[i] - points[0]).cross(points[j] - points[0]).norm());
+    return area > eps * eps * 1e6;
+  };
+  Plane plane = fit;
+  // The mesh boundary (surface or crack) along the group: its faces around the group's nodes that are
+  // parallel to the group and near its plane. If they lie in one plane, that plane stays where it is.
+  std::vector<int> surface;
+  for (int v : ids)
+    for (int e : state.adjacency[v])
+      for (size_t f = 0; f < state.elements[e].size(); ++f) {
+        const Face& face = state.elements[e][f];
+        if (std::find(face.begin(), face.end(), v) == face.end()) continue;
+        if (faceUsers(state, face).size() > 1 && !isCrack(state, e, static_cast<int>(f))) continue;
+        if (std::abs(newellNormal(state.nodes, face).normalized().dot(fit.normal)) < 0.9) continue;
+        bool near = true;
+        for (int u : face)
+          near = near && std::abs(fit.normal.dot(state.nodes[u] - fit.center)) <= thin_distance;
+        if (!near) continue;
+        for (int u : face)
+          if (std::find(surface.begin(), surface.end(), u) == surface.end()) surface.push_back(u);
+      }
+  if (planeThrough(surface, &plane)) {
+    double off = 0.0;
+    for (int v : surface) off = std::max(off, std::abs(plane.normal.dot(state.nodes[v] - plane.center)));
+    if (off <= eps) return plane;
+  }
+  if (has_neighbour[0] != has_neighbour[1] && planeThrough(side_nodes[has_neighbour[0] ? 1 : 0], &plane))
+    return plane;
+  std::vector<int> old_nodes;
+  for (int v : ids)
+    if (v < first_new_node) old_nodes.push_back(v);
+  if (planeThrough(old_nodes, &plane)) {
+    double off = 0.0;
+    for (int v : old_nodes) off = std::max(off, std::abs(plane.normal.dot(state.nodes[v] - plane.center)));
+    if (off <= eps) return plane;
+  }
+  return fit;
+}
+
 // Removes element s as in 9.2, together with the neighbours that lie in its sliver plane within thin_distance
 // (relative to the sliver's diameter; they would be flattened further). Throws std::runtime_error where the
-// construction fails. Returns the number of elements removed (not counting collapsed ones).
-int removeElement(MeshState& state, int s, double merge_relative_distance, double thin_relative,
-                  const std::vector<char>& is_boundary_node, RemovalCounts& counts) {
+// construction fails. Returns the number of elements removed (not counting collapsed ones); deleted
+// elements are left empty. undo (local mode) receives the touched elements' previous state.
+int removeElement(MeshState& state, int s, const RemovalSettings& settings,
+                  const std::vector<char>& is_boundary_node, RemovalCounts& counts, RemovalUndo* undo) {
   std::vector<Vec3>& nodes = state.nodes;
-  const bool has_disp = !state.displacements.empty();
+  const bool has_disp = !state.displacements.empty(), has_crack = !state.crack.empty();
   std::vector<int> ids = elementNodes(state.elements[s]);
   double diameter = 0.0;
   for (int a : ids)
     for (int b : ids) diameter = std::max(diameter, (nodes[a] - nodes[b]).norm());
   const double eps = 1e-9 * diameter, area_eps = eps * diameter;
+  const double thin_relative = settings.thin_relative;
 
   // Flat group: the sliver and face neighbours with all nodes near its plane.
-  std::map<std::vector<int>, std::vector<int>> face_elements;
-  for (size_t e = 0; e < state.elements.size(); ++e)
-    for (const Face& face : state.elements[e]) face_elements[sortedKey(face)].push_back(int(e));
   std::vector<char> in_group(state.elements.size(), 0);
   in_group[s] = 1;
   std::vector<int> group = {s};
-  Plane plane = sliverPlane(nodes, ids, is_boundary_node, eps);
+  Plane plane = settings.local ? fitPlane([&] {
+    std::vector<Vec3> p;
+    for (int v : ids) p.push_back(nodes[v]);
+    return p;
+  }())
+                               : sliverPlane(nodes, ids, is_boundary_node, eps);
   for (bool grown = true; grown;) {
     grown = false;
     for (size_t g = 0; g < group.size() && !grown; ++g)
       for (const Face& face : state.elements[group[g]]) {
-        for (int e : face_elements[sortedKey(face)]) {
+        for (const auto& user : faceUsers(state, face)) {
+          const int e = user.first;
           if (in_group[e]) continue;
           bool flat = true;
           for (int v : elementNodes(state.elements[e]))
@@ -178,29 +306,60 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
           group.push_back(e);
           for (int v : elementNodes(state.elements[e]))
             if (std::find(ids.begin(), ids.end(), v) == ids.end()) ids.push_back(v);
-          plane = sliverPlane(nodes, ids, is_boundary_node, eps);
+          if (settings.local) {
+            std::vector<Vec3> p;
+            for (int v : ids) p.push_back(nodes[v]);
+            plane = fitPlane(p);
+          } else {
+            plane = sliverPlane(nodes, ids, is_boundary_node, eps);
+          }
           grown = true;
           break;
         }
         if (grown) break;
       }
   }
+  if (settings.local)
+    plane =
+        localSliverPlane(state, group, in_group, ids, settings.first_new_node, eps, thin_relative * diameter);
   const Vec3 center = plane.center, normal = plane.normal;
   const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
   auto plane2d = [&](int v) { return Vec2(e1.dot(nodes[v] - center), e2.dot(nodes[v] - center)); };
 
+  // Elements using the group's nodes: the only ones the removal changes.
+  std::vector<int> affected;
+  for (int v : ids) affected.insert(affected.end(), state.adjacency[v].begin(), state.adjacency[v].end());
+  std::sort(affected.begin(), affected.end());
+  affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
+  if (undo) {
+    undo->elements = affected;
+    for (int e : affected) {
+      undo->faces.push_back(state.elements[e]);
+      if (has_crack) undo->crack.push_back(state.crack[e]);
+      undo->element_nodes.push_back(elementNodes(state.elements[e]));
+    }
+    undo->num_nodes = nodes.size();
+    for (int v : ids) {
+      undo->positions.emplace_back(v, nodes[v]);
+      if (has_disp) undo->displacements.emplace_back(v, state.displacements[v]);
+    }
+  }
+
   // Project, then merge nodes closer than the merge distance (union-find over the element's nodes).
-  std::vector<char> moved(nodes.size(), 0);
+  std::vector<char> moved(nodes.size(), 0), on_plane(nodes.size(), 0);
+  std::map<int, Vec3> original;
+  for (int v : ids) original[v] = nodes[v];
   for (int v : ids) {
     const double d = normal.dot(nodes[v] - center);
     counts.max_projection = std::max(counts.max_projection, std::abs(d));
+    on_plane[v] = std::abs(d) <= eps;
     nodes[v] -= d * normal;
     moved[v] = 1;
   }
   std::vector<int> merged(nodes.size());
   std::iota(merged.begin(), merged.end(), 0);
   std::function<int(int)> root = [&](int v) { return merged[v] == v ? v : merged[v] = root(merged[v]); };
-  const double merge_distance = merge_relative_distance * diameter;
+  const double merge_distance = settings.merge_relative_distance * diameter;
   for (size_t i = 0; i < ids.size(); ++i)
     for (size_t j = i + 1; j < ids.size(); ++j)
       if ((nodes[ids[i]] - nodes[ids[j]]).norm() < merge_distance) {
@@ -209,37 +368,55 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
       }
   std::map<int, std::vector<int>> clusters;
   for (int v : ids) clusters[root(v)].push_back(v);
+  std::vector<int> target(nodes.size());  // merged node -> the node kept
+  std::iota(target.begin(), target.end(), 0);
   for (const auto& cluster : clusters) {
     if (cluster.second.size() < 2) continue;
+    counts.merged_nodes += static_cast<int>(cluster.second.size()) - 1;
+    int keep = cluster.first;
+    if (settings.local) {
+      // A node that was on the plane keeps its place (and its values), else a node from before the cut
+      // returns to its place: the new nodes snap to the existing geometry (9.3.1).
+      auto rank = [&](int v) { return on_plane[v] ? 0 : (v < settings.first_new_node ? 1 : 2); };
+      for (int v : cluster.second)
+        if (rank(v) < rank(keep) || (rank(v) == rank(keep) && v < keep)) keep = v;
+      if (rank(keep) == 1) nodes[keep] = original[keep];
+      for (int v : cluster.second) target[v] = keep;
+      continue;
+    }
     Vec3 position = Vec3::Zero(), displacement = Vec3::Zero();
     for (int v : cluster.second) {
       position += nodes[v];
       if (has_disp) displacement += state.displacements[v];
     }
     const double k = static_cast<double>(cluster.second.size());
-    nodes[cluster.first] = position / k;
-    if (has_disp) state.displacements[cluster.first] = displacement / k;
-    counts.merged_nodes += static_cast<int>(cluster.second.size()) - 1;
+    nodes[keep] = position / k;
+    if (has_disp) state.displacements[keep] = displacement / k;
+    for (int v : cluster.second) target[v] = keep;
   }
 
-  // Apply the merge everywhere: drop repeated nodes, faces without area and elements without volume.
+  // Apply the merge: drop repeated nodes, faces without area and elements without volume.
   std::vector<char> deleted(state.elements.size(), 0);
-  for (size_t e = 0; e < state.elements.size(); ++e) {
+  for (int e : affected) {
     ElementFaces next;
+    std::vector<char> flags;
     bool touched = false;
-    for (const Face& face : state.elements[e]) {
+    for (size_t fi = 0; fi < state.elements[e].size(); ++fi) {
+      const Face& face = state.elements[e][fi];
       Face f;
       for (int v : face) {
         touched = touched || moved[v];
-        const int r = root(v);
+        const int r = target[v];
         if (f.empty() || f.back() != r) f.push_back(r);
       }
       while (f.size() > 1 && f.front() == f.back()) f.pop_back();
       if (f.size() < 3) continue;
       if (touched && newellNormal(nodes, f).norm() <= 2.0 * area_eps) continue;
       next.push_back(std::move(f));
+      if (has_crack) flags.push_back(state.crack[e][fi]);
     }
     state.elements[e] = std::move(next);
+    if (has_crack) state.crack[e] = std::move(flags);
     if (in_group[e] || !touched) continue;
     if (state.elements[e].size() < 4) {
       deleted[e] = 1;
@@ -251,19 +428,23 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
     for (const Vec3& p : element_points) scale = std::max(scale, (p - element_points[0]).norm());
     if (std::abs(surfaceVolume(nodes, state.elements[e])) <= 1e-9 * scale * scale * scale) deleted[e] = 1;
   }
-  for (char d : deleted) counts.collapsed += d;
+  for (int e : affected) counts.collapsed += deleted[e];
 
   // Upper (counter-clockwise around the normal) and lower faces of the flattened element; each set tiles the
   // projected polygon.
   // The flat group's surface: faces not shared by two group elements.
   ElementFaces sliver;
+  std::vector<char> sliver_crack;
   {
     std::map<std::vector<int>, int> uses;
     for (int g : group)
       for (const Face& face : state.elements[g]) ++uses[sortedKey(face)];
     for (int g : group)
-      for (const Face& face : state.elements[g])
-        if (uses[sortedKey(face)] == 1) sliver.push_back(face);
+      for (size_t f = 0; f < state.elements[g].size(); ++f)
+        if (uses[sortedKey(state.elements[g][f])] == 1) {
+          sliver.push_back(state.elements[g][f]);
+          sliver_crack.push_back(has_crack ? state.crack[g][f] : 0);
+        }
   }
   std::vector<std::vector<Vec2>> polygon(sliver.size());
   std::vector<int> orientation(sliver.size(), 0);
@@ -277,15 +458,17 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
     orientation[f] = area > 0.0 ? 1 : -1;
     if (orientation[f] < 0) std::reverse(polygon[f].begin(), polygon[f].end());  // 2D counter-clockwise
   }
-  // Neighbours across the sliver faces (before their faces change).
+  // Neighbours across the sliver faces (before their faces change); crack faces have none.
   std::map<std::vector<int>, std::vector<std::pair<int, int>>> face_users;
-  for (size_t e = 0; e < state.elements.size(); ++e)
+  for (int e : affected)
     if (!deleted[e] && !in_group[e])
       for (size_t f = 0; f < state.elements[e].size(); ++f)
-        face_users[sortedKey(state.elements[e][f])].emplace_back(int(e), int(f));
+        if (!has_crack || !state.crack[e][f])
+          face_users[sortedKey(state.elements[e][f])].emplace_back(e, int(f));
   // The neighbour's copy runs opposite to the sliver's (merged needles may leave two faces on one node set).
   std::vector<std::pair<int, int>> neighbour(sliver.size(), {-1, -1});
   for (size_t f = 0; f < sliver.size(); ++f) {
+    if (sliver_crack[f]) continue;
     auto it = face_users.find(sortedKey(sliver[f]));
     if (it == face_users.end()) continue;
     Face reversed(sliver[f].rbegin(), sliver[f].rend());
@@ -323,6 +506,15 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
       const int id = static_cast<int>(nodes.size());
       nodes.push_back((1.0 - t) * nodes[up.first] + t * nodes[up.second]);
       moved.push_back(1);
+      target.push_back(id);
+      state.adjacency.emplace_back();
+      if (settings.local) state.replacement.push_back(id);
+      // The interpolant is linear on edges: the mean of its values along the two crossing edges.
+      if (settings.local)
+        state.new_stencils.push_back({{up.first, 0.5 * (1.0 - t)},
+                                      {up.second, 0.5 * t},
+                                      {low.first, 0.5 * (1.0 - u)},
+                                      {low.second, 0.5 * u}});
       if (has_disp)
         state.displacements.push_back(
             0.5 * ((1.0 - t) * state.displacements[up.first] + t * state.displacements[up.second] +
@@ -360,7 +552,8 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
     for (size_t k = 0; k < poly.size(); ++k) area += cross2(poly[k], poly[(k + 1) % poly.size()]);
     return 0.5 * area;
   };
-  std::vector<std::vector<Face>> cells_of(sliver.size());  // per sliver face: its cells (2D ccw)
+  // Per sliver face: its cells (2D ccw) and the sliver face on the other side of each.
+  std::vector<std::vector<std::pair<Face, int>>> cells_of(sliver.size());
   for (size_t fu = 0; fu < sliver.size(); ++fu) {
     if (orientation[fu] < 0) continue;
     double covered = 0.0;
@@ -384,8 +577,8 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
       const double area = polygonArea(cell2d);
       if (area <= area_eps) continue;
       covered += area;
-      cells_of[fu].push_back(cell);
-      cells_of[fl].push_back(cell);
+      cells_of[fu].emplace_back(cell, static_cast<int>(fl));
+      cells_of[fl].emplace_back(cell, static_cast<int>(fu));
     }
     if (std::abs(covered - polygonArea(polygon[fu])) > 1e-9 * diameter * diameter)
       throw std::runtime_error("sliver re-tessellation does not cover upper face " + std::to_string(fu));
@@ -393,7 +586,7 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
 
   // New and T-junction nodes enter every face along the split edges.
   for (auto& entry : on_edge) std::sort(entry.second.begin(), entry.second.end());
-  for (size_t e = 0; e < state.elements.size(); ++e) {
+  for (int e : affected) {
     if (deleted[e] || in_group[e]) continue;
     for (Face& face : state.elements[e]) {
       Face next;
@@ -410,29 +603,48 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
       face = std::move(next);
     }
   }
-  // Each neighbour's face on the sliver is replaced by the cells it covers (outward for the neighbour).
-  std::map<std::pair<int, int>, std::vector<Face>> replacement;
+  // Each neighbour's face on the sliver is replaced by the cells it covers (outward for the neighbour); a
+  // cell is a crack face where the sliver face on its other side was one.
+  std::map<std::pair<int, int>, std::vector<std::pair<Face, char>>> replacement;
   for (size_t f = 0; f < sliver.size(); ++f) {
     if (neighbour[f].first < 0) continue;
-    for (Face cell : cells_of[f]) {
+    for (auto [cell, other] : cells_of[f]) {
       if (orientation[f] > 0) std::reverse(cell.begin(), cell.end());  // neighbour above: outward is -normal
-      replacement[neighbour[f]].push_back(cell);
+      replacement[neighbour[f]].emplace_back(cell, sliver_crack[other]);
     }
   }
   for (const auto& entry : replacement) {
     ElementFaces& faces = state.elements[entry.first.first];
     faces[entry.first.second].clear();
-    for (const Face& cell : entry.second) faces.push_back(cell);
+    for (const auto& cell : entry.second) {
+      faces.push_back(cell.first);
+      if (has_crack) state.crack[entry.first.first].push_back(cell.second);
+    }
+  }
+  // A neighbour's face that merged nodes made coincide with a crack face of the group lies on the crack now.
+  if (has_crack) {
+    std::set<std::vector<int>> crack_keys;
+    for (int g : group)
+      for (size_t f = 0; f < state.elements[g].size(); ++f)
+        if (state.crack[g][f]) crack_keys.insert(sortedKey(state.elements[g][f]));
+    for (int e : affected)
+      if (!deleted[e] && !in_group[e])
+        for (size_t f = 0; f < state.elements[e].size(); ++f)
+          if (!state.elements[e][f].empty() && crack_keys.count(sortedKey(state.elements[e][f])))
+            state.crack[e][f] = 1;
   }
   for (int g : group) deleted[g] = 1;
 
   // Faces bent by the projection (non-planar, more than 3 nodes) are fan-triangulated, identically on both
   // sides.
   std::map<std::vector<int>, std::pair<Face, std::vector<Face>>> triangulated;  // key -> (first copy, fan)
-  for (size_t e = 0; e < state.elements.size(); ++e) {
+  for (int e : affected) {
     if (deleted[e]) continue;
     ElementFaces next;
-    for (Face& face : state.elements[e]) {
+    std::vector<char> flags;
+    for (size_t fi = 0; fi < state.elements[e].size(); ++fi) {
+      Face& face = state.elements[e][fi];
+      const char flag = has_crack ? state.crack[e][fi] : 0;
       if (face.empty()) continue;
       bool bent = false;
       if (face.size() > 3 && std::any_of(face.begin(), face.end(), [&](int v) { return moved[v] != 0; })) {
@@ -441,6 +653,7 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
       }
       if (!bent) {
         next.push_back(std::move(face));
+        flags.push_back(flag);
         continue;
       }
       const std::vector<int> key = sortedKey(face);
@@ -466,28 +679,62 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
         for (int j = 1; j + 1 < k; ++j)
           fan.push_back({face[best], face[(best + j) % k], face[(best + j + 1) % k]});
         it = triangulated.emplace(key, std::make_pair(face, fan)).first;
-        for (const Face& t : fan) next.push_back(t);
+        for (const Face& t : fan) {
+          next.push_back(t);
+          flags.push_back(flag);
+        }
         continue;
       }
       const bool same = face == it->second.first;  // else the opposite copy
       for (Face t : it->second.second) {
         if (!same) std::reverse(t.begin(), t.end());
         next.push_back(t);
+        flags.push_back(flag);
       }
     }
     state.elements[e] = std::move(next);
+    if (has_crack) state.crack[e] = std::move(flags);
   }
+  for (int e : affected)
+    if (deleted[e]) {
+      state.elements[e].clear();
+      if (has_crack) state.crack[e].clear();
+    }
+  for (int& v : state.node_map)
+    if (v >= 0) v = target[v];
+  if (settings.local)
+    for (int v : ids)
+      if (target[v] != v) state.replacement[v] = target[v];
+  // Adjacency of the touched elements' old and new nodes.
+  for (int e : affected) {
+    for (int v :
+         undo ? undo->element_nodes[std::lower_bound(affected.begin(), affected.end(), e) - affected.begin()]
+              : std::vector<int>()) {
+      auto& list = state.adjacency[v];
+      list.erase(std::remove(list.begin(), list.end(), e), list.end());
+    }
+  }
+  if (undo)
+    for (int e : affected)
+      for (int v : elementNodes(state.elements[e])) {
+        auto& list = state.adjacency[v];
+        list.insert(std::lower_bound(list.begin(), list.end(), e), e);
+      }
+  return static_cast<int>(group.size());
+}
 
-  // Compact: drop deleted elements and unused nodes.
+// Drops deleted (empty) elements and unused nodes (global mode, after each removal).
+void compactState(MeshState& state) {
+  const bool has_disp = !state.displacements.empty();
   MeshState out;
-  std::vector<int> new_id(nodes.size(), -1);
+  std::vector<int> new_id(state.nodes.size(), -1);
   for (size_t e = 0; e < state.elements.size(); ++e) {
-    if (deleted[e]) continue;
+    if (state.elements[e].empty()) continue;
     for (Face& face : state.elements[e])
       for (int& v : face) {
         if (new_id[v] < 0) {
           new_id[v] = static_cast<int>(out.nodes.size());
-          out.nodes.push_back(nodes[v]);
+          out.nodes.push_back(state.nodes[v]);
           if (has_disp) out.displacements.push_back(state.displacements[v]);
         }
         v = new_id[v];
@@ -496,32 +743,111 @@ int removeElement(MeshState& state, int s, double merge_relative_distance, doubl
     out.parent.push_back(state.parent[e]);
   }
   for (int& v : state.node_map)
-    if (v >= 0) v = new_id[root(v)];
+    if (v >= 0) v = new_id[v];
   out.node_map = std::move(state.node_map);
   state = std::move(out);
-  return static_cast<int>(group.size());
 }
 
-// Relative tolerance that covers the face planarity and convexity deviations of all elements.
+// Relative tolerance that covers the face planarity and convexity deviations of one element.
+double requiredRelativeTolerance(const std::vector<Vec3>& nodes, const ElementFaces& faces) {
+  double required = 0.0;
+  const std::vector<int> ids = elementNodes(faces);
+  Vec3 lo = nodes[ids[0]], hi = lo;
+  for (int v : ids) {
+    lo = lo.cwiseMin(nodes[v]);
+    hi = hi.cwiseMax(nodes[v]);
+  }
+  const double scale = (hi - lo).norm();
+  for (const Face& face : faces) {
+    const Vec3 n = newellNormal(nodes, face).normalized();
+    double offset = 0.0;
+    for (int v : face) offset += n.dot(nodes[v]);
+    offset /= static_cast<double>(face.size());
+    for (int v : face) required = std::max(required, std::abs(n.dot(nodes[v]) - offset) / scale);
+    for (int v : ids) required = std::max(required, (n.dot(nodes[v]) - offset) / scale);
+  }
+  return required;
+}
+
+// Same for all elements.
 double requiredRelativeTolerance(const MeshState& state) {
   double required = 0.0;
-  for (const ElementFaces& faces : state.elements) {
-    const std::vector<int> ids = elementNodes(faces);
-    Vec3 lo = state.nodes[ids[0]], hi = lo;
-    for (int v : ids) {
-      lo = lo.cwiseMin(state.nodes[v]);
-      hi = hi.cwiseMax(state.nodes[v]);
+  for (const ElementFaces& faces : state.elements)
+    required = std::max(required, requiredRelativeTolerance(state.nodes, faces));
+  return required;
+}
+
+// Element e as a ConvexPolyhedron (throws std::invalid_argument if invalid).
+ConvexPolyhedron makeElement(const MeshState& state, int e, double relative_tolerance) {
+  std::vector<int> ids;
+  std::map<int, int> local;
+  std::vector<ConvexPolyhedron::Face> faces;
+  for (const Face& face : state.elements[e]) {
+    ConvexPolyhedron::Face local_face;
+    for (int v : face) {
+      auto it = local.emplace(v, static_cast<int>(ids.size())).first;
+      if (it->second == static_cast<int>(ids.size())) ids.push_back(v);
+      local_face.push_back(it->second);
     }
-    const double scale = (hi - lo).norm();
-    for (const Face& face : faces) {
-      const Vec3 n = newellNormal(state.nodes, face).normalized();
-      double offset = 0.0;
-      for (int v : face) offset += n.dot(state.nodes[v]);
-      offset /= static_cast<double>(face.size());
-      for (int v : face) required = std::max(required, std::abs(n.dot(state.nodes[v]) - offset) / scale);
-      for (int v : ids) required = std::max(required, (n.dot(state.nodes[v]) - offset) / scale);
-    }
+    faces.push_back(std::move(local_face));
   }
+  std::vector<Vec3> points;
+  for (int v : ids) points.push_back(state.nodes[v]);
+  return ConvexPolyhedron(std::move(points), std::move(faces), relative_tolerance, std::move(ids));
+}
+
+// The touched elements after a local removal: valid convex elements at the tolerance, every face shared by
+// at most two elements in opposite orientation, crack faces unshared, and every boundary edge of a touched
+// element matched by a reverse boundary edge. Returns the relative tolerance they need; throws otherwise.
+double checkTouchedElements(const MeshState& state, const std::vector<int>& touched, double tolerance,
+                            double max_tolerance) {
+  double required = tolerance;
+  for (int e : touched)
+    if (!state.elements[e].empty())
+      required = std::max(required, 1.5 * requiredRelativeTolerance(state.nodes, state.elements[e]));
+  if (required > max_tolerance) throw std::runtime_error("neighbours too far from convex");
+  std::map<std::pair<int, int>, int> boundary_edges;
+  std::set<int> near;  // the touched elements and their node neighbours (to match boundary edges)
+  for (int e : touched) {
+    if (state.elements[e].empty()) continue;
+    makeElement(state, e, required);
+    for (size_t f = 0; f < state.elements[e].size(); ++f) {
+      const Face& face = state.elements[e][f];
+      const std::vector<std::pair<int, int>> users = faceUsers(state, face);
+      if (users.size() > 2) throw std::runtime_error("face used by more than two elements");
+      if (users.size() == 2) {
+        const auto& other = users[0].first == e ? users[1] : users[0];
+        if (isCrack(state, e, int(f)) || isCrack(state, other.first, other.second))
+          throw std::runtime_error("crack face shared");
+        const Face& b = state.elements[other.first][other.second];
+        const Face reversed(face.rbegin(), face.rend());
+        const auto start = std::find(b.begin(), b.end(), reversed[0]);
+        Face rotated(start, b.end());
+        rotated.insert(rotated.end(), b.begin(), start);
+        if (rotated != reversed) throw std::runtime_error("shared face not in opposite order");
+      }
+    }
+    for (int v : elementNodes(state.elements[e]))
+      near.insert(state.adjacency[v].begin(), state.adjacency[v].end());
+  }
+  // Boundary edges of the touched elements must be closed by boundary faces around them.
+  std::set<int> touched_set(touched.begin(), touched.end());
+  for (int e : near)
+    for (size_t f = 0; f < state.elements[e].size(); ++f) {
+      const Face& face = state.elements[e][f];
+      if (faceUsers(state, face).size() == 2 && !isCrack(state, e, int(f))) continue;
+      for (size_t k = 0; k < face.size(); ++k) {
+        const int a = face[k], b = face[(k + 1) % face.size()];
+        const int sign = a < b ? 1 : -1;
+        boundary_edges[edgeKey(a, b)] += sign;
+      }
+    }
+  for (int e : touched)
+    for (const Face& face : state.elements[e])
+      for (size_t k = 0; k < face.size(); ++k) {
+        const auto it = boundary_edges.find(edgeKey(face[k], face[(k + 1) % face.size()]));
+        if (it != boundary_edges.end() && it->second != 0) throw std::runtime_error("boundary not closed");
+      }
   return required;
 }
 
@@ -604,8 +930,12 @@ SliverRemovalResult removeSlivers(const PolyhedralMesh& mesh, const std::vector<
     RemovalCounts counts;
     int removed = 0;
     try {
-      removed = removeElement(next, worst, options.merge_relative_distance, options.sliver_relative_thickness,
-                              current.isBoundaryNode(), counts);
+      RemovalSettings settings;
+      settings.merge_relative_distance = options.merge_relative_distance;
+      settings.thin_relative = options.sliver_relative_thickness;
+      next.adjacency = buildAdjacency(next);
+      removed = removeElement(next, worst, settings, current.isBoundaryNode(), counts, nullptr);
+      compactState(next);
       const double required = std::max(tolerance, 1.5 * requiredRelativeTolerance(next));
       if (required > options.max_relative_tolerance)
         throw std::runtime_error("neighbours too far from convex");
@@ -629,6 +959,147 @@ SliverRemovalResult removeSlivers(const PolyhedralMesh& mesh, const std::vector<
   result.node_map = std::move(state.node_map);
   result.parent_element = std::move(state.parent);
   return result;
+}
+
+CutSliverStats removeCutSlivers(EditableMesh& mesh, const std::vector<int>& candidates, int first_new_node,
+                                double relative_tolerance, const CutSliverOptions& options,
+                                CutSliverEdits* edits) {
+  if (!(options.relative_thickness >= 0.0 && options.relative_thickness < 1.0))
+    throw std::invalid_argument("removeCutSlivers: relative_thickness must be in [0, 1), got " +
+                                std::to_string(options.relative_thickness));
+  if (!(options.merge_relative_distance >= 0.0 && options.merge_relative_distance < 0.5))
+    throw std::invalid_argument("removeCutSlivers: merge_relative_distance must be in [0, 0.5)");
+  if (!(options.max_relative_tolerance > 0.0 && options.max_relative_tolerance < 1e-2))
+    throw std::invalid_argument("removeCutSlivers: max_relative_tolerance must be in (0, 1e-2)");
+  CutSliverStats stats;
+  stats.relative_tolerance = relative_tolerance;
+  const int num_input_nodes = static_cast<int>(mesh.nodes.size());
+  const int num_elements = static_cast<int>(mesh.elements.size());
+  if (edits) {
+    edits->kept_elements.resize(num_elements);
+    std::iota(edits->kept_elements.begin(), edits->kept_elements.end(), 0);
+    edits->node_replacement.resize(num_input_nodes);
+    std::iota(edits->node_replacement.begin(), edits->node_replacement.end(), 0);
+    edits->new_node_stencils.clear();
+    edits->num_input_nodes = num_input_nodes;
+  }
+  stats.num_candidates = static_cast<int>(candidates.size());
+  if (!options.enabled || candidates.empty()) return stats;
+
+  // Relative thickness of the live candidates (recomputed for the ones a removal touches).
+  std::map<int, double> thickness;
+  MeshState state;
+  auto measure = [&](int e) {
+    try {
+      thickness[e] = elementQuality(makeElement(state, e, relative_tolerance)).relative_thickness;
+    } catch (const std::invalid_argument&) {
+      thickness[e] = 0.0;  // degenerate: thinnest
+    }
+  };
+  state.nodes = std::move(mesh.nodes);
+  state.displacements = std::move(mesh.displacements);
+  state.elements = std::move(mesh.elements);
+  state.crack = std::move(mesh.crack_faces);
+  for (int e : candidates) measure(e);
+  for (const auto& entry : thickness) stats.num_thin += entry.second < options.relative_thickness;
+  if (stats.num_thin > 0) {
+    state.adjacency = buildAdjacency(state);  // the one pass over the mesh
+    state.replacement.resize(state.nodes.size());
+    std::iota(state.replacement.begin(), state.replacement.end(), 0);
+    state.num_input_nodes = num_input_nodes;
+    RemovalSettings settings;
+    settings.merge_relative_distance = options.merge_relative_distance;
+    settings.thin_relative = options.relative_thickness;
+    settings.local = true;
+    settings.first_new_node = first_new_node;
+    std::set<int> rejected;
+    for (;;) {
+      int worst = -1;
+      double worst_thickness = options.relative_thickness;
+      for (const auto& [e, t] : thickness)
+        if (t < worst_thickness && !rejected.count(e)) {
+          worst = e;
+          worst_thickness = t;
+        }
+      if (worst < 0) break;
+      RemovalCounts counts;
+      RemovalUndo undo;
+      const size_t num_stencils = state.new_stencils.size();
+      try {
+        const int removed = removeElement(state, worst, settings, {}, counts, &undo);
+        stats.relative_tolerance = checkTouchedElements(state, undo.elements, stats.relative_tolerance,
+                                                        options.max_relative_tolerance);
+        stats.num_removed += removed;
+        stats.num_collapsed += counts.collapsed;
+        stats.num_new_nodes += counts.new_nodes;
+        stats.num_merged_nodes += counts.merged_nodes;
+        stats.max_projection_distance = std::max(stats.max_projection_distance, counts.max_projection);
+        for (int e : undo.elements) {
+          if (state.elements[e].empty()) {
+            thickness.erase(e);
+          } else if (thickness.count(e)) {
+            measure(e);
+          }
+        }
+      } catch (const std::exception&) {  // invalid neighbours or overlay: keep the element as it was
+        if (!undo.elements.empty()) {
+          for (int e : undo.elements)  // drop the adjacency entries of the changed elements
+            for (int v : elementNodes(state.elements[e])) {
+              auto& list = state.adjacency[v];
+              list.erase(std::remove(list.begin(), list.end(), e), list.end());
+            }
+          for (size_t k = 0; k < undo.elements.size(); ++k) {
+            const int e = undo.elements[k];
+            state.elements[e] = undo.faces[k];
+            if (!state.crack.empty()) state.crack[e] = undo.crack[k];
+            for (int v : undo.element_nodes[k]) {
+              auto& list = state.adjacency[v];
+              if (!std::binary_search(list.begin(), list.end(), e))
+                list.insert(std::lower_bound(list.begin(), list.end(), e), e);
+            }
+          }
+          for (const auto& [v, x] : undo.positions) {
+            state.nodes[v] = x;
+            state.replacement[v] = v;
+          }
+          for (const auto& [v, u] : undo.displacements) state.displacements[v] = u;
+          state.nodes.resize(undo.num_nodes);
+          state.adjacency.resize(undo.num_nodes);
+          state.replacement.resize(undo.num_nodes);
+          if (!state.displacements.empty()) state.displacements.resize(undo.num_nodes);
+          state.new_stencils.resize(num_stencils);
+        }
+        rejected.insert(worst);
+        ++stats.num_rejected;
+      }
+    }
+  }
+  // Compact the elements; merged nodes stay (unused).
+  std::vector<int> kept;
+  for (int e = 0; e < num_elements; ++e)
+    if (!state.elements[e].empty()) {
+      if (static_cast<int>(kept.size()) != e) {
+        state.elements[kept.size()] = std::move(state.elements[e]);
+        if (!state.crack.empty()) state.crack[kept.size()] = std::move(state.crack[e]);
+      }
+      kept.push_back(e);
+    }
+  state.elements.resize(kept.size());
+  if (!state.crack.empty()) state.crack.resize(kept.size());
+  if (edits) {
+    edits->kept_elements = kept;
+    if (!state.replacement.empty()) {
+      edits->node_replacement = state.replacement;
+      for (int& v : edits->node_replacement)
+        while (state.replacement[v] != v) v = state.replacement[v];
+    }
+    edits->new_node_stencils = std::move(state.new_stencils);
+  }
+  mesh.nodes = std::move(state.nodes);
+  mesh.displacements = std::move(state.displacements);
+  mesh.elements = std::move(state.elements);
+  mesh.crack_faces = std::move(state.crack);
+  return stats;
 }
 
 }  // namespace rc

@@ -5,6 +5,7 @@
 // the old faces it covers. The sliver element disappears; its neighbours keep their identity.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "fem/polyhedral_mesh.h"
@@ -68,5 +69,63 @@ struct SliverRemovalResult {
 /// std::invalid_argument for bad options or a wrong displacement count.
 SliverRemovalResult removeSlivers(const PolyhedralMesh& mesh, const std::vector<Vec3>& displacements = {},
                                   const SliverRemovalOptions& options = SliverRemovalOptions());
+
+/// Weights (node, weight) that give a derived node's value from earlier nodes' values.
+using NodeStencil = std::vector<std::pair<int, double>>;
+
+/// Automatic sliver removal after a cut (9.2 applied to the elements the cut created; 9.3.1: thin parts are
+/// snapped to the existing geometry). Quality measure: ElementQuality::relative_thickness = thickness /
+/// diameter (thickness: min over faces of the farthest node's distance to the face plane; diameter: largest
+/// node distance). A cut element below `relative_thickness` is merged into its neighbours with its flat
+/// neighbours. Sliver plane, first that applies: the mesh boundary (surface or crack faces) along the group
+/// and parallel to it if that is one plane; the group's large faces on the side without neighbours; its
+/// nodes from before the cut if coplanar; least squares. Merged nodes keep the position of a node on that
+/// plane, else of a node from before the cut. So the boundary does not move and the volume is kept wherever
+/// the boundary is planar. A thin element with no neighbour on either large side (a separated thin sheet)
+/// cannot be merged and is kept (rejected), as is one whose neighbours would become invalid.
+struct CutSliverOptions {
+  bool enabled = true;  ///< off: cuts leave thin elements as they are (the behaviour without removal)
+  /// 0.01: a 1e-3 h slice of a cube cell has 7e-4; 1e-2 h slices (7e-3) are merged too, 3e-2 h ones kept.
+  double relative_thickness = 0.01;
+  double merge_relative_distance = 0.1;  ///< SliverRemovalOptions::merge_relative_distance
+  double max_relative_tolerance = 1e-3;  ///< SliverRemovalOptions::max_relative_tolerance
+};
+
+/// What the removal after one cut did.
+struct CutSliverStats {
+  int num_candidates = 0;    ///< elements the cut created (the only ones examined)
+  int num_thin = 0;          ///< of these, below the threshold before the removal
+  int num_removed = 0;       ///< elements merged away (thin cut elements and flat neighbours)
+  int num_rejected = 0;      ///< thin elements kept (nothing to merge into, or invalid neighbours)
+  int num_collapsed = 0;     ///< neighbours that became flat by node merging and were dropped
+  int num_new_nodes = 0;     ///< edge intersections in sliver planes
+  int num_merged_nodes = 0;  ///< nodes merged into another node
+  double max_projection_distance = 0.0;
+  double relative_tolerance = 0.0;  ///< the changed elements' tolerance (>= the input's)
+};
+
+/// Raw mesh arrays edited in place by removeCutSlivers.
+struct EditableMesh {
+  std::vector<Vec3> nodes;
+  std::vector<Vec3> displacements;                     ///< empty or one per node
+  std::vector<PolyhedralMesh::ElementFaces> elements;  ///< closed outward polygon surfaces
+  std::vector<std::vector<char>> crack_faces;          ///< empty or per element face (crack: 1)
+};
+
+/// What removeCutSlivers changed beyond the arrays.
+struct CutSliverEdits {
+  std::vector<int> kept_elements;     ///< per output element: its input element (removed ones are dropped)
+  std::vector<int> node_replacement;  ///< per output node: the node that replaces it (itself if kept)
+  std::vector<NodeStencil> new_node_stencils;  ///< per node appended (input nodes first), over earlier nodes
+  int num_input_nodes = 0;
+};
+
+/// Merges the thin elements among `candidates` (element ids of mesh, the elements a cut created) into their
+/// neighbours. Nodes below first_new_node existed before the cut. Cost: the candidates' neighbourhoods plus
+/// one linear pass to find node neighbours. Elements are compacted; merged nodes stay in the array unused;
+/// new nodes are appended. relative_tolerance: the mesh's (the result's tolerance is at least that).
+CutSliverStats removeCutSlivers(EditableMesh& mesh, const std::vector<int>& candidates, int first_new_node,
+                                double relative_tolerance, const CutSliverOptions& options,
+                                CutSliverEdits* edits = nullptr);
 
 }  // namespace rc

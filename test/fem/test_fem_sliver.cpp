@@ -1,7 +1,8 @@
 // Sliver and needle detection and sliver removal by projection onto the sliver plane (thesis 9.2): counts,
 // mesh validity and volume after removal, the thesis' tetrahedral case (one new node, five-node neighbours)
 // and the extremes test: a mesh with a flattened tetrahedron and needles is badly conditioned without
-// removal and runs with bounded energy after it.
+// removal and runs with bounded energy after it. The automatic removal after cuts (removeCutSlivers) looks
+// only at the elements a cut created, keeps volume and crack faces.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -13,6 +14,8 @@
 #include <vector>
 
 #include "fem/linear_elasticity.h"
+#include "fem/plane_cut.h"
+#include "fem/polygon_cut.h"
 #include "fem/polyhedral_mesh.h"
 #include "fem/sliver_removal.h"
 #include "fem/warped_dynamics.h"
@@ -320,6 +323,109 @@ TEST(SliverRemoval, ExtremesFlattenedTetrahedronAndNeedlesRunStablyAfterRemoval)
   EXPECT_LT(after.max_energy, 1.05 * after.initial_energy);
   EXPECT_GT(after.final_energy, 0.95 * after.initial_energy);
   EXPECT_NEAR(after.max_energy / after.initial_energy, clean.max_energy / clean.initial_energy, 1e-3);
+}
+
+// Automatic removal after cuts (removeCutSlivers): only the elements the cut created are examined, so the
+// planted defects far from a cut stay; a thin tetrahedral slice is merged with its volume kept.
+TEST(CutSliverRemoval, ExaminesOnlyTheElementsTheCutCreated) {
+  const PlantedMesh planted = plantedMesh(1e-3);
+  const std::vector<ElementDefect> before = classifyElements(planted.mesh);
+  // z = 0.1: through the bottom layer of boxes, away from the planted nodes (z >= 0.25).
+  const PlaneCutResult cut = cutMeshByPlane(planted.mesh, {}, Vec3(0, 0, 0.1), Vec3(0, 0, 1));
+  const std::vector<ElementDefect> after = classifyElements(cut.mesh);
+  std::printf("cut away from the planted defects: %d split, %d candidates, %d thin; defects %d -> %d\n",
+              cut.num_split_elements, cut.slivers.num_candidates, cut.slivers.num_thin,
+              static_cast<int>(before.size()) - countDefects(before, ElementDefect::kNone),
+              static_cast<int>(after.size()) - countDefects(after, ElementDefect::kNone));
+  EXPECT_EQ(cut.slivers.num_candidates, 2 * cut.num_split_elements);
+  EXPECT_EQ(cut.slivers.num_thin, 0);
+  EXPECT_EQ(cut.mesh.numElements(), planted.mesh.numElements() + cut.num_split_elements);
+  EXPECT_EQ(countDefects(after, ElementDefect::kSliver), planted.expected_flat);
+  EXPECT_EQ(countDefects(after, ElementDefect::kNeedle), planted.expected_needles);
+}
+
+TEST(CutSliverRemoval, MergesAThinSliceOfATetrahedralGrid) {
+  // x = 1 - 1e-3 h through the Kuhn grid: thin wedges and tetrahedra at the block face, merged back.
+  const PolyhedralMesh grid =
+      PolyhedralMesh::tetrahedralGrid(Vec3(0, 0, 0), Vec3(1, 1, 1), kCells, kCells, kCells);
+  const double h = 1.0 / kCells;
+  PlaneCutOptions off;
+  off.slivers.enabled = false;
+  const Vec3 point(1.0 - 1e-3 * h, 0, 0), normal(1, 0, 0);
+  const PlaneCutResult kept = cutMeshByPlane(grid, {}, point, normal, off);
+  const PlaneCutResult merged = cutMeshByPlane(grid, {}, point, normal);
+  std::printf(
+      "tet grid slice: off %d elements (min relative thickness %.2e); on %d elements: %d thin, %d removed, "
+      "%d collapsed, %d rejected, %d merged nodes, %d new nodes, volume - 1 = %.2e, min relative thickness "
+      "%.3f\n",
+      kept.mesh.numElements(), minRelativeThickness(kept.mesh), merged.mesh.numElements(),
+      merged.slivers.num_thin, merged.slivers.num_removed, merged.slivers.num_collapsed,
+      merged.slivers.num_rejected, merged.slivers.num_merged_nodes, merged.slivers.num_new_nodes,
+      merged.mesh.volume() - 1.0, minRelativeThickness(merged.mesh));
+  EXPECT_EQ(kept.mesh.numElements(), grid.numElements() + kept.num_split_elements);
+  EXPECT_GT(merged.slivers.num_thin, 0);
+  EXPECT_EQ(merged.slivers.num_rejected, 0);
+  // Thin wedges along grid edges collapse onto the edge when their new nodes snap to its nodes.
+  EXPECT_EQ(kept.mesh.numElements() - merged.mesh.numElements(),
+            merged.slivers.num_removed + merged.slivers.num_collapsed);
+  EXPECT_EQ(merged.mesh.numElements(), grid.numElements());
+  EXPECT_EQ(merged.mesh.numNodes(), grid.numNodes());
+  EXPECT_NEAR(merged.mesh.volume(), 1.0, 1e-11);
+  EXPECT_GT(minRelativeThickness(merged.mesh), 0.1);
+  // Values follow the nodes: a linear field through the stencils is the field at the node's place before
+  // the projection onto its sliver plane (at most the projection distance away).
+  ASSERT_EQ(static_cast<int>(merged.node_stencils.size()), merged.mesh.numNodes());
+  double stencil_error = 0.0;
+  for (int v = 0; v < merged.mesh.numNodes(); ++v) {
+    Vec3 x = Vec3::Zero();
+    for (const auto& [u, w] : merged.node_stencils[v]) x += w * grid.node(u);
+    stencil_error = std::max(stencil_error, (x - merged.mesh.node(v)).norm());
+  }
+  EXPECT_LE(stencil_error, merged.slivers.max_projection_distance + 1e-12);
+}
+
+TEST(CutSliverRemoval, PartialPolygonCutKeepsCrackAndVolume) {
+  // A polygon over half the block (y < 0.5) at x = 1/4 + 1e-3 h: thin slices along the crack, which ends
+  // inside the block (partial cut: the crack front nodes stay shared).
+  const PolyhedralMesh grid =
+      PolyhedralMesh::hexahedralGrid(Vec3(0, 0, 0), Vec3(1, 1, 1), kCells, kCells, kCells);
+  const double x = 0.25 + 1e-3 * 0.25;
+  const std::vector<Vec3> polygon = {Vec3(x, -1, -1), Vec3(x, 0.5, -1), Vec3(x, 0.5, 2), Vec3(x, -1, 2)};
+  PolygonCutOptions off;
+  off.slivers.enabled = false;
+  ProgressiveCutMesh kept(grid, {}, off), merged(grid);
+  const PolygonCutStats kept_stats = kept.cut(polygon), stats = merged.cut(polygon);
+  kept.validate();
+  merged.validate();
+  std::printf(
+      "partial polygon slice: off %d elements, %d crack faces; on %d elements, %d crack faces: %d thin, %d "
+      "removed, %d rejected; volume - 1 = %.2e, components %d\n",
+      kept.numElements(), kept.numCrackFaces(), merged.numElements(), merged.numCrackFaces(),
+      stats.slivers.num_thin, stats.slivers.num_removed, stats.slivers.num_rejected, merged.volume() - 1.0,
+      merged.numComponents());
+  EXPECT_EQ(kept_stats.slivers.num_removed, 0);
+  EXPECT_GT(stats.slivers.num_thin, 0);
+  EXPECT_EQ(stats.slivers.num_removed, stats.slivers.num_thin);
+  EXPECT_EQ(merged.numElements(), kept.numElements() - stats.slivers.num_removed);
+  EXPECT_NEAR(merged.volume(), 1.0, 1e-12);
+  EXPECT_EQ(merged.numComponents(), 1);
+  EXPECT_GT(merged.numCrackFaces(), 0);
+  const PolyhedralMesh body = merged.componentMesh(0);  // one valid mesh with its crack faces listed
+  EXPECT_NEAR(body.volume(), 1.0, 1e-12);
+  EXPECT_EQ(body.numCrackFaces(), merged.numCrackFaces());
+}
+
+TEST(CutSliverRemoval, RejectsBadParameters) {
+  EditableMesh mesh{{}, {}, {}, {}};
+  CutSliverOptions options;
+  options.relative_thickness = 1.0;
+  EXPECT_THROW(removeCutSlivers(mesh, {}, 0, 1e-10, options), std::invalid_argument);
+  options = CutSliverOptions();
+  options.merge_relative_distance = 0.5;
+  EXPECT_THROW(removeCutSlivers(mesh, {}, 0, 1e-10, options), std::invalid_argument);
+  options = CutSliverOptions();
+  options.max_relative_tolerance = 0.0;
+  EXPECT_THROW(removeCutSlivers(mesh, {}, 0, 1e-10, options), std::invalid_argument);
 }
 
 }  // namespace
