@@ -9,7 +9,8 @@
 // 1606-7000 particles 18.2 s/frame, Fig. 8.8 nine dice 2214 particles 18.7 s/frame; Pentium 4, 3 GHz) with
 // our equivalents run through runSphScene: seconds per frame, steps per frame, dt and its limit, and the
 // speed-up over the thesis. `--quick`: 10k only and one frame per scene; `--no-1m`: skip the 1M rows;
-// `--dice N`: only the Fig. 8.8 rows, N frames each.
+// `--dice N`: only the Fig. 8.8 rows, N frames each (`--only TEXT`, repeatable: only the rows whose label
+// contains TEXT).
 #include <omp.h>
 
 #include <algorithm>
@@ -21,6 +22,8 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+#include <Eigen/Eigenvalues>
 
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
@@ -179,9 +182,11 @@ struct ThesisScene {
 
 /// The scene with the locally implicit goal springs and collision penalty (SphElasticConfig::implicit_goal,
 /// SphObjectPenaltyConfig::implicit): the step is no longer limited by K_e and K_c.
-SphScene implicitSprings(SphScene scene, double step_factor = 0.0) {
+/// `global`: the globally implicit goal springs (SphElasticConfig::global_implicit_goal) instead.
+SphScene implicitSprings(SphScene scene, double step_factor = 0.0, bool global = false) {
   for (SphSceneSolid& solid : scene.solids) {
     solid.elastic.implicit_goal = true;
+    solid.elastic.global_implicit_goal = global;
     solid.elastic.implicit_step_factor = step_factor;
   }
   scene.collisions.config.implicit = true;
@@ -235,8 +240,9 @@ SphScene freezingRod3d() {
   return parseSphScene(s, "freezing_rod_3d");
 }
 
-/// dice_only > 0: only the Fig. 8.8 rows, with that many frames for the implicit ones.
-void thesisTable(bool quick, int dice_only = 0) {
+/// dice_only > 0: only the Fig. 8.8 rows, with that many frames for the implicit ones; `only` (if not
+/// empty): only the rows whose label contains one of them.
+void thesisTable(bool quick, int dice_only = 0, const std::vector<std::string>& only = {}) {
   std::vector<ThesisScene> scenes;
   const SphScene dice = loadSphScene(configPath("dice_3d.yaml"));
   scenes.push_back({"8.8", "2214", 18.7, "dice_3d.yaml, implicit springs", implicitSprings(dice), 1});
@@ -246,6 +252,12 @@ void thesisTable(bool quick, int dice_only = 0) {
   scenes.push_back({"8.8", "2214", 18.7, "dice_3d.yaml, implicit springs, dt <= 4 x explicit limit",
                     implicitSprings(dice, 4.0), 1});
   scenes.push_back({"8.8", "2214", 18.7, "dice_3d.yaml (as shipped: explicit (8.31), (8.37))", dice, 1, 1});
+  for (double factor : {10.0, 20.0, 30.0, 0.0}) {
+    const std::string cap =
+        factor > 0.0 ? ", dt <= " + std::to_string(int(factor)) + " x explicit limit" : ", no cap";
+    scenes.push_back({"8.8", "2214", 18.7, "dice_3d.yaml, global implicit springs" + cap,
+                      implicitSprings(dice, factor, true), 1});
+  }
   if (dice_only > 0) {
     for (ThesisScene& t : scenes) t.frames = dice_only;
   } else {
@@ -270,6 +282,10 @@ void thesisTable(bool quick, int dice_only = 0) {
       "1/30 s) |\n");
   std::printf("|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n");
   for (ThesisScene& t : scenes) {
+    if (!only.empty() && std::none_of(only.begin(), only.end(), [&](const std::string& o) {
+          return t.label.find(o) != std::string::npos;
+        }))
+      continue;
     SphScene& scene = t.scene;
     scene.frame_count = t.frames > 0 ? t.frames : frames;
     scene.output = SphParticleOutput{};
@@ -279,17 +295,44 @@ void thesisTable(bool quick, int dice_only = 0) {
     scene.thermal.config.num_threads = t.threads;
     omp_set_num_threads(t.threads);
     SphFluidSolver solver = makeSphSolver(scene);
+    for (const auto& term : solver.forceTerms())  // planes and gravity of the global implicit springs
+      if (auto* solid = dynamic_cast<SphElasticSolid*>(term.get()))
+        solid->setEnvironment(solver.planes(), solver.config().gravity);
     SphStepLimit limit = SphStepLimit::kMaxDt;
     SphRunOptions options;
     double max_strain = 0.0, min_contact = std::numeric_limits<double>::infinity();
+    double cg_iterations = 0.0, max_p99 = 0.0, max_mean = 0.0;
+    int cg_samples = 0;
+    std::vector<double> strains;
     options.on_frame = [&](const SphFrameReport& r) {
       limit = r.limit;
+      strains.clear();
       for (const auto& term : solver.forceTerms()) {  // the state at the frame's end
-        if (const auto* solid = dynamic_cast<const SphElasticSolid*>(term.get()))
+        if (const auto* solid = dynamic_cast<const SphElasticSolid*>(term.get())) {
           max_strain = std::max(max_strain, solid->stats().max_strain);
+          const SphParticles& p = solver.particles();
+          for (size_t i = 0; i < p.size() && i < solid->strains().size(); ++i)
+            if (p.phases[i] == solid->phase())  // largest |eigenvalue| of the strain (8.26)
+              strains.push_back(
+                  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(solid->strains()[i], Eigen::EigenvaluesOnly)
+                      .eigenvalues()
+                      .cwiseAbs()
+                      .maxCoeff());
+          if (solid->config().global_implicit_goal) {
+            cg_iterations += solid->stats().implicit_iterations;
+            ++cg_samples;
+          }
+        }
         if (const auto* penalty = dynamic_cast<const SphObjectPenalty*>(term.get()))
           if (penalty->stats().contact_pairs > 0)
             min_contact = std::min(min_contact, penalty->stats().min_distance);
+      }
+      if (!strains.empty()) {  // the 99th percentile and the mean over the solid particles
+        std::sort(strains.begin(), strains.end());
+        max_p99 = std::max(max_p99, strains[strains.size() * 99 / 100]);
+        double sum = 0.0;
+        for (double e : strains) sum += e;
+        max_mean = std::max(max_mean, sum / double(strains.size()));
       }
     };
     const SphRunStats st = runSphScene(scene, solver, options);
@@ -304,8 +347,11 @@ void thesisTable(bool quick, int dice_only = 0) {
                 t.thesis_seconds_per_frame / per_30th);
     if (t.figure == std::string("8.8"))
       std::printf(
-          "<!-- %s: max strain at frame ends %.4f, smallest distance between dice %.4f m (d %.3f) -->\n",
-          t.label.c_str(), max_strain, min_contact, scene.collisions.config.contact_distance);
+          "<!-- %s: max strain at frame ends %.4f (99th percentile %.4f, mean %.4f: largest over the frame "
+          "ends), smallest distance between dice %.4f m (d %.3f), CG iterations per solve at frame ends %.1f "
+          "-->\n",
+          t.label.c_str(), max_strain, max_p99, max_mean, min_contact,
+          scene.collisions.config.contact_distance, cg_samples > 0 ? cg_iterations / cg_samples : 0.0);
     std::fflush(stdout);
   }
 }
@@ -315,13 +361,15 @@ void thesisTable(bool quick, int dice_only = 0) {
 int main(int argc, char** argv) {
   bool quick = false, million = true;
   int dice_frames = 0;
+  std::vector<std::string> only;
   for (int a = 1; a < argc; ++a) {
+    if (!std::strcmp(argv[a], "--only") && a + 1 < argc) only.push_back(argv[++a]);
     if (!std::strcmp(argv[a], "--quick")) quick = true;
     if (!std::strcmp(argv[a], "--no-1m")) million = false;
     if (!std::strcmp(argv[a], "--dice") && a + 1 < argc) dice_frames = std::max(1, std::atoi(argv[++a]));
   }
   if (dice_frames > 0) {  // the Fig. 8.8 rows only
-    thesisTable(true, dice_frames);
+    thesisTable(true, dice_frames, only);
     return 0;
   }
   if (quick) million = false;

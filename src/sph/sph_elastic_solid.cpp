@@ -88,6 +88,11 @@ void SphElasticConfig::validate() const {
           "(s) must be in [0, 1], got " + std::to_string(deformation_allowance));
   require(implicit_step_factor >= 0.0 && std::isfinite(implicit_step_factor), "implicit_step_factor",
           "must be finite and >= 0, got " + std::to_string(implicit_step_factor));
+  require(!global_implicit_goal || implicit_goal, "global_implicit_goal", "needs implicit_goal");
+  require(implicit_tolerance > 0.0 && implicit_tolerance < 1.0, "implicit_tolerance",
+          "must be in (0, 1), got " + std::to_string(implicit_tolerance));
+  require(implicit_max_iterations >= 1, "implicit_max_iterations",
+          "must be >= 1, got " + std::to_string(implicit_max_iterations));
   require(min_neighbors >= 2, "min_neighbors", "must be >= 2, got " + std::to_string(min_neighbors));
   require(fracture_strain >= 0.0, "fracture_strain", "must be >= 0, got " + std::to_string(fracture_strain));
   require(fracture_rate >= 0.0, "fracture_rate", "must be >= 0, got " + std::to_string(fracture_rate));
@@ -299,6 +304,8 @@ void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<V
     plastic_.resize(n, Mat3::Identity());
     plastic_strain_.resize(n, 0.0);
   }
+  const bool global_implicit = config_.global_implicit_goal;
+  if (global_implicit && history_.size() != n) history_.assign(n, ImplicitHistory{});
   std::vector<Vec3>& points = member_points_;
   std::vector<uint32_t>& members = members_;
   points.clear();
@@ -321,6 +328,7 @@ void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<V
         plastic_[i].setIdentity();
         plastic_strain_[i] = 0.0;
       }
+      if (global_implicit) history_[i] = ImplicitHistory{};  // it starts anew when it (re)joins
       continue;
     }
     members.push_back(static_cast<uint32_t>(i));
@@ -341,6 +349,7 @@ void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<V
   }
   contributions_.resize(m);
   lost_.resize(m);
+  if (global_implicit) springs_.resize(m);
   net_force_.resize(m);
   net_torque_.resize(m);
   energy_.assign(m, 0.0);
@@ -463,6 +472,8 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   std::vector<Contribution>& out = contributions_[s];
   out.clear();
   lost_[s].clear();
+  const bool global_implicit = globalImplicit();
+  if (global_implicit) springs_[s].clear();
   // Current neighbours of the same solid.
   const Vec3 xi = s_pos_[s];
   SphSortedGrid::Run runs[9];
@@ -657,7 +668,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     // F_ij (8.31) towards the goal positions, half to j and minus half to i.
     const double k_e = config_.goal_stiffness * s_mass_[s] * volume;
     double energy = 0.0;
-    if (config_.implicit_goal && step_dt_ > 0.0) {
+    if (config_.implicit_goal && !config_.global_implicit_goal && step_dt_ > 0.0) {
       // Locally implicit springs (see SphElasticConfig::implicit_goal): the forces scaled by
       // 1 / (1 + dt^2 k), and the damping -dt k u / (4 (1 + dt^2 k)) of the members' velocities u relative
       // to the neighbourhood's rigid motion (weights W_j, the centre weighted sum_j W_j: its velocity is half
@@ -706,6 +717,9 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
         *next_out++ = {solid_[neighbors[k]], f};
         centre_force -= f;
       }
+      if (global_implicit)  // the stiffness of these forces in x_j - x_i, goal held fixed
+        for (size_t k = 0; k < nn; ++k)
+          if (assigned[k]) springs_[s].push_back({neighbors[k], 0.5 * k_e * weights[k]});
     }
     energy_[s] = energy;
   }
@@ -786,11 +800,15 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
   // Serial scatter in a fixed order: results do not depend on the thread count.
   SphElasticStats st;
   st.solid_particles = solid_.size();
+  const bool global_implicit = globalImplicit();
+  // Global implicit springs: the explicit forces f0 are gathered (original order) for the solve.
+  std::vector<Vec3>& target = global_implicit ? s_force_ : forces;
+  if (global_implicit) s_force_.assign(particles.size(), Vec3::Zero());
   for (size_t s = 0; s < solid_.size(); ++s) {
     unassigned_count_[solid_[s]] = 0;
   }
   for (size_t s = 0; s < solid_.size(); ++s) {
-    for (const Contribution& c : contributions_[s]) forces[c.particle] += c.force;
+    for (const Contribution& c : contributions_[s]) target[c.particle] += c.force;
     st.net_force += net_force_[s];
     st.net_torque += net_torque_[s];
     for (uint32_t j : lost_[s]) ++unassigned_count_[j];
@@ -810,10 +828,106 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
     if (config_.plasticity())
       st.max_plastic_strain = std::max(st.max_plastic_strain, plastic_strain_[solid_[s]]);
   }
+  if (global_implicit) solveGlobalImplicit(particles, velocities, forces, st);
   total_detached_ += st.detached;
   total_redocked_ += st.redocked;
   ++evaluations_;
   stats_ = st;
+}
+
+void SphElasticSolid::solveGlobalImplicit(const SphParticles& particles, const std::vector<Vec3>& velocities,
+                                          std::vector<Vec3>& forces, SphElasticStats& st) {
+  const size_t m = solid_.size();
+  const double dt = step_dt_;
+  f0_.resize(m);
+  v_mid_.resize(m);
+  dv_.resize(m);
+  constraints_.clear();
+  for (size_t s = 0; s < m; ++s) {
+    const uint32_t i = solid_[s];
+    f0_[s] = s_force_[i];
+    ImplicitHistory& h = history_[i];
+    dv_[s] = h.dv;
+    SphVelocityConstraint c;
+    c.particle = uint32_t(s);
+    if (particles.kinds[i] != SphParticleKind::kFluid) {  // anchors: prescribed motion
+      v_mid_[s] = velocities[i];
+      c.count = 3;
+      for (int k = 0; k < 3; ++k) c.normals[k] = Vec3::Unit(k);
+      constraints_.push_back(c);
+      continue;
+    }
+    // The velocity the springs resist, the coming step's without this term's velocity change (the solver's
+    // kick-drift-kick): the given (predicted) velocity less the half kick of this term's previous force,
+    // plus the other half kick of gravity; the same again when the state is evaluated again.
+    const Vec3& x = s_pos_[s];
+    if (h.known && x == h.x) {
+      v_mid_[s] = h.velocity;
+    } else {
+      v_mid_[s] = velocities[i] + (0.5 * dt) * (gravity_ - h.force / s_mass_[s]);
+    }
+    h.x = x;
+    h.velocity = v_mid_[s];
+    h.known = true;
+    // Planes that would stop the particle in the step: its normal velocity change brings it onto the plane.
+    for (const SphPlane& plane : planes_) {
+      const double gap = plane.normal.dot(x) - plane.offset, vn = plane.normal.dot(v_mid_[s]);
+      if (gap + dt * vn >= 0.0 || c.count == 3) continue;
+      bool orthogonal = true;
+      for (int k = 0; k < c.count; ++k)
+        orthogonal = orthogonal && std::abs(c.normals[k].dot(plane.normal)) < 1e-9;
+      if (!orthogonal) continue;
+      c.normals[c.count] = plane.normal;
+      c.values[c.count++] = -std::max(gap, 0.0) / dt - vn;
+    }
+    if (c.count > 0) constraints_.push_back(c);
+  }
+  implicit_solver_.setSystem(s_pos_, s_mass_, springs_);
+  SphImplicitGoalResult result;
+  for (int round = 0; round < 4; ++round) {
+    implicit_solver_.setConstraints(constraints_);
+    const SphImplicitGoalResult r = implicit_solver_.solve(f0_, v_mid_, dt, config_.implicit_tolerance,
+                                                           config_.implicit_max_iterations, dv_);
+    result.iterations += r.iterations;
+    result.relative_residual = r.relative_residual;
+    if (constraints_.empty() || round == 3) break;
+    // Planes that would have to pull (impulse . n < 0) let go, and the step is solved again.
+    implicit_solver_.constraintImpulses(f0_, v_mid_, dt, dv_, impulses_);
+    bool released = false;
+    for (size_t k = 0; k < constraints_.size(); ++k) {
+      SphVelocityConstraint& c = constraints_[k];
+      if (particles.kinds[solid_[c.particle]] != SphParticleKind::kFluid) continue;
+      int kept = 0;
+      for (int a = 0; a < c.count; ++a) {
+        if (impulses_[k].dot(c.normals[a]) < 0.0) continue;
+        c.normals[kept] = c.normals[a];
+        c.values[kept++] = c.values[a];
+      }
+      released = released || kept < c.count;
+      c.count = kept;
+    }
+    if (!released) break;
+  }
+  st.implicit_iterations = result.iterations;
+  st.implicit_residual = result.relative_residual;
+  // F = M dv / dt. Without constraints its net force and torque are removed (exact for the exact solution:
+  // f0 has none (8.32)-(8.33), the stiffness K none by construction), so momentum does not depend on the
+  // CG tolerance; plane and anchor constraints exert external impulses.
+  std::vector<Vec3>& force = f0_;
+  for (size_t s = 0; s < m; ++s) force[s] = (s_mass_[s] / dt) * dv_[s];
+  bool constrained = false;
+  for (const SphVelocityConstraint& c : constraints_) constrained = constrained || c.count > 0;
+  if (!constrained) implicit_solver_.removeNetForceAndTorque(force);
+  st.net_force.setZero();
+  st.net_torque.setZero();
+  for (size_t s = 0; s < m; ++s) {
+    const uint32_t i = solid_[s];
+    forces[i] += force[s];
+    history_[i].force = force[s];
+    history_[i].dv = dv_[s];
+    st.net_force += force[s];
+    st.net_torque += crossOf(particles.positions[i], force[s]);
+  }
 }
 
 void SphElasticSolid::setLatticeTransform(size_t i, const Mat3& transform) {

@@ -13,7 +13,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "sph/sph_fluid_solver.h"
 #include "sph/sph_force_term.h"
+#include "sph/sph_implicit_goal_solver.h"
 #include "sph/sph_kernels.h"
 #include "sph/sph_lattice.h"
 #include "sph/sph_particles.h"
@@ -61,6 +63,22 @@ struct SphElasticConfig {
   /// With implicit_goal: > 0 caps the step at this multiple of the explicit limit (an accuracy bound: the
   /// effective stiffness is about K_e / (1 + dt^2 k), k ~ K_e sum_j V W_ij); 0 (default): no elastic limit.
   double implicit_step_factor = 0.0;
+  /// With implicit_goal (scene files: `implicit_goal: global`): instead of the local springs, backward Euler
+  /// on the goal forces (8.31) of the whole solid, linearised with the goals held fixed in the step (the
+  /// stiffness of the springs 0.5 K_e m_i V W_ij between each centre and its assigned neighbours, with the
+  /// rigid motions of the whole solid projected out, see SphImplicitGoalSolver), solved by Jacobi-
+  /// preconditioned CG over all of the solid's particles, warm-started from the previous velocity change.
+  /// The force is M dv / dt; without plane contacts or anchors its net force and torque are removed, so
+  /// (8.32)-(8.33) hold exactly; a rigid motion of the whole solid is not damped. Unlike the local springs
+  /// the solid stays as stiff as K_e at any step (stiff oscillations are damped as by backward Euler). The
+  /// velocity the springs resist is the coming step's without this term: the given (predicted) velocity
+  /// less half a kick of this term's previous force, plus half a kick of gravity (setEnvironment). Planes
+  /// given by setEnvironment enter as velocity constraints. Other forces (pressure, contact penalties) stay
+  /// explicit: a static offset of about dt^2 / 2 times their acceleration. The neighbourhoods are those of
+  /// the shape matching.
+  bool global_implicit_goal = false;
+  double implicit_tolerance = 1e-4;   ///< CG: relative residual (Jacobi norm), in (0, 1)
+  int implicit_max_iterations = 200;  ///< CG iterations per evaluation, >= 1
   /// Minimum assigned neighbours of a neighbourhood for shape matching (fewer: no forces from it).
   int min_neighbors = 4;
 
@@ -128,6 +146,9 @@ struct SphElasticStats {
   size_t redocked = 0;   ///< free points that docked (healing)
   /// Plasticity: max over particles of |log sigma_k(P_i)| (0 without plasticity).
   double max_plastic_strain = 0.0;
+  /// Global implicit goal springs: CG iterations and final relative residual of the last evaluation.
+  int implicit_iterations = 0;
+  double implicit_residual = 0.0;
   double energy = 0.0;             ///< elastic energy estimate
   Vec3 net_force = Vec3::Zero();   ///< sum of the elastic forces
   Vec3 net_torque = Vec3::Zero();  ///< sum of x cross elastic force
@@ -203,6 +224,14 @@ class SphElasticSolid : public SphForceTerm {
   bool implicitInStep() const override {
     return config_.implicit_goal && config_.model == SphElasticModel::kGoalPosition;
   }
+  /// Global implicit goal springs: the solver's planes (SphFluidSolver::planes()) and gravity. The planes
+  /// enter the implicit solve as velocity constraints of the particles they would stop in the step, and
+  /// gravity the velocity the springs resist (without them a solid resting on a plane sinks in by about
+  /// dt^2 times the plane's reaction acceleration). Without constraints neither changes the result.
+  void setEnvironment(const std::vector<SphPlane>& planes, const Vec3& gravity) {
+    planes_ = planes;
+    gravity_ = gravity;
+  }
   /// The dt the next evaluation uses for docking and plasticity.
   double stepTime() const { return step_dt_; }
 
@@ -265,6 +294,14 @@ class SphElasticSolid : public SphForceTerm {
   void updateDocking(size_t s, Scratch& scratch);
   /// Plastic flow of particle i from the elastic fit A_i P_i^-1 = U diag(sigma) V^T.
   void updatePlasticity(uint32_t i, const Eigen::Matrix3d& v, const Vec3& sigma);
+  bool globalImplicit() const {
+    return config_.model == SphElasticModel::kGoalPosition && config_.implicit_goal &&
+           config_.global_implicit_goal && step_dt_ > 0.0;
+  }
+  /// Global implicit goal springs: replaces the explicit forces f0 (gathered in s_force_) by M dv / dt of
+  /// the backward Euler step and adds them to `forces`.
+  void solveGlobalImplicit(const SphParticles& particles, const std::vector<Vec3>& velocities,
+                           std::vector<Vec3>& forces, SphElasticStats& stats);
 
   SphElasticConfig config_;
   SphKernels kernels_;
@@ -289,6 +326,22 @@ class SphElasticSolid : public SphForceTerm {
   std::vector<Scratch> scratch_;                          // per thread, kept between evaluations
   std::vector<std::vector<Contribution>> contributions_;  // per sorted solid particle
   std::vector<std::vector<uint32_t>> lost_;               // neighbours left without a lattice point
+  // Global implicit goal springs: per sorted solid particle its neighbourhood's springs; per particle
+  // (original order) the last force of this term (from an evaluation with dt > 0) and velocity change.
+  std::vector<std::vector<SphGoalSpring>> springs_;
+  SphImplicitGoalSolver implicit_solver_;
+  /// Per particle: the last global implicit evaluation's position, the velocity the springs resisted,
+  /// this term's force and velocity change; known: whether there was one.
+  struct ImplicitHistory {
+    Vec3 x = Vec3::Zero(), velocity = Vec3::Zero(), force = Vec3::Zero(), dv = Vec3::Zero();
+    bool known = false;
+  };
+  std::vector<SphPlane> planes_;
+  Vec3 gravity_ = Vec3::Zero();
+  std::vector<SphVelocityConstraint> constraints_;
+  std::vector<Vec3> impulses_;
+  std::vector<ImplicitHistory> history_;
+  std::vector<Vec3> f0_, v_mid_, dv_, s_force_;  // sorted order
   std::vector<double> energy_, max_strain_;
   std::vector<Vec3> net_force_, net_torque_;  // per neighbourhood
   std::vector<uint32_t> assigned_, unassigned_;

@@ -384,8 +384,11 @@ class SceneReader {
         if (node[k]) src_.fail(node[k], where + "." + k + ": applies to model strain, not goal_position");
       optionalNumber(node, "goal_stiffness", where, &e.goal_stiffness, &Source::positive);
       optionalNumber(node, "deformation_allowance", where, &e.deformation_allowance, &Source::unitInterval);
-      if (node["implicit_goal"])
-        e.implicit_goal = src_.boolean(node["implicit_goal"], where + ".implicit_goal");
+      if (node["implicit_goal"]) {  // true | false | global (SphElasticConfig::global_implicit_goal)
+        const YAML::Node& g = node["implicit_goal"];
+        e.global_implicit_goal = g.IsScalar() && g.Scalar() == "global";
+        e.implicit_goal = e.global_implicit_goal || src_.boolean(g, where + ".implicit_goal");
+      }
       optionalNumber(node, "implicit_step_factor", where, &e.implicit_step_factor, &Source::nonNegative);
     } else {
       src_.fail(node["model"], where + ".model: unknown model '" + model + "' (strain, goal_position)");

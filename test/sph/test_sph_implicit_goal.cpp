@@ -3,9 +3,14 @@
 // dt = 4e-4 s with K_e = 2.4e7), where the explicit forces (8.31) and (8.37) blow up.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <memory>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -13,8 +18,10 @@
 #include "momentum_test_support.h"
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
+#include "sph/sph_implicit_goal_solver.h"
 #include "sph/sph_lattice.h"
 #include "sph/sph_object_penalty.h"
+#include "sph/sph_scene_file.h"
 
 namespace rc {
 namespace {
@@ -48,6 +55,19 @@ SphElasticConfig diceMaterial(bool implicit) {
   e.goal_stiffness = kStiffness;
   e.implicit_goal = implicit;
   return e;
+}
+
+/// The globally implicit goal springs (SphElasticConfig::global_implicit_goal).
+SphElasticConfig globalMaterial(double stiffness = kStiffness) {
+  SphElasticConfig e = diceMaterial(true);
+  e.global_implicit_goal = true;
+  e.goal_stiffness = stiffness;
+  return e;
+}
+
+/// The Verlet limit of the explicit goal forces, 2 / sqrt(2 K_e) (stableTimeStep at cfl 1).
+double explicitLimit(double stiffness) {
+  return std::sqrt(2.0 / stiffness);
 }
 
 struct Cube {
@@ -92,6 +112,31 @@ Cube makeCubes(const SphFluidConfig& config, const SphElasticConfig& material,
   c.solver = std::make_unique<SphFluidSolver>(config, std::move(particles));
   for (auto& s : c.solids) c.solver->addForceTerm(s);
   return c;
+}
+
+// One stiff cube spinning (3, -2, 4) rad/s and drifting (0.5, -0.2, 0.3) m/s, forces computed.
+Cube spinningDriftingCube(const SphFluidConfig& config, const SphElasticConfig& material) {
+  Cube c = makeCubes(config, material, {Vec3(0.1, 0.4, -0.2)}, {Vec3(0.5, -0.2, 0.3)},
+                     Eigen::AngleAxisd(0.7, Vec3(1, -2, 1).normalized()).toRotationMatrix(), 1.0,
+                     Vec3(3.0, -2.0, 4.0), 0.0);
+  c.solver->computeForces();
+  return c;
+}
+
+// Over `steps` steps: momentum exact per step (8.32)-(8.33), the spin kept, the rigid motion not damped and
+// no strain from it.
+void expectRigidMotionKept(Cube c, int steps, const char* label) {
+  SphFluidSolver& solver = *c.solver;
+  const double kinetic0 = solver.lastStats().kinetic_energy;
+  const MomentumDrift m = trackMomentum(solver.particles(), steps, [&] { solver.step(); });
+  const double kinetic = solver.lastStats().kinetic_energy;
+  std::printf("%s, spinning cube: dP %.2e dL %.2e per step, kinetic %.6g -> %.6g, max strain %.3g\n", label,
+              m.worst_linear, m.worst_angular, kinetic0, kinetic, c.solids[0]->stats().max_strain);
+  EXPECT_LT(m.worst_linear, 1e-9);
+  EXPECT_LT(m.worst_angular, 1e-9);
+  EXPECT_LT((m.angular_end - m.angular_start).norm(), 1e-8 * m.angular_start.norm());
+  EXPECT_GT(kinetic, 0.99 * kinetic0);  // the rigid motion is not damped
+  EXPECT_LT(c.solids[0]->stats().max_strain, 0.01);
 }
 
 double energyOf(const SphFluidSolver& solver) {
@@ -152,33 +197,7 @@ TEST(SphImplicitGoal, StiffCubeIsStableAtTheThesisStep) {
 // neighbourhood before the correction (8.32)-(8.33)) and do not damp a rigid motion: a spinning, drifting
 // cube keeps its kinetic energy and spin at dt = 4e-4.
 TEST(SphImplicitGoal, KeepsMomentumAndDoesNotDampRigidMotion) {
-  const Vec3 spin(3.0, -2.0, 4.0), drift(0.5, -0.2, 0.3);
-  Cube c = makeCubes(diceConfig(), diceMaterial(true), {Vec3(0.1, 0.4, -0.2)}, {drift},
-                     Eigen::AngleAxisd(0.7, Vec3(1, -2, 1).normalized()).toRotationMatrix(), 1.0, spin, 0.0);
-  SphFluidSolver& solver = *c.solver;
-  solver.computeForces();
-  const double kinetic0 = solver.lastStats().kinetic_energy;
-  Vec3 p0, l0;
-  double sp, sl, worst_p = 0.0, worst_l = 0.0;
-  momenta(solver.particles(), p0, l0, sp, sl);
-  const Vec3 l_start = l0;
-  for (int step = 0; step < 100; ++step) {
-    solver.step();
-    Vec3 p1, l1;
-    momenta(solver.particles(), p1, l1, sp, sl);
-    worst_p = std::max(worst_p, (p1 - p0).norm() / sp);
-    worst_l = std::max(worst_l, (l1 - l0).norm() / sl);
-    p0 = p1;
-    l0 = l1;
-  }
-  const double kinetic = solver.lastStats().kinetic_energy;
-  std::printf("spinning cube: dP %.2e dL %.2e per step, kinetic %.5g -> %.5g, max strain %.3g\n", worst_p,
-              worst_l, kinetic0, kinetic, c.solids[0]->stats().max_strain);
-  EXPECT_LT(worst_p, 1e-9);
-  EXPECT_LT(worst_l, 1e-9);
-  EXPECT_LT((l0 - l_start).norm(), 1e-8 * l_start.norm());
-  EXPECT_GT(kinetic, 0.99 * kinetic0);  // the rigid motion is not damped
-  EXPECT_LT(c.solids[0]->stats().max_strain, 0.01);
+  expectRigidMotionKept(spinningDriftingCube(diceConfig(), diceMaterial(true)), 100, "local");
 }
 
 // Two stiff cubes collide head-on at 2 m/s each with the collision penalty of the dice (K_c = 1e7, contact
@@ -239,6 +258,220 @@ TEST(SphImplicitGoal, ImplicitPenaltyResolvesAStiffCollision) {
   EXPECT_GT(v_right, 0.0);
   EXPECT_LT((p1 - p0).norm(), 1e-9 * scale);
   for (const Vec3& x : p.positions) EXPECT_TRUE(x.allFinite());
+}
+
+// The global implicit goal springs at 30x the explicit Verlet limit (dt = 8.7e-3 s, 75x the adaptive step of
+// the dice): a stretched (5%) and shaken stiff cube never gains energy, settles and keeps its shape, and CG
+// converges within its tolerance.
+TEST(SphImplicitGoal, GlobalSpringsAreStableAt30TimesTheExplicitLimit) {
+  SphFluidConfig config = diceConfig();
+  config.fixed_dt = 30.0 * explicitLimit(kStiffness);
+  Cube c = makeCubes(config, globalMaterial(), {Vec3(0, 0.5, 0)}, {Vec3::Zero()},
+                     Eigen::AngleAxisd(0.3, Vec3(1, 1, 0).normalized()).toRotationMatrix(), 1.05,
+                     Vec3::Zero(), 0.2);
+  SphFluidSolver& solver = *c.solver;
+  const SphParticles& p = solver.particles();
+  EXPECT_TRUE(std::isinf(c.solids[0]->stableTimeStep(p, 1.0)));
+  solver.computeForces();
+  const double e0 = energyOf(solver);
+  double max_energy = e0, last = e0;
+  int max_iterations = 0;
+  for (int step = 0; step < 40; ++step) {  // 0.35 s
+    solver.step();
+    last = energyOf(solver);
+    max_energy = std::max(max_energy, last);
+    const SphElasticStats& st = c.solids[0]->stats();
+    max_iterations = std::max(max_iterations, st.implicit_iterations);
+    EXPECT_LE(st.implicit_residual, globalMaterial().implicit_tolerance);
+  }
+  std::printf("global, dt %.3g: energy %.4g -> %.4g (max %.4g), max strain %.3g, CG <= %d iterations\n",
+              config.fixed_dt, e0, last, max_energy, c.solids[0]->stats().max_strain, max_iterations);
+  EXPECT_LE(max_energy, e0 * (1.0 + 1e-9));
+  EXPECT_LT(last, 0.01 * e0);
+  for (size_t i = 1; i < c.rest.size(); ++i) {
+    const double r0 = (c.rest[i] - c.rest[0]).norm(), r1 = (p.positions[i] - p.positions[0]).norm();
+    EXPECT_NEAR(r1, r0, 0.01 * r0);
+  }
+  // What remains is the static offset of about dt^2 / 2 times the pressure's acceleration (explicit).
+  EXPECT_LT(c.solids[0]->stats().max_strain, 0.01);
+  EXPECT_GT(max_iterations, 0);
+  EXPECT_LT(max_iterations, globalMaterial().implicit_max_iterations);
+}
+
+// Momentum (8.32)-(8.33) stays exact with the global springs, whatever the CG residual (the force is
+// M dv / dt with its net force and torque removed), and the rigid motion of the solid is not damped: a
+// spinning, drifting stiff cube at 30x the explicit limit.
+TEST(SphImplicitGoal, GlobalSpringsKeepMomentumAndDoNotDampRigidMotion) {
+  SphFluidConfig config = diceConfig();
+  config.fixed_dt = 30.0 * explicitLimit(kStiffness);
+  expectRigidMotionKept(spinningDriftingCube(config, globalMaterial()), 60, "global");  // 0.52 s, 2.8 rad
+}
+
+/// Mean height of the particles of a cube (K_e = `stiffness`) resting on the floor y = 0 under gravity,
+/// released at its rest shape: averaged over the steps of the last `average` seconds of `duration`.
+double restingHeight(const SphElasticConfig& material, double dt, double duration, double average) {
+  SphFluidConfig config = diceConfig();
+  config.stiffness = 1.0;  // a soft pressure (sound speed 1 m/s): its step limit stays above 30x the elastic
+  config.gravity = Vec3(0, -9.81, 0);
+  config.fixed_dt = dt;
+  Cube c = makeCubes(config, material, {Vec3(0, 0.0, 0)}, {Vec3::Zero()}, Mat3::Identity(), 1.0, Vec3::Zero(),
+                     0.0);
+  SphFluidSolver& solver = *c.solver;
+  SphParticles& p = solver.particles();
+  double low = std::numeric_limits<double>::infinity();
+  for (const Vec3& x : p.positions) low = std::min(low, x.y());
+  for (Vec3& x : p.positions) x.y() -= low;  // the bottom layer on the floor
+  solver.particlesChanged();
+  solver.addPlane(SphPlane{});
+  c.solids[0]->setEnvironment(solver.planes(), config.gravity);  // used by the global springs only
+  const int steps = int(std::lround(duration / dt)), averaged = int(std::lround(average / dt));
+  double sum = 0.0;
+  for (int step = 0; step < steps; ++step) {
+    solver.step();
+    if (step >= steps - averaged) {
+      double mean = 0.0;
+      for (const Vec3& x : p.positions) mean += x.y();
+      sum += mean / double(p.size());
+    }
+  }
+  return sum / double(averaged);
+}
+
+// Stiffness at a large step: a dice cube (K_e = 2.4e7) resting on the floor sags under gravity by the same
+// amount with the global springs at 10x and 30x the explicit limit (plane constraints in the solve) as with
+// the explicit forces (8.31) at 0.8x (time average of its undamped oscillation), within 3%; the local
+// springs at 30x sag 700x more (softened as K_e / (1 + dt^2 k)).
+TEST(SphImplicitGoal, GlobalSpringsKeepTheStaticSagAtLargeSteps) {
+  const double stiffness = kStiffness, limit = explicitLimit(stiffness);
+  SphElasticConfig explicit_material = diceMaterial(false), local = diceMaterial(true);
+  explicit_material.goal_stiffness = local.goal_stiffness = stiffness;
+  // The rest height: no gravity, nothing moves.
+  SphFluidConfig probe = diceConfig();
+  const double rest = [&] {
+    Cube c = makeCubes(probe, explicit_material, {Vec3::Zero()}, {Vec3::Zero()}, Mat3::Identity(), 1.0,
+                       Vec3::Zero(), 0.0);
+    double low = std::numeric_limits<double>::infinity(), mean = 0.0;
+    for (const Vec3& x : c.solver->particles().positions) {
+      low = std::min(low, x.y());
+      mean += x.y();
+    }
+    return mean / double(c.solver->particles().size()) - low;
+  }();
+  const double sag_explicit = rest - restingHeight(explicit_material, 0.8 * limit, 0.3, 0.25);
+  const double sag_global = rest - restingHeight(globalMaterial(stiffness), 30.0 * limit, 0.3, 0.1);
+  const double sag_global10 = rest - restingHeight(globalMaterial(stiffness), 10.0 * limit, 0.3, 0.1);
+  const double sag_local = rest - restingHeight(local, 30.0 * limit, 0.3, 0.1);
+  std::printf("sag under gravity: explicit %.4g m, global 10x %.4g m, global 30x %.4g m, local 30x %.4g m\n",
+              sag_explicit, sag_global10, sag_global, sag_local);
+  EXPECT_GT(sag_explicit, 0.0);
+  EXPECT_NEAR(sag_global10, sag_explicit, 0.03 * sag_explicit);
+  EXPECT_NEAR(sag_global, sag_explicit, 0.03 * sag_explicit);
+  EXPECT_GT(sag_local, 100.0 * sag_explicit);
+}
+
+// Scene files select the global springs with `implicit_goal: global` (true: the local ones); other words
+// are errors.
+TEST(SphImplicitGoal, SceneFileKeySelectsTheGlobalSprings) {
+  const std::string head =
+      "dimension: 2\nspacing: 0.02\nenable: [elasticity]\nsolver: {smoothing_ratio: 2}\n"
+      "frames: {count: 1, time: 0.01}\nsolids:\n";
+  const SphScene scene = parseSphScene(head +
+                                           "  - {lo: [0, 0], hi: [0.1, 0.1], implicit_goal: global, "
+                                           "implicit_step_factor: 30}\n"
+                                           "  - {lo: [0.2, 0], hi: [0.3, 0.1], implicit_goal: true}\n"
+                                           "  - {lo: [0.4, 0], hi: [0.5, 0.1]}\n",
+                                       "global.yaml");
+  ASSERT_EQ(scene.solids.size(), 3u);
+  EXPECT_TRUE(scene.solids[0].elastic.implicit_goal);
+  EXPECT_TRUE(scene.solids[0].elastic.global_implicit_goal);
+  EXPECT_EQ(scene.solids[0].elastic.implicit_step_factor, 30.0);
+  EXPECT_TRUE(scene.solids[1].elastic.implicit_goal);
+  EXPECT_FALSE(scene.solids[1].elastic.global_implicit_goal);
+  EXPECT_FALSE(scene.solids[2].elastic.implicit_goal);
+  EXPECT_FALSE(scene.solids[2].elastic.global_implicit_goal);
+  EXPECT_ANY_THROW(
+      parseSphScene(head + "  - {lo: [0, 0], hi: [0.1, 0.1], implicit_goal: globl}\n", "bad.yaml"));
+  SphElasticConfig config;  // the config needs implicit_goal with global_implicit_goal
+  config.global_implicit_goal = true;
+  EXPECT_THROW(config.validate(), std::invalid_argument);
+  config.implicit_goal = true;
+  EXPECT_NO_THROW(config.validate());
+}
+
+// The linear system of the global springs on random points and springs: K = (I - P)^T L (I - P) is
+// symmetric, positive semi-definite, zero on rigid motions and exerts no net force or torque; the solve
+// meets its tolerance and its prescribed components.
+TEST(SphImplicitGoal, GlobalSystemIsSymmetricRigidFreeAndSolved) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  const size_t n = 60;
+  std::vector<Vec3> x(n), u(n), w(n), f0(n), v(n);
+  std::vector<double> masses(n);
+  std::vector<std::vector<SphGoalSpring>> springs(n);
+  for (size_t s = 0; s < n; ++s) {
+    x[s] = Vec3(uni(rng), uni(rng), uni(rng));
+    u[s] = Vec3(uni(rng), uni(rng), uni(rng));
+    w[s] = Vec3(uni(rng), uni(rng), uni(rng));
+    f0[s] = Vec3(uni(rng), uni(rng), uni(rng));
+    v[s] = Vec3(uni(rng), uni(rng), uni(rng));
+    masses[s] = 1.0 + 0.5 * uni(rng);
+  }
+  for (size_t s = 0; s < n; ++s)
+    for (size_t j = 0; j < n; ++j)
+      if (j != s && (x[j] - x[s]).norm() < 0.8) springs[s].push_back({uint32_t(j), 1e3 * (1.5 + uni(rng))});
+  SphImplicitGoalSolver solver;
+  solver.setSystem(x, masses, springs);
+  std::vector<Vec3> ku, kw, rigid(n);
+  solver.applyStiffness(u, ku);
+  solver.applyStiffness(w, kw);
+  double wku = 0.0, ukw = 0.0, uku = 0.0, scale = 0.0;
+  Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+  for (size_t s = 0; s < n; ++s) {
+    wku += w[s].dot(ku[s]);
+    ukw += u[s].dot(kw[s]);
+    uku += u[s].dot(ku[s]);
+    scale += ku[s].norm();
+    force += ku[s];
+    torque += x[s].cross(ku[s]);
+  }
+  EXPECT_NEAR(wku, ukw, 1e-12 * std::abs(wku) + 1e-9);
+  EXPECT_GT(uku, 0.0);
+  EXPECT_LT(force.norm(), 1e-12 * scale);
+  EXPECT_LT(torque.norm(), 1e-12 * scale);
+  const Vec3 t(0.3, -0.2, 0.5), omega(1.0, 2.0, -0.7);
+  for (size_t s = 0; s < n; ++s) rigid[s] = t + omega.cross(x[s]);
+  std::vector<Vec3> k_rigid;
+  solver.applyStiffness(rigid, k_rigid);
+  for (size_t s = 0; s < n; ++s) EXPECT_LT(k_rigid[s].norm(), 1e-10 * scale / double(n));
+  // Solve with two constrained particles: one fixed, one with a prescribed normal component.
+  SphVelocityConstraint fixed, plane;
+  fixed.particle = 3;
+  fixed.count = 3;
+  for (int k = 0; k < 3; ++k) fixed.normals[k] = Vec3::Unit(k);
+  plane.particle = 11;
+  plane.count = 1;
+  plane.normals[0] = Vec3(0, 1, 0);
+  plane.values[0] = 0.25;
+  solver.setConstraints({fixed, plane});
+  const double dt = 0.05;
+  std::vector<Vec3> dv;
+  const SphImplicitGoalResult result = solver.solve(f0, v, dt, 1e-10, 500, dv);
+  EXPECT_TRUE(result.converged);
+  EXPECT_LE(result.relative_residual, 1e-10);
+  EXPECT_EQ(dv[3], Vec3::Zero());
+  EXPECT_NEAR(dv[11].y(), 0.25, 1e-14);
+  // The unconstrained rows hold: m dv + dt^2 K dv = dt (f0 - dt K v).
+  std::vector<Vec3> kdv, kv;
+  solver.applyStiffness(dv, kdv);
+  solver.applyStiffness(v, kv);
+  double worst = 0.0, rhs = 0.0;
+  for (size_t s = 0; s < n; ++s) {
+    if (s == 3 || s == 11) continue;
+    const Vec3 b = dt * (f0[s] - dt * kv[s]);
+    worst = std::max(worst, (masses[s] * dv[s] + dt * dt * kdv[s] - b).norm());
+    rhs = std::max(rhs, b.norm());
+  }
+  EXPECT_LT(worst, 1e-8 * rhs);
 }
 
 }  // namespace
