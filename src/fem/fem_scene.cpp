@@ -81,7 +81,9 @@ class SceneReader {
 
  private:
   void readMaterial(const YAML::Node& node) {
-    src_.allowKeys(node, {"youngs_modulus", "poisson_ratio", "density"}, "material");
+    src_.allowKeys(node,
+                   {"youngs_modulus", "poisson_ratio", "density", "vertex_sample_blend", "face_sample_blend"},
+                   "material");
     scene_.youngs_modulus =
         src_.positive(src_.require(node, "youngs_modulus", "material"), "material.youngs_modulus");
     const YAML::Node nu = src_.require(node, "poisson_ratio", "material");
@@ -89,6 +91,15 @@ class SceneReader {
     if (!(scene_.poisson_ratio > -1.0 && scene_.poisson_ratio < 0.5))
       src_.fail(nu, "material.poisson_ratio must be in (-1, 0.5), got " + nu.Scalar());
     if (node["density"]) scene_.density = src_.positive(node["density"], "material.density");
+    for (const char* key : {"vertex_sample_blend", "face_sample_blend"}) {
+      if (!node[key]) continue;
+      const double b = src_.number(node[key], std::string("material.") + key);
+      if (!(b > 0.0 && b <= 1.0))
+        src_.fail(node[key],
+                  std::string("material.") + key + " must be in (0, 1], got " + node[key].Scalar());
+      (std::string(key) == "vertex_sample_blend" ? scene_.quadrature.vertex_sample_blend
+                                                 : scene_.quadrature.face_sample_blend) = b;
+    }
   }
 
   void readDynamics(const YAML::Node& node) {
@@ -678,7 +689,7 @@ std::unique_ptr<WarpedDynamics> FemSimulation::makeBody(PolyhedralMesh mesh,
     v.segment<3>(3 * i) = velocities[i];
   }
   LinearElasticModel model(std::move(mesh), scene_.youngs_modulus, scene_.poisson_ratio, scene_.density,
-                           ElementQuadratureOptions(), donor);
+                           scene_.quadrature, donor);
   if (report) {
     report->recomputed_elements += model.numRecomputedElements();
     report->reused_elements += model.numReusedElements();

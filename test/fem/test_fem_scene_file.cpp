@@ -175,9 +175,32 @@ TEST(FemSceneFile, BadFilesNameFileAndLine) {
                     "    region: [[0.5, 0, 0], [0.6, 1, 0], [0.5, 0, 1]]\n",
                 10, "does not lie in the cut plane");
   expectErrorAt(yaml + "output: {encoding: binary}\n", 6, "unknown 'binary'");
+  expectErrorAt(
+      "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1]}\n"
+      "material: {youngs_modulus: 5, poisson_ratio: 0.3, face_sample_blend: 1.5}\n",
+      2, "material.face_sample_blend must be in (0, 1]");
   const std::string missing = parseError("mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1]}\n");
   EXPECT_NE(missing.find("missing 'material'"), std::string::npos) << missing;
   EXPECT_THROW(loadFemScene("/nonexistent/scene.yaml"), FemSceneError);
+}
+
+// The integration sample placement (9.1.3) is a scene key; the thesis' 0.8 / 0.9 is the default.
+TEST(FemSceneFile, SampleBlendKeysReachTheElementQuadrature) {
+  const FemScene thesis = parseFemScene(kMinimal, "minimal.yaml");
+  EXPECT_DOUBLE_EQ(thesis.quadrature.vertex_sample_blend, 0.8);
+  EXPECT_DOUBLE_EQ(thesis.quadrature.face_sample_blend, 0.9);
+  std::string yaml = kMinimal;
+  yaml.replace(yaml.find("poisson_ratio: 0.3}"), 19,
+               "poisson_ratio: 0.3, vertex_sample_blend: 0.5, face_sample_blend: 0.5}");
+  const FemScene blended = parseFemScene(yaml, "minimal.yaml");
+  const FemSimulation sim(blended);
+  const ElementQuadratureOptions& q = sim.body(0).model().quadratureOptions();
+  EXPECT_DOUBLE_EQ(q.vertex_sample_blend, 0.5);
+  EXPECT_DOUBLE_EQ(q.face_sample_blend, 0.5);
+  // Samples nearer the centroid: a softer hexahedron (bench_fem_accuracy), so a different K.
+  const FemSimulation reference(thesis);
+  EXPECT_GT((sim.body(0).model().elementStiffness(0) - reference.body(0).model().elementStiffness(0)).norm(),
+            1e-3 * reference.body(0).model().elementStiffness(0).norm());
 }
 
 TEST(FemSceneFile, RandomElementSplitsGiveOneElementPerPlane) {
