@@ -8,8 +8,12 @@
 // recomputation of basis functions, and node / element counts after all cuts. Last: elements integrated
 // anew / reused after the cuts.
 // Usage: bench_fem_scenes [--bunny-frames N] [--bunny-solver cholmod|cholmod_pcg|cg_ic|cg]
-//        [--refactor-iterations N] [--skip-block] [--scene-dir DIR]
-// (--bunny-solver replaces the bunny scene's solver; cg and cg_ic use tolerance 1e-6.)
+//        [--refactor-iterations N] [--tolerance T] [--contact-updates N] [--extension-iterations N]
+//        [--dump-positions FILE] [--skip-block] [--scene-dir DIR]
+// (--bunny-solver replaces the bunny scene's solver; cg and cg_ic use tolerance 1e-6 unless --tolerance gives
+// the CG relative residual; --contact-updates sets pcg_contact_updates (0: the preconditioner ignores contact
+// changes, the old path) and --extension-iterations pcg_extension_iterations (0: the old path);
+// --dump-positions writes the bunny's final node positions, "x y z" per line.)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -42,7 +46,7 @@ struct ThesisRow {
 struct SceneResult {
   std::string name;
   int frames = 0, nodes_start = 0, elements_start = 0, nodes = 0, elements = 0, bodies = 0;
-  long iterations = 0, recomputed = 0, reused = 0;
+  long iterations = 0, unconverged = 0, recomputed = 0, reused = 0;
   double setup = 0.0, mean_frame = 0.0;
   std::vector<double> bases, rotations, assembly, solve, topology, frame;
 };
@@ -51,6 +55,10 @@ struct SceneResult {
 struct SolverOverride {
   std::string type;  // cholmod, cholmod_pcg, cg_ic, cg
   int refactor_iterations = 0;
+  double tolerance = 0.0;         // CG relative residual; 0: the scene's (or 1e-6 for cg and cg_ic)
+  int contact_updates = -1;       // pcg_contact_updates; -1: the scene's
+  int extension_iterations = -1;  // pcg_extension_iterations; -1: the scene's
+  std::string positions_file;     // --dump-positions: final node positions, one "x y z" line per node
 };
 
 SceneResult runScene(const std::string& path, int max_frames, const SolverOverride& solver = {}) {
@@ -73,6 +81,9 @@ SceneResult runScene(const std::string& path, int max_frames, const SolverOverri
                                 "' (known: cholmod, cholmod_pcg, cg_ic, cg)");
   }
   if (solver.refactor_iterations > 0) scene.dynamics.pcg_refactor_iterations = solver.refactor_iterations;
+  if (solver.tolerance > 0.0) scene.dynamics.cg_tolerance = solver.tolerance;
+  if (solver.contact_updates >= 0) scene.dynamics.pcg_contact_updates = solver.contact_updates;
+  if (solver.extension_iterations >= 0) scene.dynamics.pcg_extension_iterations = solver.extension_iterations;
   rc::FemSimulation sim(scene);
   r.setup = std::chrono::duration<double>(Clock::now() - setup_start).count();
   r.name = scene.name;
@@ -94,12 +105,22 @@ SceneResult runScene(const std::string& path, int max_frames, const SolverOverri
     r.frame.push_back(seconds);
     total += seconds;
   }
+  if (!solver.positions_file.empty()) {
+    std::FILE* out = std::fopen(solver.positions_file.c_str(), "w");
+    if (!out) throw std::runtime_error("cannot write " + solver.positions_file);
+    for (const rc::FemBodyState& body : sim.bodyStates())
+      for (Eigen::Index k = 0; k + 2 < body.positions->size(); k += 3)
+        std::fprintf(out, "%.17g %.17g %.17g\n", (*body.positions)[k], (*body.positions)[k + 1],
+                     (*body.positions)[k + 2]);
+    std::fclose(out);
+  }
   r.frames = frames;
   r.mean_frame = frames > 0 ? total / frames : 0.0;
   r.nodes = sim.numNodes();
   r.elements = sim.numElements();
   r.bodies = sim.numBodies();
   r.iterations = sim.solverIterations();
+  r.unconverged = sim.unconvergedSolves();
   r.recomputed = sim.recomputedElements();
   r.reused = sim.reusedElements();
   return r;
@@ -120,15 +141,25 @@ int main(int argc, char** argv) {
       bunny_solver.type = argv[++i];
     } else if (!std::strcmp(argv[i], "--refactor-iterations") && i + 1 < argc) {
       bunny_solver.refactor_iterations = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--tolerance") && i + 1 < argc) {
+      bunny_solver.tolerance = std::atof(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--contact-updates") && i + 1 < argc) {
+      bunny_solver.contact_updates = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--extension-iterations") && i + 1 < argc) {
+      bunny_solver.extension_iterations = std::atoi(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--dump-positions") && i + 1 < argc) {
+      bunny_solver.positions_file = argv[++i];
     } else if (!std::strcmp(argv[i], "--skip-block")) {
       skip_block = true;
     } else if (!std::strcmp(argv[i], "--scene-dir") && i + 1 < argc) {
       scene_dir = argv[++i];
     } else {
-      std::fprintf(stderr,
-                   "usage: %s [--bunny-frames N] [--bunny-solver cholmod|cholmod_pcg|cg_ic|cg] "
-                   "[--refactor-iterations N] [--skip-block] [--scene-dir DIR]\n",
-                   argv[0]);
+      std::fprintf(
+          stderr,
+          "usage: %s [--bunny-frames N] [--bunny-solver cholmod|cholmod_pcg|cg_ic|cg] "
+          "[--refactor-iterations N] [--tolerance T] [--contact-updates N] [--extension-iterations N] "
+          "[--dump-positions FILE] [--skip-block] [--scene-dir DIR]\n",
+          argv[0]);
       return 2;
     }
   }
@@ -173,5 +204,7 @@ int main(int argc, char** argv) {
   }
   std::printf("\nElements after cuts: integrated anew / reused from the cut body\n");
   for (const SceneResult& r : results) std::printf("%s: %ld / %ld\n", r.name.c_str(), r.recomputed, r.reused);
+  std::printf("\nUnconverged solves (CG short of its tolerance)\n");
+  for (const SceneResult& r : results) std::printf("%s: %ld\n", r.name.c_str(), r.unconverged);
   return 0;
 }

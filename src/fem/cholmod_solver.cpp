@@ -118,22 +118,34 @@ void CholmodSolver::factorize(const Eigen::SparseMatrix<double>& input) {
 }
 
 void CholmodSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  Eigen::Map<const Eigen::MatrixXd> b_columns(b.data(), b.size(), 1);
+  x.resize(b.size());
+  Eigen::Map<Eigen::MatrixXd> x_columns(x.data(), x.size(), 1);
+  solveColumns(b_columns.data(), b.size(), 1, x_columns.data());
+}
+
+void CholmodSolver::solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+  x.resize(b.rows(), b.cols());
+  if (b.cols() > 0) solveColumns(b.data(), b.rows(), b.cols(), x.data());
+}
+
+void CholmodSolver::solveColumns(const double* b, Eigen::Index rows, Eigen::Index cols, double* x) {
   if (!factorized_) throw std::logic_error("CholmodSolver::solve: no successful factorisation");
-  if (b.size() != static_cast<Eigen::Index>(impl_->factor->n))
-    throw std::invalid_argument("CholmodSolver::solve: right-hand side has " + std::to_string(b.size()) +
+  if (rows != static_cast<Eigen::Index>(impl_->factor->n))
+    throw std::invalid_argument("CholmodSolver::solve: right-hand side has " + std::to_string(rows) +
                                 " entries for " + std::to_string(impl_->factor->n) + " unknowns");
   cholmod_dense rhs;
   std::memset(&rhs, 0, sizeof(rhs));
-  rhs.nrow = rhs.nzmax = rhs.d = static_cast<size_t>(b.size());
-  rhs.ncol = 1;
-  rhs.x = const_cast<double*>(b.data());
+  rhs.nrow = rhs.d = static_cast<size_t>(rows);
+  rhs.ncol = static_cast<size_t>(cols);
+  rhs.nzmax = rhs.nrow * rhs.ncol;
+  rhs.x = const_cast<double*>(b);
   rhs.xtype = CHOLMOD_REAL;
   rhs.dtype = CHOLMOD_DOUBLE;
   if (!cholmod_solve2(CHOLMOD_A, impl_->factor, &rhs, nullptr, &impl_->x, nullptr, &impl_->y, &impl_->e,
                       &impl_->common))
     throw std::runtime_error("CholmodSolver::solve: CHOLMOD status " + std::to_string(impl_->common.status));
-  x.resize(b.size());
-  std::memcpy(x.data(), impl_->x->x, sizeof(double) * static_cast<size_t>(b.size()));
+  std::memcpy(x, impl_->x->x, sizeof(double) * static_cast<size_t>(rows * cols));
 }
 
 double CholmodSolver::factorNonZeros() const {
@@ -170,6 +182,12 @@ void CholmodSolver::factorize(const Eigen::SparseMatrix<double>&) {
   lacksCholmod();
 }
 void CholmodSolver::solve(const Eigen::VectorXd&, Eigen::VectorXd&) {
+  lacksCholmod();
+}
+void CholmodSolver::solve(const Eigen::MatrixXd&, Eigen::MatrixXd&) {
+  lacksCholmod();
+}
+void CholmodSolver::solveColumns(const double*, Eigen::Index, Eigen::Index, double*) {
   lacksCholmod();
 }
 bool CholmodSolver::patternMatches(const Eigen::SparseMatrix<double>&) const {

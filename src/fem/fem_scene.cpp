@@ -127,9 +127,10 @@ class SceneReader {
                          "' (known: lumped_masses, node_volume_fractions)");
     }
     if (const YAML::Node s = node["solver"]) {
-      src_.allowKeys(
-          s, {"type", "preconditioner", "tolerance", "max_iterations", "warm_start", "refactor_iterations"},
-          "dynamics.solver");
+      src_.allowKeys(s,
+                     {"type", "preconditioner", "tolerance", "max_iterations", "warm_start",
+                      "refactor_iterations", "extension_iterations", "contact_updates"},
+                     "dynamics.solver");
       if (const YAML::Node t = s["type"]) {
         const std::string type = src_.string(t, "dynamics.solver.type");
         if (type == "cg")
@@ -162,6 +163,12 @@ class SceneReader {
       if (s["refactor_iterations"])
         d.pcg_refactor_iterations =
             int(src_.integer(s["refactor_iterations"], "dynamics.solver.refactor_iterations", 1, 1000000));
+      if (s["extension_iterations"])
+        d.pcg_extension_iterations =
+            int(src_.integer(s["extension_iterations"], "dynamics.solver.extension_iterations", 0, 1000000));
+      if (s["contact_updates"])
+        d.pcg_contact_updates =
+            int(src_.integer(s["contact_updates"], "dynamics.solver.contact_updates", 0, 1000000));
     }
   }
 

@@ -26,6 +26,15 @@ constexpr int kParallelElements = 512;
 // Solve / release rounds of the contact set per step.
 constexpr int kMaxContactRounds = 4;
 
+// to = from; only the values when the pattern is the same (it is per body).
+void copyValues(const Eigen::SparseMatrix<double>& from, Eigen::SparseMatrix<double>& to) {
+  if (to.rows() != from.rows() || to.nonZeros() != from.nonZeros() || !to.isCompressed()) {
+    to = from;
+    return;
+  }
+  std::copy(from.valuePtr(), from.valuePtr() + from.nonZeros(), to.valuePtr());
+}
+
 void checkVector(const Eigen::VectorXd& v, Eigen::Index size, const char* name) {
   if (v.size() != size)
     throw std::invalid_argument(std::string("WarpedDynamics: ") + name + " has " + std::to_string(v.size()) +
@@ -54,6 +63,9 @@ WarpedDynamics::WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOpt
       options_.pcg_refactor_iterations <= 0)
     throw std::invalid_argument(
         "WarpedDynamics: cg_tolerance, cg_max_iterations and pcg_refactor_iterations must be positive");
+  if (options_.pcg_contact_updates < 0 || options_.pcg_extension_iterations < 0)
+    throw std::invalid_argument(
+        "WarpedDynamics: pcg_contact_updates and pcg_extension_iterations must be non-negative");
 
   const PolyhedralMesh& mesh = model_.mesh();
   const int dofs = numDofs(), num_elements = mesh.numElements();
@@ -195,13 +207,16 @@ void WarpedDynamics::updateWarping() {
       ku.noalias() = model_.elementStiffness(e) * u;
       double* f = element_forces_.data() + element_force_offset_[e];
       for (int a = 0; a < n; ++a) Eigen::Map<Vec3>(f + 3 * a) = -(r * ku.segment<3>(3 * a));
-      // R_e K_e R_e^T block by block (block (a, b) column-major at 9 (b n + a)).
+      // R_e K_e R_e^T block by block (block (a, b) column-major at 9 (b n + a)); K_e is symmetric, so
+      // block (b, a) is the transpose of block (a, b).
       const Eigen::MatrixXd& k = model_.elementStiffness(e);
       double* rk = rotated_blocks_.data() + rotated_block_offset_[e];
       for (int b = 0; b < n; ++b)
-        for (int a = 0; a < n; ++a)
-          Eigen::Map<Eigen::Matrix3d>(rk + 9 * (b * n + a)).noalias() =
-              r * k.block<3, 3>(3 * a, 3 * b) * r.transpose();
+        for (int a = 0; a <= b; ++a) {
+          Eigen::Map<Eigen::Matrix3d> block(rk + 9 * (b * n + a));
+          block.noalias() = r * (k.block<3, 3>(3 * a, 3 * b) * r.transpose());
+          if (a != b) Eigen::Map<Eigen::Matrix3d>(rk + 9 * (a * n + b)) = block.transpose();
+        }
     }
   }
   degenerate_rotations_ = degenerate;
@@ -236,7 +251,8 @@ void WarpedDynamics::updateWarping() {
 }
 
 Eigen::VectorXd WarpedDynamics::solveSystem(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
-                                            const Eigen::VectorXd& guess, StepStatistics& stats) {
+                                            const Eigen::VectorXd& guess, const std::vector<char>& active,
+                                            StepStatistics& stats) {
   Eigen::VectorXd x;
   if (options_.solver == WarpedDynamicsOptions::Solver::kSimplicialLDLT) {
     if (!ldlt_analyzed_) {
@@ -254,15 +270,21 @@ Eigen::VectorXd WarpedDynamics::solveSystem(const Eigen::SparseMatrix<double>& a
     cholmod_->solve(b, x);
     stats.solver_iterations += 1;
   } else if (options_.solver == WarpedDynamicsOptions::Solver::kCholmodPcg) {
-    const bool fresh = cholmod_->numFactorizations() == 0 || !cholmod_->patternMatches(a);
-    if (fresh) factorizeCholmod(a, stats);
+    // The system and contact-filtered matrices share one pattern for the life of the body.
+    const bool fresh = cholmod_->numFactorizations() == 0 || !prepareContactCorrection(active, stats);
+    if (fresh) {
+      factorizeCholmod(a, stats);
+      recordFactoredContact(active);
+    }
     x = guess;
-    if (!factorPreconditionedCg(
-            a, b, x, fresh ? options_.cg_max_iterations : options_.pcg_refactor_iterations, stats)) {
+    if (!factorPreconditionedCg(a, b, x,
+                                fresh ? options_.cg_max_iterations : options_.pcg_refactor_iterations,
+                                fresh ? 0 : options_.pcg_extension_iterations, stats)) {
       if (fresh) {
         stats.converged = false;
       } else {  // the stale factor preconditions too poorly: factorise this matrix and solve directly
         factorizeCholmod(a, stats);
+        recordFactoredContact(active);
         cholmod_->solve(b, x);
         stats.solver_iterations += 1;
         stats.solver_error = 0.0;
@@ -303,7 +325,8 @@ void WarpedDynamics::factorizeCholmod(const Eigen::SparseMatrix<double>& a, Step
 }
 
 bool WarpedDynamics::factorPreconditionedCg(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
-                                            Eigen::VectorXd& x, int max_iterations, StepStatistics& stats) {
+                                            Eigen::VectorXd& x, int max_iterations, int max_extension,
+                                            StepStatistics& stats) {
   const double b_norm = b.norm();
   if (b_norm == 0.0) {
     x.setZero();
@@ -313,12 +336,24 @@ bool WarpedDynamics::factorPreconditionedCg(const Eigen::SparseMatrix<double>& a
   const double threshold = options_.cg_tolerance * b_norm;
   Eigen::VectorXd r = b - a * x, z, p, q;
   double r_norm = r.norm();
+  const double initial_norm = r_norm;
   int iterations = 0;
+  bool extended = false;
   if (r_norm > threshold) {
-    cholmod_->solve(r, z);
+    applyPreconditioner(r, z);
     p = z;
     double rz = r.dot(z);
-    while (iterations < max_iterations) {
+    for (;;) {
+      if (iterations >= max_iterations) {
+        // Out of iterations: go on when the mean residual reduction so far reaches the tolerance within
+        // max_extension more (cheaper than the refactorisation it saves).
+        if (extended || max_extension <= 0 || !(r_norm < initial_norm)) break;
+        const double rate = std::pow(r_norm / initial_norm, 1.0 / iterations);
+        const double needed = std::ceil(std::log(threshold / r_norm) / std::log(rate));
+        if (!(needed <= max_extension)) break;
+        max_iterations += static_cast<int>(needed);
+        extended = true;
+      }
       q.noalias() = a * p;
       const double alpha = rz / p.dot(q);
       x += alpha * p;
@@ -326,7 +361,7 @@ bool WarpedDynamics::factorPreconditionedCg(const Eigen::SparseMatrix<double>& a
       ++iterations;
       r_norm = r.norm();
       if (r_norm <= threshold) break;
-      cholmod_->solve(r, z);
+      applyPreconditioner(r, z);
       const double rz_next = r.dot(z);
       p = z + (rz_next / rz) * p;
       rz = rz_next;
@@ -337,9 +372,109 @@ bool WarpedDynamics::factorPreconditionedCg(const Eigen::SparseMatrix<double>& a
   return r_norm <= threshold;
 }
 
+void WarpedDynamics::recordFactoredContact(const std::vector<char>& active) {
+  factored_active_ = active;
+  released_nodes_.clear();
+  added_nodes_.clear();
+  if (options_.pcg_contact_updates > 0) copyValues(system_matrix_, factored_system_);
+}
+
+bool WarpedDynamics::prepareContactCorrection(const std::vector<char>& active, StepStatistics& stats) {
+  if (options_.pcg_contact_updates == 0 || factored_active_.empty()) return true;  // plain stale factor
+  std::vector<int> released, added;
+  for (int i = 0; i < numNodes(); ++i) {
+    if (factored_active_[i] && !active[i]) released.push_back(i);
+    if (!factored_active_[i] && active[i]) added.push_back(i);
+  }
+  if (static_cast<int>(released.size() + added.size()) > options_.pcg_contact_updates) return false;
+  if (released == released_nodes_ && added == added_nodes_) return true;  // prepared in an earlier round
+  released_nodes_.clear();
+  added_nodes_.clear();
+  const Vec3& n = options_.ground.normal;
+  const int dofs = numDofs(), r = static_cast<int>(released.size()), a = static_cast<int>(added.size());
+  if (r > 0) {
+    // Z = P A_f Q column by column (P: no normal component on the factor's contact nodes), Q^T A_f Q.
+    Eigen::MatrixXd coupling = Eigen::MatrixXd::Zero(dofs, r), normal_block(r, r);
+    for (int k = 0; k < r; ++k) {
+      auto column = coupling.col(k);
+      for (int c = 0; c < 3; ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(factored_system_, 3 * released[k] + c); it; ++it)
+          column[it.row()] += n[c] * it.value();
+      for (int l = 0; l < r; ++l) normal_block(l, k) = n.dot(column.segment<3>(3 * released[l]));
+    }
+    for (int i = 0; i < numNodes(); ++i)
+      if (factored_active_[i])
+        for (int k = 0; k < r; ++k) {
+          auto block = coupling.block<3, 1>(3 * i, k);
+          block -= n.dot(block) * n;
+        }
+    released_coupling_ = coupling.sparseView();
+    cholmod_->solve(coupling, released_solves_);  // W = F^-1 Z
+    released_schur_.compute(normal_block - released_coupling_.transpose() * released_solves_);
+    if (released_schur_.info() != Eigen::Success) return false;
+  }
+  released_nodes_ = released;
+  if (a > 0) {
+    Eigen::MatrixXd normals = Eigen::MatrixXd::Zero(dofs, a);  // E
+    for (int k = 0; k < a; ++k) normals.block<3, 1>(3 * added[k], k) = n;
+    applyReleasedInverse(normals, added_solves_);  // V = B^-1 E
+    Eigen::MatrixXd h(a, a);
+    for (int k = 0; k < a; ++k)
+      for (int l = 0; l < a; ++l) h(l, k) = n.dot(added_solves_.block<3, 1>(3 * added[l], k));
+    added_schur_.compute(h);
+    if (added_schur_.info() != Eigen::Success) {
+      released_nodes_.clear();
+      return false;
+    }
+  }
+  added_nodes_ = added;
+  stats.contact_updates = std::max(stats.contact_updates, r + a);
+  return true;
+}
+
+void WarpedDynamics::applyReleasedInverse(const Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+  const int r = static_cast<int>(released_nodes_.size());
+  if (r == 0) {
+    cholmod_->solve(b, x);
+    return;
+  }
+  // Block elimination: x_R = S^-1 (Q^T b - Z^T F^-1 b_G), x = F^-1 b_G - W x_R + Q x_R, b_G = b - Q Q^T b.
+  const Vec3& n = options_.ground.normal;
+  const Eigen::Index cols = b.cols();
+  Eigen::MatrixXd normal_part(r, cols), free_part = b;
+  for (int k = 0; k < r; ++k) {
+    auto rows = free_part.middleRows<3>(3 * released_nodes_[k]);
+    normal_part.row(k) = n.transpose() * rows;
+    rows -= n * normal_part.row(k);
+  }
+  cholmod_->solve(free_part, x);
+  const Eigen::MatrixXd released_values =
+      released_schur_.solve(normal_part - released_coupling_.transpose() * x);
+  x.noalias() -= released_solves_ * released_values;
+  for (int k = 0; k < r; ++k) x.middleRows<3>(3 * released_nodes_[k]) += n * released_values.row(k);
+}
+
+void WarpedDynamics::applyPreconditioner(const Eigen::VectorXd& r, Eigen::VectorXd& z) {
+  if (released_nodes_.empty() && added_nodes_.empty()) {
+    cholmod_->solve(r, z);
+    return;
+  }
+  const Vec3& n = options_.ground.normal;
+  Eigen::MatrixXd filtered = r, t;
+  for (int i : added_nodes_) filtered.block<3, 1>(3 * i, 0) -= n.dot(r.segment<3>(3 * i)) * n;
+  applyReleasedInverse(filtered, t);
+  z = t.col(0);
+  if (added_nodes_.empty()) return;
+  Eigen::VectorXd normal_values(added_nodes_.size());
+  for (size_t k = 0; k < added_nodes_.size(); ++k)
+    normal_values[k] = n.dot(z.segment<3>(3 * added_nodes_[k]));
+  z.noalias() -= added_solves_ * added_schur_.solve(normal_values);
+  for (int i : added_nodes_) z.segment<3>(3 * i) += n.dot(r.segment<3>(3 * i)) * n;
+}
+
 void WarpedDynamics::buildConstrainedMatrix(const std::vector<char>& active) {
   // A' = S A S + (I - S), S_i = I - n n^T on contact nodes, I elsewhere; blocks of A are full 3 x 3.
-  constrained_matrix_ = system_matrix_;
+  copyValues(system_matrix_, constrained_matrix_);
   const Vec3& n = options_.ground.normal;
   const Eigen::Matrix3d s = Eigen::Matrix3d::Identity() - n * n.transpose();
   const int* outer = constrained_matrix_.outerIndexPtr();
@@ -402,7 +537,7 @@ StepStatistics WarpedDynamics::step() {
     if (num_active == 0) {
       stats.assembly_ms += millisecondsSince(phase_start);
       phase_start = Clock::now();
-      dv = solveSystem(system_matrix_, rhs, guess, stats);
+      dv = solveSystem(system_matrix_, rhs, guess, active, stats);
       stats.solve_ms += millisecondsSince(phase_start);
       phase_start = Clock::now();
       break;
@@ -420,7 +555,7 @@ StepStatistics WarpedDynamics::step() {
     buildConstrainedMatrix(active);
     stats.assembly_ms += millisecondsSince(phase_start);
     phase_start = Clock::now();
-    dv = solveSystem(constrained_matrix_, b, y0, stats) + z;
+    dv = solveSystem(constrained_matrix_, b, y0, active, stats) + z;
     stats.solve_ms += millisecondsSince(phase_start);
     phase_start = Clock::now();
     reaction = system_matrix_ * dv - rhs;       // ground impulse on each node (M dv = dt f + J)

@@ -17,6 +17,7 @@
 // the step are projected back and lose their inward normal velocity.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
@@ -59,6 +60,13 @@ struct WarpedDynamicsOptions {
   int cg_max_iterations = 2000;
   bool cg_warm_start = true;         // start from the previous step's dv
   int pcg_refactor_iterations = 10;  // kCholmodPcg: CG iterations before refactorising
+  /// kCholmodPcg: after pcg_refactor_iterations, CG goes on when its mean residual reduction per iteration
+  /// predicts convergence within this many more (0: refactorise at once, the old rule).
+  int pcg_extension_iterations = 3;
+  /// kCholmodPcg: the preconditioner follows the contact set exactly when at most this many nodes are in
+  /// contact differently from the factorised matrix (Schur complements of the factor, one blocked solve per
+  /// new contact set); more refactorise. 0: no correction (each changed node costs CG iterations).
+  int pcg_contact_updates = 64;
   /// Keep the previous R_e when Horn's top eigenvalue gap is below this (collinear/collapsed element).
   double min_eigenvalue_gap = 1e-12;
 };
@@ -71,6 +79,7 @@ struct StepStatistics {
   int contact_nodes = 0;         // nodes held on the ground inside the solve (v+ . n = 0)
   int projected_nodes = 0;       // nodes that crossed the ground during the step and were projected back
   int contact_rounds = 0;        // linear solves (contact set releases + 1)
+  int contact_updates = 0;       // kCholmodPcg: changed contact nodes absorbed by the preconditioner
   int degenerate_rotations = 0;  // elements that kept their previous rotation
   // Wall time of the step's phases, milliseconds: R_e, element forces and R_e K_e R_e^T (warping); scatter
   // into K_w, system matrix, right-hand side and contact-filtered matrices (assembly); linear solves (solve).
@@ -130,12 +139,24 @@ class WarpedDynamics {
   Eigen::VectorXd elementDisplacement(int e, const ElementFrame& frame) const;  // u_e
   void applyGroundContact(StepStatistics& stats);
   Eigen::VectorXd solveSystem(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
-                              const Eigen::VectorXd& guess, StepStatistics& stats);
+                              const Eigen::VectorXd& guess, const std::vector<char>& active,
+                              StepStatistics& stats);
   void buildConstrainedMatrix(const std::vector<char>& active);
   void factorizeCholmod(const Eigen::SparseMatrix<double>& a, StepStatistics& stats);
-  // CG on a x = b from x, preconditioned by cholmod_'s factor; false when not converged in max_iterations.
+  // kCholmodPcg: remembers the matrix and contact set of the factorisation just made.
+  void recordFactoredContact(const std::vector<char>& active);
+  // Prepares the preconditioner for the contact set `active`: false when more nodes changed than
+  // pcg_contact_updates or the correction is not positive definite (then refactorise).
+  bool prepareContactCorrection(const std::vector<char>& active, StepStatistics& stats);
+  // x = B^-1 b, B: the factorised matrix with the released nodes' normal dofs coupled again.
+  void applyReleasedInverse(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
+  // z = M^-1 r, M: the factorised matrix filtered to the current contact set.
+  void applyPreconditioner(const Eigen::VectorXd& r, Eigen::VectorXd& z);
+  // CG on a x = b from x, preconditioned by cholmod_'s factor; false when not converged in max_iterations
+  // (plus up to max_extension when the residual's mean reduction rate predicts convergence within them).
   bool factorPreconditionedCg(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
-                              Eigen::VectorXd& x, int max_iterations, StepStatistics& stats);
+                              Eigen::VectorXd& x, int max_iterations, int max_extension,
+                              StepStatistics& stats);
 
   LinearElasticModel model_;
   WarpedDynamicsOptions options_;
@@ -163,6 +184,18 @@ class WarpedDynamics {
   bool ldlt_analyzed_ = false;
   double last_warping_ms_ = 0.0, last_scatter_ms_ = 0.0;  // of the latest updateWarping()
   std::unique_ptr<CholmodSolver> cholmod_;  // kCholmod only; re-analyses when the pattern changes
+  // kCholmodPcg: the factor is of F = filter(A_f, C_f), A_f the unfiltered system matrix then (kept for the
+  // couplings), C_f its contact set. For the current set C: released nodes (C_f \ C, normals p_i = e_i (x) n,
+  // columns of Q) and added nodes (C \ C_f, columns of E). With Z = P A_f Q (P removes the normals of C_f),
+  // W = F^-1 Z, S = Q^T A_f Q - Z^T W: B^-1 (filter(A_f, C_f \ C)) by block elimination; with V = B^-1 E,
+  // H = E^T V and t = B^-1 (I - E E^T) r the preconditioner M^-1 r = t - V H^-1 E^T t + E E^T r is the exact
+  // inverse of filter(A_f, C): only A_f -> A (rotations) is left to CG.
+  Eigen::SparseMatrix<double> factored_system_;
+  std::vector<char> factored_active_;
+  std::vector<int> released_nodes_, added_nodes_;
+  Eigen::SparseMatrix<double> released_coupling_;             // Z
+  Eigen::MatrixXd released_solves_, added_solves_;            // W, V
+  Eigen::LLT<Eigen::MatrixXd> released_schur_, added_schur_;  // S, H
 };
 
 }  // namespace rc

@@ -203,6 +203,21 @@ TEST(FemSceneFile, SampleBlendKeysReachTheElementQuadrature) {
             1e-3 * reference.body(0).model().elementStiffness(0).norm());
 }
 
+TEST(FemSceneFile, CholmodPcgKeysReachTheSolverOptions) {
+  std::string yaml = kMinimal;
+  yaml.replace(yaml.find("dynamics: {time_step: 0.01,"), 27,
+               "dynamics: {solver: {type: cholmod_pcg, extension_iterations: 0, contact_updates: 7}, "
+               "time_step: 0.01,");
+  const FemScene scene = parseFemScene(yaml, "minimal.yaml");
+  EXPECT_EQ(scene.dynamics.pcg_extension_iterations, 0);
+  EXPECT_EQ(scene.dynamics.pcg_contact_updates, 7);
+  const FemScene defaults = parseFemScene(kMinimal, "minimal.yaml");
+  EXPECT_EQ(defaults.dynamics.pcg_extension_iterations, 3);
+  EXPECT_EQ(defaults.dynamics.pcg_contact_updates, 64);
+  yaml.replace(yaml.find("contact_updates: 7"), 18, "contact_updates: -1");
+  expectErrorAt(yaml, 3, "dynamics.solver.contact_updates");
+}
+
 TEST(FemSceneFile, RandomElementSplitsGiveOneElementPerPlane) {
   const PolyhedralMesh mesh = randomElementSplits(Vec3::Zero(), Vec3::Ones(), 1, 1, 1, 30, 7);
   EXPECT_EQ(mesh.numElements(), 31);
