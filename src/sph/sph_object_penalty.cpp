@@ -88,6 +88,14 @@ void SphObjectPenalty::beginStep(double dt) {
   step_dt_ = dt;
 }
 
+void SphObjectPenalty::setObjectStiffness(uint8_t phase, double stiffness) {
+  if (!(stiffness >= 0.0) || !std::isfinite(stiffness))
+    throw std::invalid_argument(
+        "SphObjectPenalty::setObjectStiffness: stiffness must be finite and >= 0, got " +
+        std::to_string(stiffness));
+  object_stiffness_[phase] = stiffness;
+}
+
 void SphObjectPenalty::gatherStiffness(size_t s) {
   const double d2 = config_.contact_distance * config_.contact_distance;
   const Vec3 xs = s_pos_[s];
@@ -102,7 +110,7 @@ void SphObjectPenalty::gatherStiffness(size_t s) {
       if (!(r2 < d2) || r2 <= 0.0) continue;
       k += 0.5 * (s_mass_[s] + s_mass_[j]) * kernels_.poly6(r2);
     }
-  s_stiffness_[s] = k * volume_ * config_.stiffness / s_mass_[s];
+  s_stiffness_[s] = k * volume_ * config_.stiffness / s_mass_[s] + object_stiffness_[phase];
 }
 
 void SphObjectPenalty::gatherForces(size_t s) {

@@ -245,11 +245,18 @@ SphFluidSolver makeSphSolver(const SphScene& scene) {
   SphFluidSolver solver(scene.config, scene.particles);
   for (const SphPlane& plane : scene.planes) solver.addPlane(plane);
   const SphKernels kernels(scene.config.dimension, scene.config.smoothing_length);
-  for (const SphSceneSolid& solid : scene.solids)
-    solver.addForceTerm(
-        std::make_shared<SphElasticSolid>(solid.elastic, kernels, solid.phase, solid.orientation));
-  if (scene.collisions.enabled)
-    solver.addForceTerm(std::make_shared<SphObjectPenalty>(scene.collisions.config, kernels));
+  for (const SphSceneSolid& solid : scene.solids) {
+    auto term = std::make_shared<SphElasticSolid>(solid.elastic, kernels, solid.phase, solid.orientation);
+    term->setEnvironment(solver.planes(), solver.config().gravity);  // constraints of the global springs
+    solver.addForceTerm(term);
+  }
+  if (scene.collisions.enabled) {
+    auto penalty = std::make_shared<SphObjectPenalty>(scene.collisions.config, kernels);
+    for (const SphSceneSolid& solid : scene.solids)  // bodies held by implicit goal springs
+      if (solid.elastic.implicit_goal && solid.elastic.model == SphElasticModel::kGoalPosition)
+        penalty->setObjectStiffness(solid.phase, solid.elastic.goal_stiffness);
+    solver.addForceTerm(penalty);
+  }
   return solver;
 }
 

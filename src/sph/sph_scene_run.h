@@ -77,7 +77,9 @@ struct SphRunStats {
 };
 
 /// A solver for the scene (its config, particles and planes) with an SphElasticSolid force term per solid
-/// and, with `enable: [collisions]`, an SphObjectPenalty term after them.
+/// (given the scene's planes and gravity, SphElasticSolid::setEnvironment) and, with `enable: [collisions]`,
+/// an SphObjectPenalty term after them (told K_e of the solids with implicit goal springs,
+/// SphObjectPenalty::setObjectStiffness).
 SphFluidSolver makeSphSolver(const SphScene& scene);
 
 /// Per particle of the solver: the docked lattice points (SphElasticSolid::dockedCounts) of the solids

@@ -22,6 +22,7 @@
 #include "sph/sph_lattice.h"
 #include "sph/sph_object_penalty.h"
 #include "sph/sph_scene_file.h"
+#include "sph/sph_scene_run.h"
 
 namespace rc {
 namespace {
@@ -137,6 +138,23 @@ void expectRigidMotionKept(Cube c, int steps, const char* label) {
   EXPECT_LT((m.angular_end - m.angular_start).norm(), 1e-8 * m.angular_start.norm());
   EXPECT_GT(kinetic, 0.99 * kinetic0);  // the rigid motion is not damped
   EXPECT_LT(c.solids[0]->stats().max_strain, 0.01);
+}
+
+// Runs `duration` seconds of steps dt and returns the particles' mean height averaged over the last
+// `average` seconds.
+double meanHeightOverLastSteps(SphFluidSolver& solver, double duration, double average, double dt) {
+  const SphParticles& p = solver.particles();
+  const int steps = int(std::lround(duration / dt)), averaged = int(std::lround(average / dt));
+  double sum = 0.0;
+  for (int step = 0; step < steps; ++step) {
+    solver.step();
+    if (step >= steps - averaged) {
+      double mean = 0.0;
+      for (const Vec3& x : p.positions) mean += x.y();
+      sum += mean / double(p.size());
+    }
+  }
+  return sum / double(averaged);
 }
 
 double energyOf(const SphFluidSolver& solver) {
@@ -324,17 +342,7 @@ double restingHeight(const SphElasticConfig& material, double dt, double duratio
   solver.particlesChanged();
   solver.addPlane(SphPlane{});
   c.solids[0]->setEnvironment(solver.planes(), config.gravity);  // used by the global springs only
-  const int steps = int(std::lround(duration / dt)), averaged = int(std::lround(average / dt));
-  double sum = 0.0;
-  for (int step = 0; step < steps; ++step) {
-    solver.step();
-    if (step >= steps - averaged) {
-      double mean = 0.0;
-      for (const Vec3& x : p.positions) mean += x.y();
-      sum += mean / double(p.size());
-    }
-  }
-  return sum / double(averaged);
+  return meanHeightOverLastSteps(solver, duration, average, dt);
 }
 
 // Stiffness at a large step: a dice cube (K_e = 2.4e7) resting on the floor sags under gravity by the same
@@ -472,6 +480,142 @@ TEST(SphImplicitGoal, GlobalSystemIsSymmetricRigidFreeAndSolved) {
     rhs = std::max(rhs, b.norm());
   }
   EXPECT_LT(worst, 1e-8 * rhs);
+}
+
+/// A stiff dice cube (K_e = 2.4e7) with its lowest particle 0.02 m above the floor y = 0, falling
+/// at `speed` under gravity, adaptive step (the dice scene's pressure, K = 20).
+Cube fallingCube(const SphElasticConfig& material, double stretch, double speed) {
+  SphFluidConfig config = diceConfig();
+  config.fixed_dt = 0.0;
+  config.gravity = Vec3(0, -9.81, 0);
+  Cube c = makeCubes(config, material, {Vec3(0, 0.5, 0)}, {Vec3(0, -speed, 0)},
+                     Eigen::AngleAxisd(0.3, Vec3(1, 0, 1).normalized()).toRotationMatrix(), stretch,
+                     Vec3::Zero(), 0.0);
+  SphParticles& p = c.solver->particles();
+  double low = std::numeric_limits<double>::infinity();
+  for (const Vec3& x : p.positions) low = std::min(low, x.y());
+  for (Vec3& x : p.positions) x.y() += 0.02 - low;
+  c.solver->particlesChanged();
+  c.solver->addPlane(SphPlane{});
+  for (auto& s : c.solids) s->setEnvironment(c.solver->planes(), config.gravity);
+  return c;
+}
+
+// The explicit goal forces (8.31) keep the force limit cfl sqrt(h / max |a|) on their accelerations: the
+// falling stiff cube, stretched by 30%, hits the floor with the same force limits and steps, bit for bit, as
+// before the implicit terms left that limit (reference values of that code).
+TEST(SphImplicitGoal, ExplicitSpringsKeepTheForceLimitBitwise) {
+  Cube c = fallingCube(diceMaterial(false), 1.3, 3.0);
+  SphFluidSolver& solver = *c.solver;
+  double dt_force = std::numeric_limits<double>::infinity();
+  for (int step = 0; step < 150; ++step) dt_force = std::min(dt_force, solver.step().dt_force);
+  double sum = 0.0;
+  for (size_t i = 0; i < solver.particles().size(); ++i) {
+    const Vec3& x = solver.particles().positions[i];
+    const Vec3& v = solver.particles().velocities[i];
+    sum += x.x() + 2.0 * x.y() + 3.0 * x.z() + 5.0 * v.x() + 7.0 * v.y() + 11.0 * v.z();
+  }
+  std::printf("explicit falling cube: time %a, checksum %a, smallest force limit %a\n", solver.time(), sum,
+              dt_force);
+  EXPECT_EQ(solver.time(), 0x1.1bc779ef0d4e8p-6);
+  EXPECT_EQ(sum, 0x1.71d3d39fec595p+11);
+  EXPECT_EQ(dt_force, 0x1.ccbd842e40c1dp-12);
+}
+
+/// Mean particle height of the scene file's cube (K_e = 2.4e7, `implicit_goal` as given, soft pressure
+/// K = 1) resting on the floor plane of its box under gravity at the fixed step `dt`, run through
+/// makeSphSolver: averaged over the steps of the last `average` seconds of `duration`, minus the mean height
+/// at rest (no gravity). `no_environment`: the solids' planes and gravity taken away again.
+double sceneFileSag(const std::string& implicit_goal, double dt, double duration, double average,
+                    bool no_environment = false) {
+  char text[1024];
+  std::snprintf(
+      text, sizeof text,
+      "dimension: 3\nspacing: 0.07\nenable: [elasticity]\n"
+      "solver: {smoothing_ratio: 2, rest_density: 1, stiffness: 1, gamma: 1, "
+      "negative_pressure_scale: 0.01, xsph: 0, gravity: [0, -9.81, 0], fixed_dt: %.17g, threads: 1}\n"
+      "solids:\n  - {lo: [-0.175, 0, -0.175], hi: [0.175, 0.35, 0.175], model: goal_position, "
+      "goal_stiffness: 2.4e7, implicit_goal: %s}\n"
+      "boundary:\n  box_planes:\n    - {lo: [-1, 0, -1], hi: [1, 2, 1]}\n"
+      "frames: {count: 1, time: 0.01}\n",
+      dt, implicit_goal.c_str());
+  const SphScene scene = parseSphScene(text, "resting_cube.yaml");
+  SphFluidSolver solver = makeSphSolver(scene);
+  SphParticles& p = solver.particles();
+  double low = std::numeric_limits<double>::infinity(), rest = 0.0;
+  for (const Vec3& x : p.positions) low = std::min(low, x.y());
+  for (Vec3& x : p.positions) {
+    x.y() -= low;  // the bottom layer on the floor
+    rest += x.y() / double(p.size());
+  }
+  solver.particlesChanged();
+  if (no_environment)
+    for (const auto& term : solver.forceTerms())
+      if (auto* solid = dynamic_cast<SphElasticSolid*>(term.get())) solid->setEnvironment({}, Vec3::Zero());
+  return rest - meanHeightOverLastSteps(solver, duration, average, dt);
+}
+
+// The scene runner gives the global springs the scene's planes and gravity (makeSphSolver): a scene-file
+// cube with `implicit_goal: global` at 30x the explicit limit rests on the floor with the sag of the
+// explicit forces (8.31) at 0.8x (within 3%, as GlobalSpringsKeepTheStaticSagAtLargeSteps); without its
+// environment it sinks in by dt^2 times the floor's reaction acceleration.
+TEST(SphImplicitGoal, SceneFileGlobalSpringsGetTheFloorAndKeepTheSag) {
+  const double limit = explicitLimit(kStiffness);
+  const double sag_explicit = sceneFileSag("false", 0.8 * limit, 0.3, 0.25);
+  const double sag_global = sceneFileSag("global", 30.0 * limit, 0.3, 0.1);
+  const double sag_bare = sceneFileSag("global", 30.0 * limit, 0.3, 0.1, true);
+  std::printf("scene file cube, sag under gravity: explicit %.4g m, global 30x %.4g m (no planes: %.4g m)\n",
+              sag_explicit, sag_global, sag_bare);
+  EXPECT_GT(sag_explicit, 0.0);
+  EXPECT_NEAR(sag_global, sag_explicit, 0.03 * sag_explicit);
+  EXPECT_GT(sag_bare, 1.5 * sag_explicit);
+}
+
+// Two stiff cubes (global springs at 30x the explicit limit) colliding head-on at 6 m/s with the implicit
+// penalty (K_c = 1e7). Without the bodies' stiffness in the contact springs a contact moves a surface
+// particle by the whole overlap in one step, straining the stiff cube by it: the kinetic energy grows
+// 17-fold. With setObjectStiffness(K_e) it does not grow, the cubes keep their shape and every step is the
+// capped one.
+TEST(SphImplicitGoal, ContactSpringsSeeTheBodyStiffness) {
+  auto collide = [](bool body_stiffness, double& max_kinetic, double& max_strain, int& steps) {
+    SphFluidConfig config = diceConfig();
+    config.fixed_dt = 0.0;
+    SphElasticConfig material = globalMaterial();
+    material.implicit_step_factor = 30.0;
+    Cube pair = makeCubes(config, material, {Vec3(-0.25, 0.5, 0), Vec3(0.25, 0.5, 0)},
+                          {Vec3(3.0, 0, 0), Vec3(-3.0, 0, 0)}, Mat3::Identity(), 1.0, Vec3::Zero(), 0.0);
+    SphObjectPenaltyConfig contact;
+    contact.stiffness = 1e7;
+    contact.contact_distance = kSpacing;
+    contact.implicit = true;
+    auto penalty = std::make_shared<SphObjectPenalty>(contact, SphKernels(3, config.smoothing_length));
+    EXPECT_THROW(penalty->setObjectStiffness(1, -1.0), std::invalid_argument);
+    if (body_stiffness)
+      for (uint8_t phase : {1, 2}) penalty->setObjectStiffness(phase, kStiffness);
+    SphFluidSolver& solver = *pair.solver;
+    solver.addForceTerm(penalty);
+    solver.computeForces();
+    const double kinetic0 = solver.lastStats().kinetic_energy;
+    max_kinetic = kinetic0;
+    max_strain = 0.0;
+    steps = 0;
+    while (solver.time() < 0.05) {
+      max_kinetic = std::max(max_kinetic, solver.step().kinetic_energy);
+      for (const auto& solid : pair.solids) max_strain = std::max(max_strain, solid->stats().max_strain);
+      ++steps;
+    }
+    std::printf("cubes collide, body stiffness %s: %d steps, kinetic %.4g -> max %.4g, max strain %.3g\n",
+                body_stiffness ? "on" : "off", steps, kinetic0, max_kinetic, max_strain);
+    return kinetic0;
+  };
+  double max_kinetic = 0.0, max_strain = 0.0;
+  int steps = 0;
+  const double kinetic0 = collide(false, max_kinetic, max_strain, steps);
+  EXPECT_GT(max_kinetic, 5.0 * kinetic0);
+  collide(true, max_kinetic, max_strain, steps);
+  EXPECT_EQ(steps, int(std::ceil(0.05 / (30.0 * 0.4 * explicitLimit(kStiffness)))));  // all at the cap
+  EXPECT_LE(max_kinetic, kinetic0 * (1.0 + 1e-3));
+  EXPECT_LT(max_strain, 0.1);
 }
 
 }  // namespace

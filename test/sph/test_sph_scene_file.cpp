@@ -651,7 +651,9 @@ TEST(SphSceneFile, DiceAreNineSeparateStiffSolidsAndWriteSurfaces) {
   for (const SphSceneSolid& die : scene.solids) {
     EXPECT_EQ(die.count, 249u);
     EXPECT_EQ(die.elastic.model, SphElasticModel::kGoalPosition);
-    EXPECT_EQ(die.elastic.goal_stiffness, 2.4e7);  // appendix F.2
+    EXPECT_EQ(die.elastic.goal_stiffness, 2.4e7);   // appendix F.2
+    EXPECT_TRUE(die.elastic.global_implicit_goal);  // dt up to 30x the explicit limit
+    EXPECT_EQ(die.elastic.implicit_step_factor, 30.0);
     EXPECT_NEAR((die.orientation.transpose() * die.orientation - Eigen::Matrix3d::Identity()).norm(), 0.0,
                 1e-14);
     phases.insert(die.phase);
@@ -662,6 +664,7 @@ TEST(SphSceneFile, DiceAreNineSeparateStiffSolidsAndWriteSurfaces) {
   EXPECT_TRUE(scene.collisions.enabled);
   EXPECT_EQ(scene.collisions.config.stiffness, 1.0e7);
   EXPECT_EQ(scene.collisions.config.contact_distance, 0.07);
+  EXPECT_TRUE(scene.collisions.config.implicit);
   // No two dice overlap at the start: particles of different dice are more than a spacing apart, and all lie
   // above the floor.
   double closest = 1e9;
@@ -676,10 +679,10 @@ TEST(SphSceneFile, DiceAreNineSeparateStiffSolidsAndWriteSurfaces) {
   EXPECT_TRUE(scene.surface.obj && !scene.surface.ply);
   EXPECT_EQ(scene.surface.config.cell_size, 0.035);
   EXPECT_EQ(scene.surface.config.smoothing_length, 0.14);
-  // Two short frames at the elastic step limit: stable, the dice hardly deform; the surface is written for
-  // frame 0 only (every 2).
+  // Two short frames at the capped step 30 x 0.4 sqrt(2 / K_e): stable, the dice hardly deform; the surface
+  // is written for frame 0 only (every 2).
   scene.frame_count = 2;
-  scene.frame_time = 0.001;
+  scene.frame_time = 0.01;
   const fs::path dir = tempDir("dice");
   SphFluidSolver solver = makeSphSolver(scene);
   SphRunOptions options;
@@ -688,8 +691,9 @@ TEST(SphSceneFile, DiceAreNineSeparateStiffSolidsAndWriteSurfaces) {
   EXPECT_TRUE(stats.instability.empty()) << stats.instability;
   EXPECT_EQ(stats.solids, 9u);
   EXPECT_EQ(stats.solid_particles, 9u * 249u);
-  EXPECT_NEAR(stats.min_dt, 0.4 * std::sqrt(2.0 / 2.4e7), 1e-12);
-  EXPECT_GE(stats.steps, 18u);
+  const double cap = 30.0 * 0.4 * std::sqrt(2.0 / 2.4e7);  // 3.46e-3 s: 3 steps per frame, the last shorter
+  EXPECT_EQ(stats.steps, 6u);
+  EXPECT_NEAR(stats.min_dt, cap, 1e-12);  // the shortened last steps not counted
   EXPECT_LT(stats.max_strain, 0.01);
   EXPECT_TRUE(fs::exists(dir / "dice_3d_surface_0000.obj"));
   EXPECT_FALSE(fs::exists(dir / "dice_3d_surface_0001.obj"));
