@@ -285,10 +285,10 @@ void thesisTable(bool quick, int dice_only = 0, const std::vector<std::string>& 
                       loadSphScene(configPath("freezing_rod_2d.yaml"))});
     scenes.push_back({"8.5", "1606-7000", 18.2, "freezing rod in 3D, 7200 fluid", freezingRod3d()});
   }
-  const int frames = quick ? 1 : 2;
+  const int frames = dice_only > 0 ? dice_only : quick ? 1 : 2;
   std::printf(
-      "\n## (b) Table 8.1 scenes (thesis: Pentium 4, 3 GHz), %d frame(s) from the start, no output, 2 "
-      "threads\n\n",
+      "\n## (b) Table 8.1 scenes (thesis: Pentium 4, 3 GHz), %d frame(s) from the start, no "
+      "output\n\n",
       frames);
   std::printf(
       "| Fig. | thesis particles | thesis s/frame | our scene | threads | particles | frame time [s] | s / "
