@@ -17,15 +17,10 @@
 #include "fem/linear_elasticity.h"
 #include "fem/polyhedral_mesh.h"
 #include "fem/warped_dynamics.h"
+#include "warped_test_support.h"
 
 namespace rc {
 namespace {
-
-Eigen::Matrix3d randomRotation(std::mt19937& rng) {
-  std::normal_distribution<double> normal;
-  Eigen::Quaterniond q(normal(rng), normal(rng), normal(rng), normal(rng));
-  return q.normalized().toRotationMatrix();
-}
 
 // x = Q X + t for every node.
 Eigen::VectorXd rigidlyMoved(const Eigen::VectorXd& rest, const Eigen::Matrix3d& q, const Vec3& t) {
@@ -121,34 +116,17 @@ TEST(WarpedDynamics, WarpedStiffnessAndForcesMatchElementSums) {
   for (Eigen::Index d = 0; d < x.size(); ++d) x[d] += jitter(rng);
   sim.setPositions(x);
   sim.updateWarping();
-  const int dofs = sim.numDofs();
-  Eigen::MatrixXd k_dense = Eigen::MatrixXd::Zero(dofs, dofs);
-  Eigen::VectorXd f = Eigen::VectorXd::Zero(dofs);
-  for (int e = 0; e < model.mesh().numElements(); ++e) {
-    const auto& ids = model.mesh().element(e).globalNodeIds();
-    const int n = static_cast<int>(ids.size());
-    const Eigen::Matrix3d& r = sim.rotations()[e];
-    Eigen::MatrixXd rotation = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-    Eigen::VectorXd rest(3 * n), current(3 * n), weights(n);
-    for (int a = 0; a < n; ++a) {
-      rotation.block<3, 3>(3 * a, 3 * a) = r;
-      rest.segment<3>(3 * a) = sim.restPositions().segment<3>(3 * ids[a]);
-      current.segment<3>(3 * a) = x.segment<3>(3 * ids[a]);
-      weights[a] = model.lumpedMasses()[ids[a]];
-    }
-    const HornRegistration reg = hornRegistration(rest, current, weights);
-    EXPECT_LT((reg.rotation - r).cwiseAbs().maxCoeff(), 1e-12);
-    Eigen::VectorXd u(3 * n);
-    for (int a = 0; a < n; ++a)
-      u.segment<3>(3 * a) = r.transpose() * (current.segment<3>(3 * a) - reg.current_centroid) -
-                            (rest.segment<3>(3 * a) - reg.rest_centroid);
-    const Eigen::MatrixXd rk = rotation * model.elementStiffness(e) * rotation.transpose();
-    const Eigen::VectorXd fe = -rotation * (model.elementStiffness(e) * u);
-    for (int a = 0; a < n; ++a) {
-      f.segment<3>(3 * ids[a]) += fe.segment<3>(3 * a);
-      for (int b = 0; b < n; ++b) k_dense.block<3, 3>(3 * ids[a], 3 * ids[b]) += rk.block<3, 3>(3 * a, 3 * b);
-    }
-  }
+  const WarpedElementSums sums =
+      warpedElementSums(model, sim, x,
+                        [&](int e, const Eigen::VectorXd& rest, const Eigen::VectorXd& current,
+                            const Eigen::VectorXd& weights) {
+                          const HornRegistration reg = hornRegistration(rest, current, weights);
+                          EXPECT_LT((reg.rotation - sim.rotations()[e]).cwiseAbs().maxCoeff(), 1e-12);
+                        });
+  Eigen::SparseMatrix<double> k_sparse(sim.numDofs(), sim.numDofs());
+  k_sparse.setFromTriplets(sums.stiffness.begin(), sums.stiffness.end());
+  const Eigen::MatrixXd k_dense(k_sparse);
+  const Eigen::VectorXd& f = sums.forces;
   const double k_scale = k_dense.cwiseAbs().maxCoeff();
   EXPECT_LT((Eigen::MatrixXd(sim.warpedStiffness()) - k_dense).cwiseAbs().maxCoeff(), 1e-12 * k_scale);
   EXPECT_LT((sim.elasticForces() - f).cwiseAbs().maxCoeff(), 1e-12 * k_scale);

@@ -21,15 +21,10 @@
 #include "fem/linear_elasticity.h"
 #include "fem/polyhedral_mesh.h"
 #include "fem/warped_dynamics.h"
+#include "warped_test_support.h"
 
 namespace rc {
 namespace {
-
-Eigen::Matrix3d randomRotation(std::mt19937& rng) {
-  std::normal_distribution<double> normal;
-  Eigen::Quaterniond q(normal(rng), normal(rng), normal(rng), normal(rng));
-  return q.normalized().toRotationMatrix();
-}
 
 Eigen::Matrix3d smallRotation(std::mt19937& rng, double angle) {
   std::normal_distribution<double> normal;
@@ -176,43 +171,10 @@ TEST(WarpedDynamics, ParallelWarpingEqualsElementSums) {
     x.segment<3>(3 * i) = q * sim.restPositions().segment<3>(3 * i) + Vec3(jitter(rng), jitter(rng), 0.1);
   sim.setPositions(x);
   sim.updateWarping();
-  std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::VectorXd f = Eigen::VectorXd::Zero(sim.numDofs());
-  for (int e = 0; e < model.mesh().numElements(); ++e) {
-    const auto& ids = model.mesh().element(e).globalNodeIds();
-    const int n = static_cast<int>(ids.size());
-    const Eigen::Matrix3d& r = sim.rotations()[e];
-    Eigen::MatrixXd rotation = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-    Eigen::VectorXd rest(3 * n), current(3 * n), weights(n);
-    for (int a = 0; a < n; ++a) {
-      rotation.block<3, 3>(3 * a, 3 * a) = r;
-      rest.segment<3>(3 * a) = sim.restPositions().segment<3>(3 * ids[a]);
-      current.segment<3>(3 * a) = x.segment<3>(3 * ids[a]);
-      weights[a] = model.lumpedMasses()[ids[a]];
-    }
-    Vec3 rest_centroid = Vec3::Zero(), current_centroid = Vec3::Zero();
-    for (int a = 0; a < n; ++a) {
-      rest_centroid += weights[a] * rest.segment<3>(3 * a);
-      current_centroid += weights[a] * current.segment<3>(3 * a);
-    }
-    rest_centroid /= weights.sum();
-    current_centroid /= weights.sum();
-    Eigen::VectorXd u(3 * n);
-    for (int a = 0; a < n; ++a)
-      u.segment<3>(3 * a) = r.transpose() * (current.segment<3>(3 * a) - current_centroid) -
-                            (rest.segment<3>(3 * a) - rest_centroid);
-    const Eigen::MatrixXd rk = rotation * model.elementStiffness(e) * rotation.transpose();
-    const Eigen::VectorXd fe = -rotation * (model.elementStiffness(e) * u);
-    for (int a = 0; a < n; ++a) {
-      f.segment<3>(3 * ids[a]) += fe.segment<3>(3 * a);
-      for (int b = 0; b < n; ++b)
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-            triplets.emplace_back(3 * ids[a] + i, 3 * ids[b] + j, rk(3 * a + i, 3 * b + j));
-    }
-  }
+  const WarpedElementSums sums = warpedElementSums(model, sim, x);
+  const Eigen::VectorXd& f = sums.forces;
   Eigen::SparseMatrix<double> k(sim.numDofs(), sim.numDofs());
-  k.setFromTriplets(triplets.begin(), triplets.end());
+  k.setFromTriplets(sums.stiffness.begin(), sums.stiffness.end());
   const Eigen::SparseMatrix<double> difference = k - sim.warpedStiffness();
   EXPECT_LT(difference.norm(), 1e-13 * k.norm());
   EXPECT_LT((f - sim.elasticForces()).norm(), 1e-12 * f.norm());

@@ -88,8 +88,9 @@ TEST(DiscontinuityClipper, AnOpenedCrackRendersAsACleanGap) {
       }
     }
   }
-  std::printf("gap %zu pixels: covered %zu without the discs, %zu with; %zu fragments clipped on %zu surfels\n",
-              gap_pixels, covered_plain, covered_clipped, stats.clipped_fragments, clip.clippedSurfels());
+  std::printf(
+      "gap %zu pixels: covered %zu without the discs, %zu with; %zu fragments clipped on %zu surfels\n",
+      gap_pixels, covered_plain, covered_clipped, stats.clipped_fragments, clip.clippedSurfels());
   ASSERT_GT(gap_pixels, 1000u);
   EXPECT_GT(covered_plain, gap_pixels / 10);  // the splats overlap into the gap
   EXPECT_EQ(covered_clipped, 0u);
