@@ -37,7 +37,6 @@ DiscontinuityClipper::DiscontinuityClipper(const SurfelCloud& surface, const Sur
     radii_.push_back(r);
     max_disc = std::max(max_disc, r);
   }
-  surfel_centers_ = surface.positions;
   offsets_.assign(1, 0);
   if (centers_.empty()) {
     offsets_.resize(surface.size() + 1, 0);

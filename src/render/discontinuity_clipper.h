@@ -31,7 +31,6 @@ class DiscontinuityClipper : public FragmentClipper {
   std::vector<Vec3> centers_, normals_;  // discs
   std::vector<double> radii_;
   std::vector<uint32_t> offsets_, ids_;  // per surface surfel: the discs with its centre behind them
-  std::vector<Vec3> surfel_centers_;
 };
 
 }  // namespace rc

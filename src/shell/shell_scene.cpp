@@ -534,8 +534,10 @@ ShellSimulation::ShellSimulation(const ShellScene& scene) : scene_(scene) {
 }
 
 void ShellSimulation::takeStep(ShellFrameReport* report) {
-  if (tear_time_ < 0.0 && crackCount() > 0) tear_time_ = model_->cracks().front().time;
-  if (pressure_) *pressure_ = scene_.balloon.pressureAt(solver_->time(), tear_time_);
+  if (pressure_) {
+    const double tear_time = crackCount() > 0 ? model_->cracks().front().time : -1.0;  // the first crack
+    *pressure_ = scene_.balloon.pressureAt(solver_->time(), tear_time);
+  }
   Clock::time_point t0 = Clock::now();
   const ShellStepReport r = solver_->step();
   report->forces_ms += msSince(t0);
@@ -585,7 +587,7 @@ double ShellSimulation::animateSurface() {
     // nodes include visible ones also where the disc reaches past the shell's border.
     cracks_ = crackDiscontinuitySurfels(cracks);
     for (size_t k = 0; k < cracks_.size(); ++k)
-      cracks_.positions[k] -= 0.25 * cracks[k / 2].radius * cracks_.normals[k];
+      cracks_.positions[k] -= kCrackSurfelInset * cracks[k / 2].radius * cracks_.normals[k];
     try {
       if (crack_skinning_ && crack_skinning_->boundCracks() == crack_skinning_->size() / 2) {
         crack_skinning_->rebind(cracks_, solver_->nodes(), cracks);  // the pairs of earlier cracks stay

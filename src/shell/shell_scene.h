@@ -127,6 +127,9 @@ class ShellSimulation {
 
   /// Simulates one frame and animates the surface; throws ShellInstabilityError.
   ShellFrameReport advanceFrame();
+  /// Crack surfels sit this many crack radii inside their material (behind their normal), so each binds to
+  /// its own side; the crack plane is that far in front of each.
+  static constexpr double kCrackSurfelInset = 0.25;
   /// Deforms the dense surfels (and crack surfels) to the current node positions; returns the milliseconds.
   double animateSurface();
 
@@ -139,8 +142,6 @@ class ShellSimulation {
   const ShellMembraneBalanceReport* membraneBalance() const {
     return scene_.balance_membrane ? &membrane_balance_ : nullptr;
   }
-  /// Time of the first crack (balloon: the tear), negative before.
-  double tearTime() const { return tear_time_; }
   size_t crackCount() const { return model_ ? model_->cracks().size() : 0; }
   size_t fiberCount() const { return solver_->fibers().size(); }
   const SurfelCloud& surfels() const { return surfels_; }      ///< deformed dense surfels
@@ -162,7 +163,6 @@ class ShellSimulation {
   std::unique_ptr<ShellSolver> solver_;
   std::unique_ptr<ShellMaterialModel> model_;
   std::shared_ptr<double> pressure_;
-  double tear_time_ = -1.0;  ///< time of the first crack, negative before
   ShellMembraneBalanceReport membrane_balance_;
   std::unique_ptr<ShellSkinning> skinning_, crack_skinning_;
   size_t bound_cracks_ = 0;

@@ -67,13 +67,14 @@ class FrameRenderer {
     const rc::SurfelCloud& cloud = sim.surfels();
     if (cloud.empty()) return;
     // Crack surfels are discontinuity surfels (4.3): invisible, they cut the dense surfels at the crack.
-    // Skinned, each sits a quarter radius inside its material; its clip plane is the crack plane.
+    // Skinned, each sits kCrackSurfelInset radii inside its material; its clip plane is the crack plane.
     std::unique_ptr<rc::DiscontinuityClipper> clipper;
     if (sim.crackCount() > 0 && !sim.crackSurfels().empty()) {
       rc::SurfelCloud cracks = sim.crackSurfels();
       addNormalsAndRadiiFromAxes(&cracks);
       for (size_t k = 0; k < cracks.size(); ++k)
-        cracks.positions[k] += 0.25 * cracks.radii[k] * cracks.normals[k].normalized();
+        cracks.positions[k] +=
+            rc::ShellSimulation::kCrackSurfelInset * cracks.radii[k] * cracks.normals[k].normalized();
       clipper = std::make_unique<rc::DiscontinuityClipper>(cloud, cracks);
       clipper->prepare();
     }
