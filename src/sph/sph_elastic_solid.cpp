@@ -99,9 +99,9 @@ void SphElasticConfig::validate() const {
   require(max_docking_rate >= 0.0 && std::isfinite(max_docking_rate), "max_docking_rate",
           "must be finite and >= 0, got " + std::to_string(max_docking_rate));
   require(docking_rate_increase >= 0.0 && std::isfinite(docking_rate_increase), "docking_rate_increase",
-          "must be finite and >= 0, got " + std::to_string(docking_rate_increase));
+          "(1/s^2) must be finite and >= 0, got " + std::to_string(docking_rate_increase));
   require(docking_rate_decrease >= 0.0 && std::isfinite(docking_rate_decrease), "docking_rate_decrease",
-          "must be finite and >= 0, got " + std::to_string(docking_rate_decrease));
+          "(1/s^2) must be finite and >= 0, got " + std::to_string(docking_rate_decrease));
   require(docking_distance > 0.0 && docking_distance <= 1.0, "docking_distance",
           "must be in (0, 1], got " + std::to_string(docking_distance));
   require(yield_strain >= 0.0, "yield_strain", "must be >= 0, got " + std::to_string(yield_strain));
@@ -310,10 +310,17 @@ void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<V
   std::vector<uint32_t>& members = members_;
   points.clear();
   members.clear();
+  // The solver's neighbour rows replace the search when they are of the same radius (setNeighborSource).
+  const SphFluidSolver* source = neighbor_source_;
+  if (source && (source->config().smoothing_length != kernels_.h || source->neighborGrid().size() != n))
+    source = nullptr;
+  if (reset_done_.size() != n) reset_done_.resize(n, 0);
   for (size_t i = 0; i < n; ++i) {
     const bool solid = particles.phases[i] == phase_ &&
                        (particles.kinds[i] == SphParticleKind::kFluid || config_.anchor_boundary_particles);
     if (!solid) {
+      if (reset_done_[i]) continue;  // reset at an earlier evaluation and untouched since
+      reset_done_[i] = 1;
       has_transform_[i] = 0;  // a particle that (re)joins starts from the lattice orientation
       transform_[i] = rotation_[i] = orientation_;
       quaternion_[i] = Eigen::Quaterniond(orientation_);
@@ -331,18 +338,39 @@ void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<V
       if (global_implicit) history_[i] = ImplicitHistory{};  // it starts anew when it (re)joins
       continue;
     }
+    reset_done_[i] = 0;
     members.push_back(static_cast<uint32_t>(i));
-    points.push_back(particles.positions[i]);
+    if (!source) points.push_back(particles.positions[i]);
   }
-  grid_.build(points, kernels_.h, 1);
   const size_t m = members.size();
   solid_.resize(m);
+  if (source) {
+    // Sorted order: the solver's cell order restricted to the members; row_to_solid_ maps its sorted
+    // positions to this order (kNoSolid for other particles).
+    const std::vector<uint32_t>& order = source->neighborGrid().order();
+    row_to_solid_.resize(n);
+    solid_row_.resize(m);
+    size_t next = 0;
+    for (size_t r = 0; r < n; ++r) {
+      const uint32_t i = order[r];
+      const bool member = particles.phases[i] == phase_ && (particles.kinds[i] == SphParticleKind::kFluid ||
+                                                            config_.anchor_boundary_particles);
+      row_to_solid_[r] = member ? uint32_t(next) : kNoSolid;
+      if (member) {
+        solid_row_[next] = uint32_t(r);
+        solid_[next++] = i;
+      }
+    }
+  } else {
+    solid_row_.clear();
+    grid_.build(points, kernels_.h, 1);
+    for (size_t s = 0; s < m; ++s) solid_[s] = members[grid_.order()[s]];
+  }
   s_pos_.resize(m);
   s_vel_.resize(m);
   s_mass_.resize(m);
   for (size_t s = 0; s < m; ++s) {
-    const uint32_t i = members[grid_.order()[s]];
-    solid_[s] = i;
+    const uint32_t i = solid_[s];
     s_pos_[s] = particles.positions[i];
     s_vel_[s] = velocities[i];
     s_mass_[s] = particles.masses[i];
@@ -372,14 +400,48 @@ double SphElasticSolid::uniformRandom(uint64_t seed, uint64_t evaluation, uint64
   return double(x >> 11) * 0x1.0p-53;
 }
 
+SphElasticSolid::RateStep SphElasticSolid::growDockingRate(double rate, double growth, double cap,
+                                                           double dt) {
+  const double grown = rate + growth * dt;
+  if (grown <= cap) return {grown, (rate + 0.5 * growth * dt) * dt};
+  // The rate reaches the cap after t = (cap - rate) / growth and stays there for the rest of the step.
+  const double t = rate < cap ? (cap - rate) / growth : 0.0;
+  return {cap, 0.5 * (rate + cap) * t + cap * (dt - t)};
+}
+
+bool SphElasticSolid::dockedInnerNeighbor(const std::vector<DockPoint>& state,
+                                          const Eigen::Vector3i& index) const {
+  const double d2 = lattice_.spacing() * lattice_.spacing(), eps = 1e-9 * d2;
+  const double norm2 = lattice_.point(index).squaredNorm();
+  const int kz = lattice_.dimension() == 3 ? 1 : 0;
+  for (int z = -kz; z <= kz; ++z)
+    for (int y = -1; y <= 1; ++y)
+      for (int x = -1; x <= 1; ++x) {
+        const Eigen::Vector3i step(x, y, z);  // the nearest neighbours (|B step| = d) lie in [-1, 1]^3
+        if (std::abs(lattice_.point(step).squaredNorm() - d2) > eps) continue;
+        const Eigen::Vector3i inner = index + step;
+        if (!(lattice_.point(inner).squaredNorm() < norm2 - eps)) continue;
+        if (inner.isZero()) return true;  // next to the centre particle
+        const uint32_t key = latticeKey(inner);
+        const auto it = std::lower_bound(state.begin(), state.end(), key,
+                                         [](const DockPoint& q, uint32_t k) { return q.key < k; });
+        if (it != state.end() && it->key == key && it->docked) return true;
+      }
+  return false;
+}
+
 void SphElasticSolid::updateDocking(size_t s, Scratch& sc) {
   const uint32_t i = solid_[s];
   const size_t nn = sc.offsets.size();
   const double dt = step_dt_, d = lattice_.spacing();
-  const double up = config_.docking_rate_increase, down = config_.docking_rate_decrease;
+  // Rates per unit time: lambda_d^q changes by Delta lambda_d^+- dt in a step of length dt (8.2.5).
+  const double up = config_.docking_rate_increase, down = config_.docking_rate_decrease * dt;
   const double max_rate = config_.max_docking_rate;
   const double near2 = std::pow(config_.docking_distance * d, 2);
   const double p_break = eventProbability(config_.fracture_rate, dt);
+  // Lattice points at the rim of the kernel (rest weight below kMinDockingWeight W(0)) carry no force at
+  // rest; a particle that reaches one from outside would dock a gap of a lattice spacing shut.
+  const double min_weight = kMinDockingWeight * kernels_.poly6(0.0);
   const bool first = !dock_initialized_[i];
   std::vector<DockPoint>& state = dock_[i];  // sorted by key
   sc.keyed.clear();
@@ -403,22 +465,25 @@ void SphElasticSolid::updateDocking(size_t s, Scratch& sc) {
     if (old < state.size() && state[old].key == key) q = state[old++];
     const Eigen::Vector3i& index = sc.assignment.indices[k];
     const bool near = (lattice_.point(index) - inverse * sc.offsets[k]).squaredNorm() <= near2;
+    const double stretch = sc.offsets[k].norm() / sc.rest[k].norm() - 1.0;
     if (first) {  // the sampled lattice: every occupied point starts docked
       q.docked = near ? 1 : 0;
       q.rate = near ? max_rate : 0.0;
     } else if (q.docked) {
-      const double stretch = sc.offsets[k].norm() / sc.rest[k].norm() - 1.0;
       if (stretch > config_.fracture_strain &&
           uniformRandom(config_.seed, evaluations_, i, key) < p_break) {  // (8.34)
         q.docked = 0;
         q.rate = 0.0;  // a crack: it has to heal from zero
         ++detached_[s];
       } else {
-        q.rate = std::min(max_rate, q.rate + up);
+        q.rate = growDockingRate(q.rate, up, max_rate, dt).rate;
       }
-    } else if (near) {
-      q.rate = std::min(max_rate, q.rate + up);                                                // occupied
-      if (uniformRandom(config_.seed, evaluations_, i, key) < eventProbability(q.rate, dt)) {  // (8.34)
+    } else if (near && stretch <= config_.fracture_strain &&
+               kernels_.poly6(sc.rest[k].squaredNorm()) >= min_weight && dockedInnerNeighbor(state, index)) {
+      // Occupied: docks within the step with probability 1 - exp(-integral of lambda_d^q dt) (8.34).
+      const RateStep grown = growDockingRate(q.rate, up, max_rate, dt);
+      q.rate = grown.rate;
+      if (uniformRandom(config_.seed, evaluations_, i, key) < -std::expm1(-grown.integral)) {
         q.docked = 1;
         ++redocked_[s];
       }
@@ -474,12 +539,20 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   lost_[s].clear();
   const bool global_implicit = globalImplicit();
   if (global_implicit) springs_[s].clear();
-  // Current neighbours of the same solid.
+  // Current neighbours of the same solid: from the solver's row or from a search of the solid's grid.
   const Vec3 xi = s_pos_[s];
   SphSortedGrid::Run runs[9];
-  const int num_runs = grid_.neighborRuns(grid_.cellOfSorted(s), runs);
+  int num_runs = 0;
   size_t candidates = 0;
-  for (int r = 0; r < num_runs; ++r) candidates += runs[r].end - runs[r].begin;
+  const uint32_t* row = nullptr;
+  if (!solid_row_.empty()) {
+    uint32_t count = 0;
+    row = neighbor_source_->neighborRow(solid_row_[s], count);
+    candidates = count;
+  } else {
+    num_runs = grid_.neighborRuns(grid_.cellOfSorted(s), runs);
+    for (int r = 0; r < num_runs; ++r) candidates += runs[r].end - runs[r].begin;
+  }
   // Fixed scratch of the candidate count (only grows), filled by index and cut to the neighbours.
   if (sc.offsets.size() < candidates) {
     sc.offsets.resize(candidates);
@@ -491,16 +564,29 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   double* weights = sc.weights.data();
   size_t nn = 0;
   const double h2 = kernels_.h2;
+  const Vec3* pos = s_pos_.data();
+  // Branch-free: every candidate is written, the count advances only for neighbours (in ascending order).
+  for (size_t e = 0; e < (row ? candidates : 0); ++e) {  // the row holds those within h: keep the members
+    const uint32_t j = row_to_solid_[row[e]];
+    const bool member = j != kNoSolid;
+    const uint32_t jj = member ? j : uint32_t(s);
+    const double dx = pos[jj].x() - xi.x(), dy = pos[jj].y() - xi.y(), dz = pos[jj].z() - xi.z();
+    offsets[nn] = Vec3(dx, dy, dz);
+    neighbors[nn] = jj;
+    weights[nn] = kernels_.poly6(dx * dx + dy * dy + dz * dz);  // d < h on the row
+    nn += size_t(member);
+  }
   for (int r = 0; r < num_runs; ++r)
     for (uint32_t j = runs[r].begin; j < runs[r].end; ++j) {
-      const Vec3 rij = s_pos_[j] - xi;
-      const double d2 = rij.squaredNorm();
-      if (d2 >= h2 || j == s) continue;
-      offsets[nn] = rij;
+      const double dx = pos[j].x() - xi.x(), dy = pos[j].y() - xi.y(), dz = pos[j].z() - xi.z();
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      offsets[nn] = Vec3(dx, dy, dz);
       neighbors[nn] = j;
-      weights[nn] = kernels_.poly6(d2);
-      ++nn;
+      weights[nn] = d2;
+      nn += size_t((d2 < h2) & (j != s));
     }
+  if (!row)
+    for (size_t k = 0; k < nn; ++k) weights[k] = kernels_.poly6(weights[k]);
   sc.offsets.resize(nn);
   sc.neighbors.resize(nn);
   sc.weights.resize(nn);
@@ -510,9 +596,14 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   // Rest points of the (plastically deformed) lattice: P_i l_ij; neighbours left without a point.
   sc.rest.resize(nn);
   const bool plastic = config_.plasticity();
+  const Vec3 b0 = lattice_.basis().col(0), b1 = lattice_.basis().col(1), b2 = lattice_.basis().col(2);
+  const bool three = dim == 3;
   for (size_t k = 0; k < nn; ++k) {
-    sc.rest[k] = lattice_.point(sc.assignment.indices[k]);
-    if (plastic) sc.rest[k] = plastic_[i] * sc.rest[k];
+    const Eigen::Vector3i& n = sc.assignment.indices[k];  // B n, as SphLattice::point
+    Vec3& l = sc.rest[k];
+    l = b0 * n.x() + b1 * n.y();
+    if (three) l += b2 * n.z();
+    if (plastic) l = plastic_[i] * l;
     if (!assigned[k]) {
       ++unassigned_[s];
       lost_[s].push_back(solid_[neighbors[k]]);
@@ -557,6 +648,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   const bool goal_model = config_.model == SphElasticModel::kGoalPosition;
   Mat3 rot, goal;
   bool polar = false;
+  double max_strain = -1.0;  // from the stretch's eigenvalues where the polar path has them
   if (!plastic) {
     Eigen::Quaterniond q = quaternion_[i];
     if (extractRotation(a, q)) {
@@ -569,6 +661,8 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
       // sv_k = s sigma_k + 1 - s >= 0.05 holds for sigma >= 0.25 whenever s <= 1.
       if (sigma.allFinite() && sigma(0) >= 0.25 && sigma(2) <= 4.0) {
         polar = true;
+        // sym(A R^T) = R S R^T: the strain (8.26) has the eigenvalues sigma - 1.
+        max_strain = std::max(std::abs(sigma(0) - 1.0), std::abs(sigma(2) - 1.0));
         quaternion_[i] = q;
         transform_[i] = a;  // A_i for the next assignment (no clamp active)
         if (goal_model) {
@@ -627,7 +721,9 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     strain.col(2).setZero();
   }
   strain_[i] = strain;
-  {
+  if (max_strain >= 0.0) {
+    max_strain_[s] = max_strain;
+  } else {
     Eigen::SelfAdjointEigenSolver<Mat3> eigen;
     eigen.computeDirect(strain, Eigen::EigenvaluesOnly);
     max_strain_[s] = eigen.eigenvalues().cwiseAbs().maxCoeff();
@@ -635,7 +731,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
 
   const double volume = lattice_.cellVolume();
   out.resize(count + 1);  // the centre particle first, then the assigned neighbours in order
-  out[0] = {i, Vec3::Zero()};
+  out[0] = {uint32_t(s), Vec3::Zero()};
   Contribution* next_out = out.data() + 1;
   Vec3 centre_force = Vec3::Zero();
   if (config_.model == SphElasticModel::kStrain) {
@@ -661,7 +757,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
       const Vec3 residual = a * l - offsets[k];
       energy_[s] += 0.5 * hourglass * weights[k] * residual.squaredNorm();
       const Vec3 f = (-volume * weights[k]) * (stress_den * g) + (hourglass * weights[k]) * residual;
-      *next_out++ = {solid_[neighbors[k]], f};
+      *next_out++ = {neighbors[k], f};
       centre_force -= f;
     }
   } else {
@@ -703,7 +799,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
         const Vec3 u = s_vel_[neighbors[k]] - mean_v - crossOf(spin, offsets[k] - centre);
         const Vec3 f = (0.5 * scale * k_e * weights[k]) * delta - (damping * weights[k]) * u;
         energy += 0.5 * k_e * weights[k] * delta.squaredNorm();
-        *next_out++ = {solid_[neighbors[k]], f};
+        *next_out++ = {neighbors[k], f};
         centre_force -= f;
       }
       // The centre's damping -damping w_neighbors u_i equals minus the neighbours' sum (sum_k W_k u_k = 0),
@@ -714,7 +810,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
         const Vec3 delta = goal * sc.rest[k] - offsets[k];
         const Vec3 f = (0.5 * k_e * weights[k]) * delta;
         energy += 0.5 * k_e * weights[k] * delta.squaredNorm();
-        *next_out++ = {solid_[neighbors[k]], f};
+        *next_out++ = {neighbors[k], f};
         centre_force -= f;
       }
       if (global_implicit)  // the stiffness of these forces in x_j - x_i, goal held fixed
@@ -781,6 +877,12 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
   // nine 249-particle dice of Fig. 8.8 ran 3x slower on 2 threads than on 1 with 64 per thread).
   const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), m / 512)));
   if (scratch_.size() < size_t(threads)) scratch_.resize(threads);
+  target_lo_.resize(m);
+  target_hi_.resize(m);
+  const bool global_implicit = globalImplicit();
+  // Global implicit springs: the explicit forces f0 are gathered (original order) for the solve.
+  std::vector<Vec3>& target = global_implicit ? s_force_ : forces;
+  if (global_implicit) s_force_.assign(particles.size(), Vec3::Zero());
 #pragma omp parallel num_threads(threads)
   {
     Scratch& scratch = scratch_[omp_get_thread_num()];
@@ -789,26 +891,33 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
       processNeighborhood(static_cast<size_t>(s), scratch);
       // The neighbourhood's net force and torque (diagnostics), summed here in parallel.
       Vec3 net_force = Vec3::Zero(), net_torque = Vec3::Zero();
+      uint32_t lo = uint32_t(s), hi = uint32_t(s);
       for (const Contribution& c : contributions_[s]) {
         net_force += c.force;
-        net_torque += crossOf(particles.positions[c.particle], c.force);
+        net_torque += crossOf(s_pos_[c.target], c.force);
+        lo = std::min(lo, c.target);
+        hi = std::max(hi, c.target);
       }
       net_force_[s] = net_force;
       net_torque_[s] = net_torque;
+      target_lo_[s] = lo;
+      target_hi_[s] = hi;
+    }
+    // Scatter (after the loop's barrier): each thread adds the contributions to its own range of targets, in
+    // neighbourhood order, so every sum is formed in the same order for any thread count.
+    const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+    const uint32_t first = uint32_t(m * t / nt), last = uint32_t(m * (t + 1) / nt);
+    for (long s = 0; s < m; ++s) {
+      if (target_hi_[s] < first || target_lo_[s] >= last) continue;
+      for (const Contribution& c : contributions_[s])
+        if (c.target >= first && c.target < last) target[solid_[c.target]] += c.force;
     }
   }
-  // Serial scatter in a fixed order: results do not depend on the thread count.
   SphElasticStats st;
   st.solid_particles = solid_.size();
-  const bool global_implicit = globalImplicit();
-  // Global implicit springs: the explicit forces f0 are gathered (original order) for the solve.
-  std::vector<Vec3>& target = global_implicit ? s_force_ : forces;
-  if (global_implicit) s_force_.assign(particles.size(), Vec3::Zero());
+  st.solver_neighbor_rows = !solid_row_.empty();
+  for (size_t s = 0; s < solid_.size(); ++s) unassigned_count_[solid_[s]] = 0;
   for (size_t s = 0; s < solid_.size(); ++s) {
-    unassigned_count_[solid_[s]] = 0;
-  }
-  for (size_t s = 0; s < solid_.size(); ++s) {
-    for (const Contribution& c : contributions_[s]) target[c.particle] += c.force;
     st.net_force += net_force_[s];
     st.net_torque += net_torque_[s];
     for (uint32_t j : lost_[s]) ++unassigned_count_[j];
@@ -853,6 +962,7 @@ void SphElasticSolid::solveGlobalImplicit(const SphParticles& particles, const s
     if (particles.kinds[i] != SphParticleKind::kFluid) {  // anchors: prescribed motion
       v_mid_[s] = velocities[i];
       c.count = 3;
+      c.fixed = true;
       for (int k = 0; k < 3; ++k) c.normals[k] = Vec3::Unit(k);
       constraints_.push_back(c);
       continue;
@@ -883,50 +993,40 @@ void SphElasticSolid::solveGlobalImplicit(const SphParticles& particles, const s
     if (c.count > 0) constraints_.push_back(c);
   }
   implicit_solver_.setSystem(s_pos_, s_mass_, springs_);
-  SphImplicitGoalResult result;
-  for (int round = 0; round < 4; ++round) {
-    implicit_solver_.setConstraints(constraints_);
-    const SphImplicitGoalResult r = implicit_solver_.solve(f0_, v_mid_, dt, config_.implicit_tolerance,
-                                                           config_.implicit_max_iterations, dv_);
-    result.iterations += r.iterations;
-    result.relative_residual = r.relative_residual;
-    if (constraints_.empty() || round == 3) break;
-    // Planes that would have to pull (impulse . n < 0) let go, and the step is solved again.
-    implicit_solver_.constraintImpulses(f0_, v_mid_, dt, dv_, impulses_);
-    bool released = false;
-    for (size_t k = 0; k < constraints_.size(); ++k) {
-      SphVelocityConstraint& c = constraints_[k];
-      if (particles.kinds[solid_[c.particle]] != SphParticleKind::kFluid) continue;
-      int kept = 0;
-      for (int a = 0; a < c.count; ++a) {
-        if (impulses_[k].dot(c.normals[a]) < 0.0) continue;
-        c.normals[kept] = c.normals[a];
-        c.values[kept++] = c.values[a];
-      }
-      released = released || kept < c.count;
-      c.count = kept;
-    }
-    if (!released) break;
+  implicit_solver_.setConstraints(constraints_);
+  // Solved with the other coupled solids and their contact springs by the coupling's term after this one,
+  // or here alone (released plane constraints, force M dv / dt, see SphImplicitGoalCoupling).
+  SphImplicitGoalBlock block;
+  block.solver = &implicit_solver_;
+  block.particles = &solid_;
+  block.f0 = &f0_;
+  block.velocity = &v_mid_;
+  block.dv = &dv_;
+  block.force = &implicit_force_;
+  block.dt = dt;
+  block.tolerance = config_.implicit_tolerance;
+  block.max_iterations = config_.implicit_max_iterations;
+  if (implicit_coupling_) {
+    block.finish = [this](const SphImplicitGoalResult& result) { finishGlobalImplicit(result, stats_); };
+    implicit_coupling_->submit(std::move(block));
+    return;
   }
+  block.finish = [this, &st](const SphImplicitGoalResult& result) { finishGlobalImplicit(result, st); };
+  own_coupling_.submit(std::move(block));
+  own_coupling_.solve({}, forces);
+}
+
+void SphElasticSolid::finishGlobalImplicit(const SphImplicitGoalResult& result, SphElasticStats& st) {
   st.implicit_iterations = result.iterations;
   st.implicit_residual = result.relative_residual;
-  // F = M dv / dt. Without constraints its net force and torque are removed (exact for the exact solution:
-  // f0 has none (8.32)-(8.33), the stiffness K none by construction), so momentum does not depend on the
-  // CG tolerance; plane and anchor constraints exert external impulses.
-  std::vector<Vec3>& force = f0_;
-  for (size_t s = 0; s < m; ++s) force[s] = (s_mass_[s] / dt) * dv_[s];
-  bool constrained = false;
-  for (const SphVelocityConstraint& c : constraints_) constrained = constrained || c.count > 0;
-  if (!constrained) implicit_solver_.removeNetForceAndTorque(force);
   st.net_force.setZero();
   st.net_torque.setZero();
-  for (size_t s = 0; s < m; ++s) {
+  for (size_t s = 0; s < solid_.size(); ++s) {
     const uint32_t i = solid_[s];
-    forces[i] += force[s];
-    history_[i].force = force[s];
+    history_[i].force = implicit_force_[s];
     history_[i].dv = dv_[s];
-    st.net_force += force[s];
-    st.net_torque += crossOf(particles.positions[i], force[s]);
+    st.net_force += implicit_force_[s];
+    st.net_torque += crossOf(s_pos_[s], implicit_force_[s]);
   }
 }
 
@@ -939,6 +1039,7 @@ void SphElasticSolid::setLatticeTransform(size_t i, const Mat3& transform) {
   if (!transform.allFinite() || !(std::abs(det) > 0.0))
     throw std::invalid_argument("SphElasticSolid::setLatticeTransform: transform must be finite and regular");
   transform_[i] = transform;
+  if (i < reset_done_.size()) reset_done_[i] = 0;  // prepare() resets it if it is no member
   Mat3 u, v;
   Vec3 sigma;
   rotationSvd(transform, lattice_.dimension(), u, sigma, v);

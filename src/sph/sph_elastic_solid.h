@@ -73,9 +73,10 @@ struct SphElasticConfig {
   /// the solid stays as stiff as K_e at any step (stiff oscillations are damped as by backward Euler). The
   /// velocity the springs resist is the coming step's without this term: the given (predicted) velocity
   /// less half a kick of this term's previous force, plus half a kick of gravity (setEnvironment). Planes
-  /// given by setEnvironment enter as velocity constraints. Other forces (pressure, contact penalties) stay
-  /// explicit: a static offset of about dt^2 / 2 times their acceleration. The neighbourhoods are those of
-  /// the shape matching.
+  /// given by setEnvironment enter as velocity constraints. Implicit contact penalties (8.37) between solids
+  /// coupled through an SphImplicitGoalCoupling (makeSphSolver couples them) join one system with the
+  /// solids they connect; other forces (pressure, uncoupled penalties) stay explicit: a static offset of
+  /// about dt^2 / 2 times their acceleration. The neighbourhoods are those of the shape matching.
   bool global_implicit_goal = false;
   double implicit_tolerance = 1e-4;   ///< CG: relative residual (Jacobi norm), in (0, 1)
   int implicit_max_iterations = 200;  ///< CG iterations per evaluation, >= 1
@@ -90,10 +91,17 @@ struct SphElasticConfig {
   // neighbourhood, whether q is docked (the particle assigned to q (8.21) enters the shape matching and
   // the forces) and a docking rate lambda_d^q. A docked q stays docked while a particle is assigned to it,
   // unless the pair is stretched beyond fracture_strain: then it detaches with the Poisson rate
-  // fracture_rate (8.34) and its docking rate drops to 0 (a crack). A free q that is occupied (an assigned
-  // particle within docking_distance of it) docks with probability 1 - exp(-lambda_d^q dt) (8.34).
-  // lambda_d^q grows by docking_rate_increase per evaluation while q is docked or occupied, up to
-  // max_docking_rate, and shrinks by docking_rate_decrease while it is unoccupied (never below 0). At a
+  // fracture_rate (8.34) and its docking rate drops to 0 (a crack). A free q is occupied when its assigned
+  // particle lies within docking_distance of it, the pair is not stretched beyond fracture_strain (it would
+  // tear at once), q is not at the rim of the kernel (rest weight >= 1e-3 W(0)) and q is a nearest
+  // neighbour of the centre or of a docked point nearer to the centre (docking proceeds from the contact
+  // outwards: without this, pieces that approach dock at outer lattice points first, across a gap of a
+  // lattice spacing, and bounce off the weak outer bonds). An occupied q docks within a step with
+  // probability 1 - exp(-integral of lambda_d^q over the step) (8.34). The rates are per unit time:
+  // lambda_d^q grows at docking_rate_increase (1/s^2) while q is docked or occupied, up to
+  // max_docking_rate, and shrinks at docking_rate_decrease (1/s^2) otherwise (never below 0), so the
+  // docking process does not depend on the step: a free point occupied from rate 0 on docks within time t
+  // with probability 1 - exp(-increase t^2 / 2) (mean sqrt(pi / (2 increase)) below the cap). At a
   // particle's first evaluation its occupied points start docked at max_docking_rate, the others free at 0.
   // dt is the evaluation's step (SphForceTerm::beginStep; fixed or adaptive), else time_step.
   bool docking = false;
@@ -102,8 +110,8 @@ struct SphElasticConfig {
   double fracture_strain = std::numeric_limits<double>::infinity();
   double fracture_rate = std::numeric_limits<double>::infinity();  ///< 1/s, >= 0; infinity: at once
   double max_docking_rate = 1000.0;                                ///< 1/s, >= 0
-  double docking_rate_increase = 100.0;                            ///< Delta lambda_d^+ (1/s), >= 0
-  double docking_rate_decrease = 100.0;                            ///< Delta lambda_d^- (1/s), >= 0
+  double docking_rate_increase = 1.0e5;                            ///< Delta lambda_d^+ (1/s^2), >= 0
+  double docking_rate_decrease = 1.0e5;                            ///< Delta lambda_d^- (1/s^2), >= 0
   /// A free lattice point is occupied by its assigned particle within this distance (in units of d, in
   /// lattice coordinates A_i^-1 r_ij), in (0, 1].
   double docking_distance = 0.3;
@@ -152,6 +160,8 @@ struct SphElasticStats {
   double energy = 0.0;             ///< elastic energy estimate
   Vec3 net_force = Vec3::Zero();   ///< sum of the elastic forces
   Vec3 net_torque = Vec3::Zero();  ///< sum of x cross elastic force
+  /// The neighbourhoods came from the solver's neighbour rows (setNeighborSource), not a search of their own.
+  bool solver_neighbor_rows = false;
 };
 
 /// Result of the lattice assignment of one neighbourhood (8.21).
@@ -232,6 +242,10 @@ class SphElasticSolid : public SphForceTerm {
     planes_ = planes;
     gravity_ = gravity;
   }
+  /// The neighbour rows of the solver whose force evaluation runs (SphFluidSolver sets it around its
+  /// addForces calls and clears it after): with the same smoothing length as this term's kernels, the
+  /// neighbourhoods are read from its rows (SphFluidSolver::neighborRow) instead of a search of their own.
+  void setNeighborSource(const SphFluidSolver* solver) { neighbor_source_ = solver; }
   /// The dt the next evaluation uses for docking and plasticity.
   double stepTime() const { return step_dt_; }
 
@@ -274,7 +288,7 @@ class SphElasticSolid : public SphForceTerm {
     double rate;  // lambda_d^q
   };
   struct Contribution {
-    uint32_t particle;
+    uint32_t target;  // sorted solid index
     Vec3 force;
   };
   struct Scratch {
@@ -292,6 +306,16 @@ class SphElasticSolid : public SphForceTerm {
   /// Docking decisions of the neighbourhood of solid particle s (8.2.5): clears assignment.assigned of
   /// the neighbours whose lattice point is not docked.
   void updateDocking(size_t s, Scratch& scratch);
+  /// A docking rate after a step dt of growth (1/s^2) capped at `cap`, and its integral over the step.
+  struct RateStep {
+    double rate, integral;
+  };
+  static RateStep growDockingRate(double rate, double growth, double cap, double dt);
+  /// Whether lattice point `index` is a nearest neighbour of the centre or of a lattice point nearer to the
+  /// centre that is docked in `state` (sorted by key): docking proceeds from the centre outwards.
+  bool dockedInnerNeighbor(const std::vector<DockPoint>& state, const Eigen::Vector3i& index) const;
+  /// Free lattice points whose rest weight is below this fraction of W(0) do not dock.
+  static constexpr double kMinDockingWeight = 1e-3;
   /// Plastic flow of particle i from the elastic fit A_i P_i^-1 = U diag(sigma) V^T.
   void updatePlasticity(uint32_t i, const Eigen::Matrix3d& v, const Vec3& sigma);
   bool globalImplicit() const {
@@ -302,6 +326,23 @@ class SphElasticSolid : public SphForceTerm {
   /// the backward Euler step and adds them to `forces`.
   void solveGlobalImplicit(const SphParticles& particles, const std::vector<Vec3>& velocities,
                            std::vector<Vec3>& forces, SphElasticStats& stats);
+  /// Global implicit goal springs, after the solve: keeps the step's force and velocity change per particle
+  /// (the next step's warm start and resisted velocity) and the solve's statistics in `stats`.
+  void finishGlobalImplicit(const SphImplicitGoalResult& result, SphElasticStats& stats);
+
+ public:
+  /// Global implicit goal springs: hands the solid's system to `coupling` at every evaluation instead of
+  /// solving it; the term that runs the coupling after the solids (SphObjectPenalty::coupleGlobalImplicit)
+  /// solves them together with their contact springs and adds their forces. nullptr (default): solved alone.
+  void setImplicitCoupling(std::shared_ptr<SphImplicitGoalCoupling> coupling) {
+    implicit_coupling_ = std::move(coupling);
+  }
+  const std::shared_ptr<SphImplicitGoalCoupling>& implicitCoupling() const { return implicit_coupling_; }
+
+ private:
+  std::shared_ptr<SphImplicitGoalCoupling> implicit_coupling_;
+  SphImplicitGoalCoupling own_coupling_;  // the solve of the solid alone
+  std::vector<Vec3> implicit_force_;      // sorted order: the step's force of the global springs
 
   SphElasticConfig config_;
   SphKernels kernels_;
@@ -325,7 +366,15 @@ class SphElasticSolid : public SphForceTerm {
   SphSortedGrid grid_;
   std::vector<Scratch> scratch_;                          // per thread, kept between evaluations
   std::vector<std::vector<Contribution>> contributions_;  // per sorted solid particle
-  std::vector<std::vector<uint32_t>> lost_;               // neighbours left without a lattice point
+  // Scatter of the contributions: per neighbourhood the range of its targets (sorted solid indices).
+  std::vector<uint32_t> target_lo_, target_hi_;
+  // Neighbour rows of the solver (setNeighborSource): per sorted solid particle its row in the solver's
+  // order, per solver row the sorted solid index (kNoSolid: not of this solid). Empty: own grid search.
+  static constexpr uint32_t kNoSolid = 0xFFFFFFFFu;
+  const SphFluidSolver* neighbor_source_ = nullptr;
+  std::vector<uint32_t> solid_row_, row_to_solid_;
+  std::vector<uint8_t> reset_done_;          // per particle: reset as a non-member and untouched since
+  std::vector<std::vector<uint32_t>> lost_;  // neighbours left without a lattice point
   // Global implicit goal springs: per sorted solid particle its neighbourhood's springs; per particle
   // (original order) the last force of this term (from an evaluation with dt > 0) and velocity change.
   std::vector<std::vector<SphGoalSpring>> springs_;

@@ -9,6 +9,8 @@
 #include <limits>
 #include <string>
 
+#include "sph/sph_elastic_solid.h"
+
 namespace rc {
 
 namespace {
@@ -172,6 +174,7 @@ void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
   row_begin_.resize(n);
   row_count_.resize(n);
   if (thread_lists_.size() < size_t(threads)) thread_lists_.resize(threads);
+  if (thread_sq_dists_.size() < size_t(threads)) thread_sq_dists_.resize(threads);
   thread_first_.assign(threads + 1, 0);
   for (int t = 0; t <= threads; ++t) thread_first_[t] = n * t / threads;
 
@@ -245,7 +248,11 @@ void SphFluidSolver::addTermForces(const std::vector<Vec3>& velocities) {
   const size_t n = particles_.size();
   term_forces_.assign(n, Vec3::Zero());
   for (const auto& term : force_terms_) {
+    // Elastic solids read their neighbourhoods from this evaluation's rows (no search of their own).
+    auto* solid = dynamic_cast<SphElasticSolid*>(term.get());
+    if (solid) solid->setNeighborSource(this);
     term->addForces(particles_, velocities, term_forces_);
+    if (solid) solid->setNeighborSource(nullptr);
     stats_.term_energy += term->potentialEnergy();
   }
   for (size_t i = 0; i < n; ++i) {
@@ -261,6 +268,7 @@ void SphFluidSolver::densityPass(int t) {
   std::vector<uint32_t>& list = thread_lists_[t];
   size_t used = 0;
   const double h2 = kernels_.h2;
+  std::vector<double>& sq_dists = thread_sq_dists_[t];
   SphSortedGrid::Run runs[9];
   int num_runs = 0;
   size_t candidates = 0;
@@ -276,7 +284,9 @@ void SphFluidSolver::densityPass(int t) {
       for (int r = 0; r < num_runs; ++r) candidates += runs[r].end - runs[r].begin;
     }
     if (used + candidates > list.size()) list.resize(std::max(2 * list.size(), used + candidates + 4096));
+    if (sq_dists.size() < candidates) sq_dists.resize(candidates);
     uint32_t* out = list.data() + used;
+    double* d2s = sq_dists.data();
     const double px = pos[s].x(), py = pos[s].y(), pz = pos[s].z();
     double sum = 0.0;  // sum_j m_j (1 - d^2/h^2)^3
     size_t found = 0;
@@ -284,12 +294,15 @@ void SphFluidSolver::densityPass(int t) {
       for (uint32_t j = runs[r].begin; j < runs[r].end; ++j) {
         const double dx = pos[j].x() - px, dy = pos[j].y() - py, dz = pos[j].z() - pz;
         const double d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 < h2 && j != s) {
-          const double q = 1.0 - d2 / h2;
-          sum += mass[j] * (q * q * q);
-          out[found++] = j;
-        }
+        // Branch-free: every candidate is written, the count advances only for neighbours.
+        out[found] = j;
+        d2s[found] = d2;
+        found += size_t((d2 < h2) & (j != s));
       }
+    }
+    for (size_t e = 0; e < found; ++e) {  // in neighbour order, as the sum always was
+      const double q = 1.0 - d2s[e] / h2;
+      sum += mass[out[e]] * (q * q * q);
     }
     const double rho = kernels_.poly6_coeff * (mass[s] + sum);  // (8.4), self term included
     row_begin_[s] = static_cast<uint32_t>(used);

@@ -211,6 +211,7 @@ class SphFluidSolver {
   std::vector<SphParticleKind> s_kind_;
   std::vector<uint32_t> row_begin_, row_count_;  // neighbour rows in the owning thread's buffer
   std::vector<std::vector<uint32_t>> thread_lists_;
+  std::vector<std::vector<double>> thread_sq_dists_;  // per thread: squared distances of a row (scratch)
   std::vector<size_t> thread_first_;
 };
 

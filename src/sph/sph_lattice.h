@@ -2,6 +2,7 @@
 // in 3D (8.20), hexagonal in 2D.
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <vector>
 
@@ -38,8 +39,8 @@ class SphLattice {
   /// The same search from lattice coordinates c = B^-1 q (c.z ignored in 2D; |c| < 2^30); *sq_dist receives
   /// |B n - q|^2. Inline: it runs for every neighbour of every solid particle at every evaluation (8.21).
   Eigen::Vector3i nearestIndexOfCoordinates(const Vec3& c, double* sq_dist) const {
-    // Rounding half away from zero (as std::lround) by truncation.
-    const auto round = [](double x) { return static_cast<int>(x >= 0.0 ? x + 0.5 : x - 0.5); };
+    // Rounding half away from zero (as std::lround) by truncation; copysign keeps it free of branches.
+    const auto round = [](double x) { return static_cast<int>(x + std::copysign(0.5, x)); };
     const bool three = dimension_ == 3;
     const int nx = round(c.x()), ny = round(c.y()), nz = three ? round(c.z()) : 0;
     const double ex = c.x() - nx, ey = c.y() - ny, ez = three ? c.z() - nz : 0.0;

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "sph/sph_elastic_solid.h"
 #include "sph/sph_lattice.h"
 
 namespace rc {
@@ -96,6 +97,21 @@ void SphObjectPenalty::setObjectStiffness(uint8_t phase, double stiffness) {
   object_stiffness_[phase] = stiffness;
 }
 
+void SphObjectPenalty::coupleGlobalImplicit(SphElasticSolid& solid) {
+  if (!config_.implicit)
+    throw std::invalid_argument(
+        "SphObjectPenalty::coupleGlobalImplicit: needs implicit contact springs (config.implicit)");
+  const SphElasticConfig& e = solid.config();
+  if (e.model != SphElasticModel::kGoalPosition || !e.implicit_goal || !e.global_implicit_goal)
+    throw std::invalid_argument(
+        "SphObjectPenalty::coupleGlobalImplicit: solid of phase " + std::to_string(int(solid.phase())) +
+        " has no global implicit goal springs (goal_position, implicit_goal: global)");
+  if (!coupling_) coupling_ = std::make_shared<SphImplicitGoalCoupling>();
+  if (solid.implicitCoupling() == coupling_) return;
+  solid.setImplicitCoupling(coupling_);
+  ++coupled_solids_;
+}
+
 void SphObjectPenalty::gatherStiffness(size_t s) {
   const double d2 = config_.contact_distance * config_.contact_distance;
   const Vec3 xs = s_pos_[s];
@@ -120,6 +136,8 @@ void SphObjectPenalty::gatherForces(size_t s) {
   const uint8_t phase = s_phase_[s];
   const double dt = step_dt_;
   const bool implicit = config_.implicit && dt > 0.0;
+  const bool coupled = !s_coupled_.empty() && s_coupled_[s];
+  if (coupled) s_springs_[s].clear();
   Vec3 force = Vec3::Zero();
   double energy = 0.0, min_dist = d;
   uint32_t contacts = 0, repulsive = 0;
@@ -135,10 +153,25 @@ void SphObjectPenalty::gatherForces(size_t s) {
       if (!(r2 < d2) || r2 <= 0.0) continue;  // coincident particles: no direction
       const double r = std::sqrt(r2);
       const Vec3 n = rsj / r;
-      ++contacts;
-      min_dist = std::min(min_dist, r);
       const double mean_mass = 0.5 * (s_mass_[s] + s_mass_[j]);
       const double scale = mean_mass * volume_ * kernels_.poly6(r2);
+      const bool joint = coupled && s_coupled_[j];  // into the solids' implicit solve, once per pair
+      if (joint && j > s) {
+        SphContactSpring spring;
+        spring.first = members_[s];
+        spring.second = members_[j];
+        spring.normal = n;
+        spring.force = scale * k_c * (d - r);
+        // -dN/dr of m V K_c W(r) (d - r); W' <= 0.
+        spring.stiffness =
+            mean_mass * volume_ * k_c * (kernels_.poly6(r2) - kernels_.poly6Derivative(r) * (d - r));
+        spring.damping = scale * c;
+        s_springs_[s].push_back(spring);
+      }
+      ++contacts;
+      min_dist = std::min(min_dist, r);
+      energy += 0.5 * mean_mass * pairPotential(r);  // each pair is visited from both ends
+      if (joint) continue;
       // n . F_sj with F_sj = scale (K_c (d - r) n - c (v_j - v_s)); (8.37) keeps it along n if positive.
       const double approach = n.dot(s_vel_[j] - vs);
       double spring = k_c * (d - r);
@@ -151,7 +184,6 @@ void SphObjectPenalty::gatherForces(size_t s) {
         ++repulsive;
         force -= normal * n;
       }
-      energy += 0.5 * mean_mass * pairPotential(r);  // each pair is visited from both ends
     }
   s_force_[s] = force;
   s_energy_[s] = energy;
@@ -177,7 +209,20 @@ void SphObjectPenalty::addForces(const SphParticles& particles, const std::vecto
   SphObjectPenaltyStats st;
   st.min_distance = config_.contact_distance;
   st.objects = countObjects(particles);
+  // Coupled solids hand over their systems at every evaluation with a step (they evaluate before this term).
+  const bool coupled = coupled_solids_ > 0 && coupling_->pendingBlocks() > 0;
+  coupling_stats_ = SphImplicitCouplingStats{};
+  if (coupled_solids_ > 0) {
+    const size_t expected = config_.implicit && step_dt_ > 0.0 ? coupled_solids_ : 0;
+    if (coupling_->pendingBlocks() != expected)
+      throw std::logic_error(
+          "SphObjectPenalty::addForces: " + std::to_string(coupling_->pendingBlocks()) + " of the " +
+          std::to_string(expected) +
+          " coupled solids handed over their implicit systems; add this term to the solver "
+          "after the solids it couples (coupleGlobalImplicit) and announce the same step");
+  }
   if (st.objects < 2) {  // off: nothing to collide
+    if (coupled) coupling_stats_ = coupling_->solve({}, forces);
     stats_ = st;
     return;
   }
@@ -212,6 +257,12 @@ void SphObjectPenalty::addForces(const SphParticles& particles, const std::vecto
   const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), count / 512)));
   const bool implicit = config_.implicit && step_dt_ > 0.0;
   if (implicit) s_stiffness_.resize(m);
+  s_coupled_.clear();
+  if (coupled) {
+    s_coupled_.resize(m);
+    s_springs_.resize(m);
+    for (size_t s = 0; s < m; ++s) s_coupled_[s] = coupling_->blockOf(members_[s]) >= 0;
+  }
 #pragma omp parallel num_threads(threads)
   {
     if (implicit) {
@@ -232,6 +283,13 @@ void SphObjectPenalty::addForces(const SphParticles& particles, const std::vecto
   }
   st.contact_pairs /= 2;
   st.repulsive_pairs /= 2;
+  if (coupled) {  // the contact springs between coupled solids, in sorted order
+    springs_.clear();
+    for (size_t s = 0; s < m; ++s)
+      if (s_coupled_[s]) springs_.insert(springs_.end(), s_springs_[s].begin(), s_springs_[s].end());
+    coupling_stats_ = coupling_->solve(springs_, forces);
+    st.repulsive_pairs += coupling_stats_.active_contacts;
+  }
   stats_ = st;
 }
 

@@ -4,14 +4,18 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "sph/sph_force_term.h"
+#include "sph/sph_implicit_goal_solver.h"
 #include "sph/sph_kernels.h"
 #include "sph/sph_particles.h"
 #include "sph/sph_sorted_grid.h"
 
 namespace rc {
+
+class SphElasticSolid;
 
 struct SphObjectPenaltyConfig {
   /// K_c (1/s^2, per unit mass like K_e of (8.31)): stiffness of the goal-position force that pushes a
@@ -33,7 +37,15 @@ struct SphObjectPenaltyConfig {
   /// becomes the contact CFL cfl d / (2 max speed) (no pair closes more than cfl d / 1 per step) and the
   /// explicit damping limit; the approach of colliding objects is dissipated (at most the stiffness part).
   /// Off (default): explicit (8.37), stable below the K_c limit of stableTimeStep().
+  /// Between solids with global implicit goal springs coupled by SphObjectPenalty::coupleGlobalImplicit
+  /// (makeSphSolver couples them when `couple_global_implicit`), the contact springs instead join the
+  /// solids' backward Euler solve (SphImplicitGoalCoupling): solids in contact are solved as one system
+  /// with the pair springs linearised at the current positions, stiffness -dN/dr, so a contact is as stiff
+  /// as (8.37) at any step (the local springs above are softened by 1 + dt^2 K_e).
   bool implicit = false;
+  /// With `implicit`: makeSphSolver couples the contacts between solids with global implicit goal springs
+  /// into their solve (coupleGlobalImplicit). Off: the locally implicit springs above between them too.
+  bool couple_global_implicit = true;
 
   /// Throws std::invalid_argument naming the first invalid field.
   void validate() const;
@@ -41,12 +53,14 @@ struct SphObjectPenaltyConfig {
 
 /// Diagnostics of the last force evaluation.
 struct SphObjectPenaltyStats {
-  size_t objects = 0;          ///< distinct object ids (phases 1..255) among the integrated particles
-  size_t contact_pairs = 0;    ///< pairs of different objects closer than the contact distance
-  size_t repulsive_pairs = 0;  ///< contact pairs whose force passed the test of (8.37)
-  double min_distance = 0.0;   ///< smallest distance between particles of different objects (< d), else d
-  double energy = 0.0;         ///< potential energy of the stiffness part
-  Vec3 net_force = Vec3::Zero();
+  size_t objects = 0;        ///< distinct object ids (phases 1..255) among the integrated particles
+  size_t contact_pairs = 0;  ///< pairs of different objects closer than the contact distance
+  /// contact pairs whose force passed the test of (8.37) (coupled solids: contact springs that pushed at the
+  /// end of the step)
+  size_t repulsive_pairs = 0;
+  double min_distance = 0.0;      ///< smallest distance between particles of different objects (< d), else d
+  double energy = 0.0;            ///< potential energy of the stiffness part
+  Vec3 net_force = Vec3::Zero();  ///< of the forces added by this term itself (not the coupled contacts)
 };
 
 /// Object ids are the particle phases: every integrated (kFluid) particle with phase p != 0 belongs to
@@ -105,6 +119,17 @@ class SphObjectPenalty : public SphForceTerm {
 
   const SphObjectPenaltyStats& stats() const { return stats_; }
 
+  /// With `implicit`: the contacts between `solid` and the other coupled solids (all with global implicit
+  /// goal springs) join their backward Euler solve (see SphImplicitGoalCoupling): the solid hands its system
+  /// to this term instead of solving it, and this term solves all of them with the contact springs and adds
+  /// the solids' forces, so it must be added to the solver after them. Pairs with an uncoupled object keep
+  /// the locally implicit springs. Throws std::invalid_argument unless `implicit` and the solid has global
+  /// implicit goal springs (goal-position model).
+  void coupleGlobalImplicit(SphElasticSolid& solid);
+  size_t coupledSolids() const { return coupled_solids_; }
+  /// Of the last evaluation with coupled solids: groups solved, contact springs that pushed, CG iterations.
+  const SphImplicitCouplingStats& couplingStats() const { return coupling_stats_; }
+
  private:
   /// Number of distinct object ids among the integrated particles.
   static size_t countObjects(const SphParticles& particles);
@@ -130,6 +155,14 @@ class SphObjectPenalty : public SphForceTerm {
   double step_dt_ = 0.0;
   std::array<double, 256> object_stiffness_{};  // per phase, see setObjectStiffness
   std::vector<uint32_t> s_contacts_, s_repulsive_;
+  // Coupled global implicit solve: per sorted particle whether it is in a pending block and the contact
+  // springs to later sorted particles of other blocks; all of them in sorted order.
+  std::shared_ptr<SphImplicitGoalCoupling> coupling_;
+  size_t coupled_solids_ = 0;
+  SphImplicitCouplingStats coupling_stats_;
+  std::vector<uint8_t> s_coupled_;
+  std::vector<std::vector<SphContactSpring>> s_springs_;
+  std::vector<SphContactSpring> springs_;
 };
 
 }  // namespace rc

@@ -319,8 +319,12 @@ class SceneReader {
       p.contact_distance = std::min(p.contact_distance, solid.elastic.lattice_spacing);
     const bool given = node && node["contact_distance"];
     if (node) {
-      src_.allowKeys(node, {"stiffness", "contact_distance", "damping", "implicit"}, "collisions");
+      src_.allowKeys(node, {"stiffness", "contact_distance", "damping", "implicit", "couple_global_implicit"},
+                     "collisions");
       if (node["implicit"]) p.implicit = src_.boolean(node["implicit"], "collisions.implicit");
+      if (node["couple_global_implicit"])
+        p.couple_global_implicit =
+            src_.boolean(node["couple_global_implicit"], "collisions.couple_global_implicit");
       optionalNumber(node, "stiffness", "collisions", &p.stiffness, &Source::positive);
       optionalNumber(node, "contact_distance", "collisions", &p.contact_distance, &Source::positive);
       optionalNumber(node, "damping", "collisions", &p.damping, &Source::nonNegative);

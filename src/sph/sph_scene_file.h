@@ -49,7 +49,8 @@ struct SphSurfaceOutput {
 /// [sx, sy, sz], translation}: the mesh placed at translation + R (scale x), sampled where its generalised
 /// winding number exceeds 1/2 (closed meshes, or scans with small holes); `skin: {mesh: same}` skins it.
 /// Optional solid keys: `fracture` {strain, rate, max_docking_rate, docking_rate_increase,
-/// docking_rate_decrease, docking_distance, seed} (docking, 8.2.5), `plasticity` {yield_strain, flow_rate,
+/// docking_rate_decrease (both 1/s^2: the rate changes by value * dt per step), docking_distance, seed}
+/// (docking, 8.2.5), `plasticity` {yield_strain, flow_rate,
 /// max_strain} (both work with fixed and adaptive steps: the solver announces each step's dt;
 /// elastic.time_step is solver.fixed_dt, else solver.max_dt), and `anchor` {lo, hi}: the solid's particles in
 /// that box become static boundary particles it is fixed to (kind kStaticBoundary, still of this phase;
@@ -88,8 +89,9 @@ struct SphSceneThermal {
 };
 
 /// Penalty collisions between the solids (`enable: [collisions]`, key collisions {stiffness,
-/// contact_distance, damping}; thesis 8.2.6, (8.37)): an SphObjectPenalty term. contact_distance defaults to
-/// the smallest lattice spacing of the solids.
+/// contact_distance, damping, implicit, couple_global_implicit}; thesis 8.2.6, (8.37)): an SphObjectPenalty
+/// term. contact_distance defaults to the smallest lattice spacing of the solids; couple_global_implicit
+/// (default true) solves implicit contacts inside the global implicit goal solve of the solids they join.
 struct SphSceneCollisions {
   bool enabled = false;
   SphObjectPenaltyConfig config;

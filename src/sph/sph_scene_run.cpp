@@ -245,16 +245,25 @@ SphFluidSolver makeSphSolver(const SphScene& scene) {
   SphFluidSolver solver(scene.config, scene.particles);
   for (const SphPlane& plane : scene.planes) solver.addPlane(plane);
   const SphKernels kernels(scene.config.dimension, scene.config.smoothing_length);
+  std::vector<std::shared_ptr<SphElasticSolid>> terms;
   for (const SphSceneSolid& solid : scene.solids) {
     auto term = std::make_shared<SphElasticSolid>(solid.elastic, kernels, solid.phase, solid.orientation);
     term->setEnvironment(solver.planes(), solver.config().gravity);  // constraints of the global springs
     solver.addForceTerm(term);
+    terms.push_back(term);
   }
   if (scene.collisions.enabled) {
-    auto penalty = std::make_shared<SphObjectPenalty>(scene.collisions.config, kernels);
-    for (const SphSceneSolid& solid : scene.solids)  // bodies held by implicit goal springs
-      if (solid.elastic.implicit_goal && solid.elastic.model == SphElasticModel::kGoalPosition)
-        penalty->setObjectStiffness(solid.phase, solid.elastic.goal_stiffness);
+    const SphObjectPenaltyConfig& contact = scene.collisions.config;
+    auto penalty = std::make_shared<SphObjectPenalty>(contact, kernels);
+    for (size_t k = 0; k < scene.solids.size(); ++k) {
+      const SphElasticConfig& elastic = scene.solids[k].elastic;
+      if (!elastic.implicit_goal || elastic.model != SphElasticModel::kGoalPosition) continue;
+      // Bodies held by implicit goal springs: the local contact springs see their stiffness; those with
+      // global springs solve their contacts with them (the penalty evaluates after the solids).
+      penalty->setObjectStiffness(scene.solids[k].phase, elastic.goal_stiffness);
+      if (contact.implicit && contact.couple_global_implicit && elastic.global_implicit_goal)
+        penalty->coupleGlobalImplicit(*terms[k]);
+    }
     solver.addForceTerm(penalty);
   }
   return solver;

@@ -79,7 +79,9 @@ struct SphRunStats {
 /// A solver for the scene (its config, particles and planes) with an SphElasticSolid force term per solid
 /// (given the scene's planes and gravity, SphElasticSolid::setEnvironment) and, with `enable: [collisions]`,
 /// an SphObjectPenalty term after them (told K_e of the solids with implicit goal springs,
-/// SphObjectPenalty::setObjectStiffness).
+/// SphObjectPenalty::setObjectStiffness; with implicit contact springs and `couple_global_implicit`, the
+/// solids with global implicit goal springs solve their contacts in one system with them,
+/// SphObjectPenalty::coupleGlobalImplicit).
 SphFluidSolver makeSphSolver(const SphScene& scene);
 
 /// Per particle of the solver: the docked lattice points (SphElasticSolid::dockedCounts) of the solids

@@ -341,6 +341,62 @@ double extentX(const std::vector<Vec3>& x) {
   return hi - lo;
 }
 
+// Inside a solver the neighbourhoods come from its neighbour rows (its cell order, fluid and melted particles
+// among them); the forces equal those of the solid's own search to rounding.
+TEST(SphElasticSolid, SolverNeighborRowsGiveTheForcesOfTheOwnSearch) {
+  const double d = 0.05;
+  Vec3 center;
+  const std::vector<Vec3> rest = blockPoints(d, Vec3(0.3, 0.25, 0.35), center);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.12 * d, 0.12 * d), speed(-0.5, 0.5);
+  const Mat3 q = rotation(0.4, Vec3(1, -2, 1));
+  SphFluidConfig config;
+  config.dimension = 3;
+  config.smoothing_length = 2.0 * d;
+  config.gravity = Vec3::Zero();
+  const SphKernels kernels(3, config.smoothing_length);
+  for (SphElasticModel model : {SphElasticModel::kGoalPosition, SphElasticModel::kStrain}) {
+    SphElasticConfig e = elasticConfig(model, d);
+    e.implicit_goal = model == SphElasticModel::kGoalPosition;  // the locally implicit springs and damping
+    SphParticles particles;
+    for (size_t k = 0; k < rest.size(); ++k) {
+      const Vec3 x = center + q * (1.05 * (rest[k] - center)) + Vec3(jitter(rng), jitter(rng), jitter(rng));
+      particles.add(x, Vec3(speed(rng), speed(rng), speed(rng)), 1.0, SphParticleKind::kFluid);
+      particles.phases.back() = k % 7 == 3 ? 0 : 1;  // every seventh melted (fluid)
+    }
+    for (int k = 0; k < 20; ++k)  // fluid beside the block
+      particles.add(center + Vec3(0.2 + 0.01 * k, 0.0, 0.0), Vec3::Zero(), 1.0, SphParticleKind::kFluid);
+    SphFluidSolver solver(config, particles);
+    solver.computeForces();  // the rows of the current positions
+    SphElasticSolid from_rows(e, kernels, 1), own_search(e, kernels, 1);
+    from_rows.beginStep(1e-3);
+    own_search.beginStep(1e-3);
+    for (int evaluation = 0; evaluation < 2; ++evaluation) {  // the second starts from the fitted A_i
+      std::vector<Vec3> fa, fb;
+      from_rows.setNeighborSource(&solver);
+      from_rows.computeForces(solver.particles(), fa);
+      from_rows.setNeighborSource(nullptr);
+      own_search.computeForces(solver.particles(), fb);
+      const SphElasticStats &a = from_rows.stats(), &b = own_search.stats();
+      EXPECT_TRUE(a.solver_neighbor_rows);
+      EXPECT_FALSE(b.solver_neighbor_rows);
+      EXPECT_EQ(a.solid_particles, b.solid_particles);
+      EXPECT_EQ(a.matched_neighborhoods, b.matched_neighborhoods);
+      EXPECT_EQ(a.assigned_pairs, b.assigned_pairs);
+      EXPECT_EQ(a.unassigned_pairs, b.unassigned_pairs);
+      EXPECT_GT(a.assigned_pairs, 20 * a.solid_particles);
+      EXPECT_NEAR(a.energy, b.energy, 1e-12 * b.energy);
+      double fmax = 0.0, diff = 0.0;
+      for (size_t i = 0; i < fb.size(); ++i) {
+        fmax = std::max(fmax, fb[i].norm());
+        diff = std::max(diff, (fa[i] - fb[i]).norm());
+      }
+      EXPECT_GT(fmax, 0.0);
+      EXPECT_LE(diff, 1e-12 * fmax) << "model " << int(model) << ", evaluation " << evaluation;
+    }
+  }
+}
+
 TEST(SphElasticSolid, StrainOfUniformStretchIsExact) {
   const double d = 0.05;
   Vec3 c;

@@ -92,7 +92,8 @@ PullResult pullBar(double speed, int threads, double duration = 0.08) {
   e.docking = true;
   e.fracture_strain = 0.08;
   e.fracture_rate = 5000.0;
-  e.docking_rate_increase = 5.0;  // slow healing: a crack that opens stays open
+  e.docking_rate_increase = 5.0 / kDt;    // 1/s^2: slow healing, a crack that opens stays open
+  e.docking_rate_decrease = 100.0 / kDt;  // forgets a point in 10 steps
   e.seed = 11;
   const std::vector<Vec3> points = hexBox(Vec3(0, 0, 0), Vec3(0.4, 0.1, 0));
   std::vector<Vec3> velocities;
@@ -176,6 +177,7 @@ double approachThenPull(double docking_rate_increase, uint64_t* redocked, size_t
   e.docking = true;
   e.fracture_strain = 0.3;
   e.docking_rate_increase = docking_rate_increase;
+  e.docking_rate_decrease = 100.0 / kDt;
   e.max_docking_rate = 2000.0;
   const double gap = 2.0 * kSpacing, speed = 0.1;  // no neighbours across the gap at the start
   std::vector<Vec3> points;
@@ -208,18 +210,21 @@ double approachThenPull(double docking_rate_increase, uint64_t* redocked, size_t
 TEST(SphFracture, PiecesPushedTogetherHealAndHoldTogether) {
   uint64_t healed = 0, never = 0;
   size_t before = 0, after = 0, before0 = 0, after0 = 0;
-  const double healed_change = approachThenPull(200.0, &healed, &before, &after);
+  const double healed_change = approachThenPull(200.0 / kDt, &healed, &before, &after);
   const double apart_change = approachThenPull(0.0, &never, &before0, &after0);
   std::printf("healing: %llu redocked, docked points %zu -> %zu, separation change on pulling %.4f\n",
               (unsigned long long)healed, before, after, healed_change);
   std::printf("no healing: %llu redocked, docked points %zu -> %zu, separation change %.4f\n",
               (unsigned long long)never, before0, after0, apart_change);
-  EXPECT_GT(healed, 100u);  // lattice points across the former gap docked
-  EXPECT_GT(after, before + 50);
+  // Lattice points across the contact docked (free points at the kernel rim, 2 d, never dock: they carry no
+  // force at rest), and the count is back at that of the start.
+  EXPECT_GT(healed, 40u);
+  EXPECT_GE(after, before);
   // Delta lambda^+ = 0: only points that lost their particle a moment ago (rate not yet decayed) re-dock.
   EXPECT_LT(20 * never, healed);
   EXPECT_LE(after0, before0);
-  EXPECT_GT(apart_change, 0.01);  // the unhealed pieces drift apart when pulled
+  EXPECT_GT(apart_change, 0.01);                 // the unhealed pieces drift apart when pulled
+  EXPECT_LT(healed_change, 0.3 * apart_change);  // the healed ones hold together
 }
 
 double extentX(const std::vector<Vec3>& x) {

@@ -16,6 +16,7 @@
 #include <Eigen/Geometry>
 
 #include "momentum_test_support.h"
+#include "scene_file_test_support.h"
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_implicit_goal_solver.h"
@@ -616,6 +617,343 @@ TEST(SphImplicitGoal, ContactSpringsSeeTheBodyStiffness) {
   EXPECT_EQ(steps, int(std::ceil(0.05 / (30.0 * 0.4 * explicitLimit(kStiffness)))));  // all at the cap
   EXPECT_LE(max_kinetic, kinetic0 * (1.0 + 1e-3));
   EXPECT_LT(max_strain, 0.1);
+}
+
+/// Two stiff cubes (global springs at 30x the explicit limit, K_e = 2.4e7) at (-0.25 - gap / 2) and
+/// (0.25 + gap / 2) moving at +-`speed` along x, with the implicit penalty (K_c = 1e7, d) added after them
+/// and, if `coupled`, their contacts in the coupled solve (SphObjectPenalty::coupleGlobalImplicit).
+struct CubePair {
+  Cube cubes;
+  std::shared_ptr<SphObjectPenalty> penalty;
+};
+
+CubePair cubePair(double speed, double gap, bool coupled, double fixed_dt = 0.0) {
+  SphFluidConfig config = diceConfig();
+  config.fixed_dt = fixed_dt;
+  SphElasticConfig material = globalMaterial();
+  material.implicit_step_factor = 30.0;
+  CubePair pair;
+  pair.cubes = makeCubes(config, material, {Vec3(-0.25 - 0.5 * gap, 0.5, 0), Vec3(0.25 + 0.5 * gap, 0.5, 0)},
+                         {Vec3(speed, 0, 0), Vec3(-speed, 0, 0)}, Mat3::Identity(), 1.0, Vec3::Zero(), 0.0);
+  SphObjectPenaltyConfig contact;
+  contact.stiffness = 1e7;
+  contact.contact_distance = kSpacing;
+  contact.implicit = true;
+  pair.penalty = std::make_shared<SphObjectPenalty>(contact, SphKernels(3, config.smoothing_length));
+  for (uint8_t phase : {1, 2}) pair.penalty->setObjectStiffness(phase, kStiffness);
+  if (coupled)
+    for (auto& solid : pair.cubes.solids) pair.penalty->coupleGlobalImplicit(*solid);
+  pair.cubes.solver->addForceTerm(pair.penalty);
+  return pair;
+}
+
+// The coupled solve (contacts in the solids' backward Euler system): the head-on collision at 6 m/s never
+// gains kinetic energy, keeps linear and angular momentum per step to 1e-12 while the contacts push, the
+// cubes bounce apart without passing into each other, and every step is the capped one.
+TEST(SphImplicitGoal, CoupledContactsCollideWithoutEnergyGainAndKeepMomentum) {
+  CubePair pair = cubePair(3.0, 0.0, true);
+  SphFluidSolver& solver = *pair.cubes.solver;
+  solver.computeForces();
+  const double kinetic0 = solver.lastStats().kinetic_energy;
+  double max_kinetic = kinetic0, max_strain = 0.0, min_distance = kSpacing;
+  int steps = 0, contact_steps = 0;
+  size_t max_pushing = 0;
+  double worst_linear = 0.0, worst_angular = 0.0;
+  while (solver.time() < 0.05) {
+    const MomentumDrift m = trackMomentum(solver.particles(), 1, [&] { solver.step(); });
+    max_kinetic = std::max(max_kinetic, solver.lastStats().kinetic_energy);
+    for (const auto& solid : pair.cubes.solids) max_strain = std::max(max_strain, solid->stats().max_strain);
+    min_distance = std::min(min_distance, pair.penalty->stats().min_distance);
+    const size_t pushing = pair.penalty->couplingStats().active_contacts;
+    max_pushing = std::max(max_pushing, pushing);
+    if (pushing > 0) {
+      ++contact_steps;
+      worst_linear = std::max(worst_linear, m.worst_linear);
+      worst_angular = std::max(worst_angular, m.worst_angular);
+    }
+    ++steps;
+  }
+  double v_left = 0.0;
+  size_t n_left = 0;
+  const SphParticles& p = solver.particles();
+  for (size_t i = 0; i < p.size(); ++i)
+    if (p.phases[i] == 1) {
+      v_left += p.velocities[i].x();
+      ++n_left;
+    }
+  v_left /= double(n_left);
+  std::printf(
+      "coupled contacts, cubes at 6 m/s: %d steps (%d with contacts, <= %zu pushing), kinetic %.4g -> max "
+      "%.4g, max strain %.3g, min distance %.4g, left cube after %.3g m/s, dP %.2e dL %.2e per step\n",
+      steps, contact_steps, max_pushing, kinetic0, max_kinetic, max_strain, min_distance, v_left,
+      worst_linear, worst_angular);
+  EXPECT_EQ(steps, int(std::ceil(0.05 / (30.0 * 0.4 * explicitLimit(kStiffness)))));  // all at the cap
+  EXPECT_GT(contact_steps, 2);
+  EXPECT_LE(max_kinetic, kinetic0 * (1.0 + 1e-3));
+  EXPECT_LT(max_strain, 0.1);
+  EXPECT_GT(min_distance, 0.4 * kSpacing);
+  EXPECT_LT(v_left, 0.0);  // bounced back
+  EXPECT_LT(worst_linear, 1e-12);
+  EXPECT_LT(worst_angular, 1e-12);
+}
+
+enum class ContactMode { kExplicit, kLocal, kCoupled };
+
+struct Pressed {
+  double overlap = 0.0;    ///< d - r_min
+  double approach = 0.0;   ///< of the cubes' centres along x from touching
+  size_t max_pushing = 0;  ///< the most contact springs that pushed in a coupled solve
+};
+
+/// Overlap d - r_min and approach of the centres of two stiff cubes (side 0.21, K_e = 2.4e7) pressed together
+/// from touching at rest: gravity 2000 m/s^2 along -x, cube 1 resting on the wall plane x = const, cube 2 on
+/// cube 1, both in a channel of planes along x; penalty K_c = 1e7 with damping 3000 / s. Explicit goal forces
+/// and penalty at 0.4x their limits, averaged over the last 0.02 s of 0.08 s; or global springs at 30x the
+/// explicit limit (the wall and gravity in their solve) with the local (kLocal) or the coupled (kCoupled)
+/// contact springs, averaged over the last 0.03 s of 0.12 s.
+Pressed pressedCubes(ContactMode mode) {
+  SphFluidConfig config = diceConfig();
+  const SphKernels kernels(3, config.smoothing_length);
+  const SphLattice lattice(3, kSpacing);
+  const double mass = lattice.particleMass(kernels, config.rest_density);
+  SphElasticConfig material = mode == ContactMode::kExplicit ? diceMaterial(false) : globalMaterial();
+  SphObjectPenaltyConfig contact;
+  contact.stiffness = 1e7;
+  contact.contact_distance = kSpacing;
+  contact.damping = 3000.0;
+  contact.implicit = mode != ContactMode::kExplicit;
+  // One lattice box split at x = 0: the cubes touch with their lattice continued across the interface
+  // (the closest pairs at the contact distance d, no force).
+  const std::vector<Vec3> points =
+      sampleLatticeBox(lattice, Vec3(-0.21, 0.395, -0.105), Vec3(0.21, 0.605, 0.105));
+  std::vector<Vec3> halves[2];
+  for (const Vec3& x : points) halves[x.x() < -1e-9 ? 0 : 1].push_back(x);
+  SphParticles particles;
+  std::vector<std::shared_ptr<SphElasticSolid>> solids;
+  for (int k = 0; k < 2; ++k) {
+    auto solid = std::make_shared<SphElasticSolid>(material, kernels, uint8_t(k + 1));
+    solid->addParticles(particles, halves[k], mass);
+    solids.push_back(solid);
+  }
+  auto penalty = std::make_shared<SphObjectPenalty>(contact, kernels);
+  const double explicit_dt =
+      0.4 * std::min(std::sqrt(2.0 / kStiffness), penalty->stableTimeStep(particles, 1.0));
+  config.fixed_dt = mode == ContactMode::kExplicit ? explicit_dt : 30.0 * 0.4 * explicitLimit(kStiffness);
+  config.gravity = Vec3(-2000.0, 0.0, 0.0);
+  if (mode == ContactMode::kExplicit) config.viscosity = 0.2;  // damps its bouncing (stable at its step)
+  SphPlane wall;
+  wall.normal = Vec3::UnitX();
+  wall.offset = std::numeric_limits<double>::infinity();
+  for (const Vec3& x : particles.positions) wall.offset = std::min(wall.offset, x.x());
+  // A channel of planes along x around both cubes keeps them from sliding off each other.
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3& x : particles.positions) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  SphFluidSolver solver(config, std::move(particles));
+  solver.addPlane(wall);
+  for (int axis : {1, 2}) {
+    SphPlane side;
+    side.normal = Vec3::Unit(axis);
+    side.offset = lo[axis] - 1e-3;
+    solver.addPlane(side);
+    side.normal = -Vec3::Unit(axis);
+    side.offset = -hi[axis] - 1e-3;
+    solver.addPlane(side);
+  }
+  for (auto& solid : solids) {
+    solid->setEnvironment(solver.planes(), config.gravity);
+    solver.addForceTerm(solid);
+    if (mode == ContactMode::kCoupled) penalty->coupleGlobalImplicit(*solid);
+    penalty->setObjectStiffness(solid->phase(), kStiffness);
+  }
+  solver.addForceTerm(penalty);
+  const double duration = mode == ContactMode::kExplicit ? 0.25 : 0.12;
+  const double average = mode == ContactMode::kExplicit ? 0.088 : 0.03;  // explicit: 4 of its bounces
+  // Approach of the cubes' centres along x from touching.
+  const auto centreDistance = [&] {
+    const SphParticles& p = solver.particles();
+    double c[2] = {0.0, 0.0}, n[2] = {0.0, 0.0};
+    for (size_t i = 0; i < p.size(); ++i) {
+      c[p.phases[i] - 1] += p.positions[i].x();
+      n[p.phases[i] - 1] += 1.0;
+    }
+    return c[1] / n[1] - c[0] / n[0];
+  };
+  const double touching = centreDistance();
+  Pressed out;
+  int samples = 0;
+  while (solver.time() < duration - 0.5 * config.fixed_dt) {
+    solver.step();
+    out.max_pushing = std::max(out.max_pushing, penalty->couplingStats().active_contacts);
+    if (solver.time() > duration - average) {
+      out.overlap += kSpacing - penalty->stats().min_distance;
+      out.approach += touching - centreDistance();
+      ++samples;
+    }
+  }
+  out.overlap /= double(samples);
+  out.approach /= double(samples);
+  return out;
+}
+
+// Two stiff cubes pressed together at rest reach the overlap of the explicit penalty (8.37) (within 20%)
+// with the contact springs in the coupled solve at 30x the explicit limit; the local contact springs,
+// softened by 1 + dt^2 K_e, let them sink several times deeper into each other.
+TEST(SphImplicitGoal, CoupledContactsReachTheExplicitEquilibriumOverlap) {
+  const Pressed reference = pressedCubes(ContactMode::kExplicit);
+  const Pressed coupled = pressedCubes(ContactMode::kCoupled);
+  const Pressed local = pressedCubes(ContactMode::kLocal);
+  std::printf(
+      "pressed cubes, overlap d - r_min / approach of the centres: explicit %.4g / %.4g m, coupled 30x %.4g "
+      "/ "
+      "%.4g m (%zu springs push), local 30x %.4g / %.4g m\n",
+      reference.overlap, reference.approach, coupled.overlap, coupled.approach, coupled.max_pushing,
+      local.overlap, local.approach);
+  EXPECT_GT(reference.overlap, 0.002);
+  EXPECT_GT(coupled.max_pushing, 10u);
+  EXPECT_NEAR(coupled.overlap, reference.overlap, 0.2 * reference.overlap);
+  EXPECT_NEAR(coupled.approach, reference.approach, 0.2 * reference.approach);
+  EXPECT_GT(local.overlap, 2.0 * reference.overlap);
+}
+
+// Coupling needs implicit contact springs and solids with global implicit goal springs, and the penalty
+// evaluated after the solids it couples; makeSphSolver couples the dice of the shipped scene.
+TEST(SphImplicitGoal, CouplingChecksItsTermsAndTheirOrder) {
+  const SphKernels kernels(3, 2.0 * kSpacing);
+  SphObjectPenaltyConfig contact;
+  contact.contact_distance = kSpacing;
+  SphObjectPenalty explicit_penalty(contact, kernels);
+  SphElasticSolid global_solid(globalMaterial(), kernels, 1), local_solid(diceMaterial(true), kernels, 2);
+  EXPECT_THROW(explicit_penalty.coupleGlobalImplicit(global_solid), std::invalid_argument);
+  contact.implicit = true;
+  SphObjectPenalty penalty(contact, kernels);
+  EXPECT_THROW(penalty.coupleGlobalImplicit(local_solid), std::invalid_argument);
+  penalty.coupleGlobalImplicit(global_solid);
+  penalty.coupleGlobalImplicit(global_solid);  // once only
+  EXPECT_EQ(penalty.coupledSolids(), 1u);
+  EXPECT_EQ(global_solid.implicitCoupling() != nullptr, true);
+
+  // The penalty added before the solids: their systems are not there when it solves.
+  CubePair pair = cubePair(3.0, 0.0, false, 30.0 * 0.4 * explicitLimit(kStiffness));
+  SphFluidConfig config = diceConfig();
+  auto early = std::make_shared<SphObjectPenalty>(pair.penalty->config(), kernels);
+  SphFluidSolver solver(config, pair.cubes.solver->particles());
+  solver.addForceTerm(early);
+  for (auto& solid : pair.cubes.solids) {
+    early->coupleGlobalImplicit(*solid);
+    solver.addForceTerm(solid);
+  }
+  EXPECT_THROW(solver.step(), std::logic_error);
+
+  const SphScene dice = loadSphScene(sphSceneDir() + "dice_3d.yaml");
+  SphFluidSolver scene_solver = makeSphSolver(dice);
+  size_t coupled = 0;
+  for (const auto& term : scene_solver.forceTerms())
+    if (const auto* p = dynamic_cast<const SphObjectPenalty*>(term.get())) coupled = p->coupledSolids();
+  EXPECT_EQ(coupled, 9u);
+}
+
+// The coupled solve of two random spring systems joined by five contact springs: one group; its forces
+// reproduce M dv / dt (the CG tolerance), have no net force or torque, and the contact that separates fast
+// lets go ((8.37) never pulls); without contacts each system is solved alone.
+TEST(SphImplicitGoal, CoupledSystemKeepsMomentumAndReleasesPullingContacts) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  const size_t n = 20;
+  SphImplicitGoalSolver solvers[2];
+  std::vector<uint32_t> particles[2];
+  std::vector<Vec3> x[2], f0[2], v[2], dv[2], force[2], all_x(2 * n);
+  for (int b = 0; b < 2; ++b) {
+    std::vector<double> masses(n);
+    std::vector<std::vector<SphGoalSpring>> springs(n);
+    for (size_t s = 0; s < n; ++s) {
+      x[b].push_back(Vec3(0.5 * uni(rng) + (b == 0 ? -0.5 : 0.5), 0.5 * uni(rng), 0.5 * uni(rng)));
+      f0[b].push_back(Vec3(uni(rng), uni(rng), uni(rng)));
+      v[b].push_back(Vec3(uni(rng), uni(rng), uni(rng)));
+      masses[s] = 1.0 + 0.5 * uni(rng);
+      particles[b].push_back(uint32_t(b * n + s));
+      all_x[b * n + s] = x[b][s];
+    }
+    for (size_t s = 0; s < n; ++s)
+      for (size_t j = 0; j < n; ++j)
+        if (j != s && (x[b][j] - x[b][s]).norm() < 0.5)
+          springs[s].push_back({uint32_t(j), 1e3 * (1.5 + uni(rng))});
+    solvers[b].setSystem(x[b], masses, springs);
+    solvers[b].removeNetForceAndTorque(f0[b]);  // goal forces have none (8.32)-(8.33)
+  }
+  std::vector<SphContactSpring> contacts;
+  for (size_t k = 0; k < 5; ++k) {
+    SphContactSpring c;
+    c.first = uint32_t(k);
+    c.second = uint32_t(n + k);
+    c.normal = (all_x[c.second] - all_x[c.first]).normalized();
+    c.force = 2.0;
+    c.stiffness = 1e3;
+    c.damping = 0.5;
+    contacts.push_back(c);
+  }
+  v[1][0] += 50.0 * contacts[0].normal;  // contact 0 separates fast: it would pull
+  for (size_t k = 1; k < 5; ++k) v[1][k] -= 5.0 * contacts[k].normal;  // the others close
+  const double dt = 0.05;
+  auto solve = [&](const std::vector<SphContactSpring>& springs, std::vector<Vec3>& forces) {
+    SphImplicitGoalCoupling coupling;
+    forces.assign(2 * n, Vec3::Zero());
+    for (int b = 0; b < 2; ++b) {
+      dv[b].assign(n, Vec3::Zero());
+      SphImplicitGoalBlock block;
+      block.solver = &solvers[b];
+      block.particles = &particles[b];
+      block.f0 = &f0[b];
+      block.velocity = &v[b];
+      block.dv = &dv[b];
+      block.force = &force[b];
+      block.dt = dt;
+      block.tolerance = 1e-12;
+      block.max_iterations = 1000;
+      coupling.submit(block);
+    }
+    EXPECT_THROW(coupling.submit(SphImplicitGoalBlock{}), std::invalid_argument);
+    return coupling.solve(springs, forces);
+  };
+  std::vector<Vec3> forces;
+  const SphImplicitCouplingStats st = solve(contacts, forces);
+  Vec3 net = Vec3::Zero(), torque = Vec3::Zero();
+  double scale = 0.0, mismatch = 0.0;
+  for (int b = 0; b < 2; ++b)
+    for (size_t s = 0; s < n; ++s) {
+      const Vec3& f = forces[b * n + s];
+      net += f;
+      torque += all_x[b * n + s].cross(f);
+      scale += f.norm();
+      mismatch = std::max(mismatch, (f - solvers[b].masses()[s] / dt * dv[b][s]).norm());
+    }
+  std::printf(
+      "coupled system: %zu group(s), %zu pushing, %zu released, %d CG iterations, |net force| %.2e, "
+      "|torque| %.2e, max |F - M dv / dt| %.2e (scale %.3g)\n",
+      st.groups, st.active_contacts, st.released_contacts, st.iterations, net.norm(), torque.norm(), mismatch,
+      scale);
+  EXPECT_EQ(st.groups, 1u);
+  EXPECT_EQ(st.coupled_solids, 2u);
+  EXPECT_GE(st.released_contacts, 1u);
+  EXPECT_GE(st.active_contacts, 1u);
+  EXPECT_LE(st.active_contacts + st.released_contacts, 5u);
+  EXPECT_GT(st.iterations, 0);
+  EXPECT_LT(net.norm(), 1e-12 * scale);
+  EXPECT_LT(torque.norm(), 1e-12 * scale);
+  EXPECT_LT(mismatch, 1e-8 * scale / double(2 * n));
+  // Without contacts: two groups, each solved alone, again without net force.
+  const SphImplicitCouplingStats alone = solve({}, forces);
+  net.setZero();
+  for (const Vec3& f : forces) net += f;
+  EXPECT_EQ(alone.groups, 2u);
+  EXPECT_EQ(alone.coupled_solids, 0u);
+  EXPECT_LT(net.norm(), 1e-12 * scale);
+  // A contact with an end outside the blocks is an error.
+  SphContactSpring stray = contacts[1];
+  stray.second = uint32_t(5 * n);
+  EXPECT_THROW(solve({stray}, forces), std::invalid_argument);
 }
 
 }  // namespace

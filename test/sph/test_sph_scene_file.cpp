@@ -629,6 +629,15 @@ TEST(SphSceneFile, ImplicitGoalAndContactSpringsAreSceneKeys) {
   EXPECT_FALSE(scene.solids[1].elastic.implicit_goal);  // off unless asked for
   EXPECT_EQ(scene.solids[1].elastic.implicit_step_factor, 0.0);
   EXPECT_TRUE(scene.collisions.config.implicit);
+  EXPECT_TRUE(scene.collisions.config.couple_global_implicit);  // on unless switched off
+  const SphScene uncoupled =
+      parseSphScene(head +
+                        "solids:\n"
+                        "  - {lo: [0, 0], hi: [0.1, 0.1]}\n"
+                        "  - {lo: [0.2, 0], hi: [0.3, 0.1]}\n" +
+                        tail + "collisions: {implicit: true, couple_global_implicit: false}\n",
+                    "uncoupled.yaml");
+  EXPECT_FALSE(uncoupled.collisions.config.couple_global_implicit);
   expectErrorAt(head +
                     "solids:\n"
                     "  - {lo: [0, 0], hi: [0.1, 0.1], model: strain, implicit_goal: true}\n"
