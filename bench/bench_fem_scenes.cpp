@@ -9,11 +9,14 @@
 // anew / reused after the cuts.
 // Usage: bench_fem_scenes [--bunny-frames N] [--bunny-solver cholmod|cholmod_pcg|cg_ic|cg]
 //        [--refactor-iterations N] [--tolerance T] [--contact-updates N] [--extension-iterations N]
-//        [--dump-positions FILE] [--skip-block] [--scene-dir DIR]
+//        [--dump-positions FILE] [--no-carry] [--blas-thread-control] [--skip-block] [--scene-dir DIR]
 // (--bunny-solver replaces the bunny scene's solver; cg and cg_ic use tolerance 1e-6 unless --tolerance gives
 // the CG relative residual; --contact-updates sets pcg_contact_updates (0: the preconditioner ignores contact
 // changes, the old path) and --extension-iterations pcg_extension_iterations (0: the old path);
-// --dump-positions writes the bunny's final node positions, "x y z" per line.)
+// --dump-positions writes the bunny's final node positions, "x y z" per line; --blas-thread-control gives
+// factorisations all threads and shuts OpenBLAS's pool down after each (setCholmodBlasThreadControl; off by
+// default) and --no-carry starts the bodies made by cuts afresh (FemSimulation::setCarryStateAcrossCuts; the
+// old path).)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -24,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "fem/cholmod_solver.h"
 #include "fem/fem_scene.h"
 
 namespace {
@@ -47,6 +51,7 @@ struct SceneResult {
   std::string name;
   int frames = 0, nodes_start = 0, elements_start = 0, nodes = 0, elements = 0, bodies = 0;
   long iterations = 0, unconverged = 0, recomputed = 0, reused = 0;
+  rc::FemSimulation::SolverCounts solver;
   double setup = 0.0, mean_frame = 0.0;
   std::vector<double> bases, rotations, assembly, solve, topology, frame;
 };
@@ -59,6 +64,7 @@ struct SolverOverride {
   int contact_updates = -1;       // pcg_contact_updates; -1: the scene's
   int extension_iterations = -1;  // pcg_extension_iterations; -1: the scene's
   std::string positions_file;     // --dump-positions: final node positions, one "x y z" line per node
+  bool carry_state = true;        // --no-carry: bodies made by cuts start fresh (the old path)
 };
 
 SceneResult runScene(const std::string& path, int max_frames, const SolverOverride& solver = {}) {
@@ -85,6 +91,7 @@ SceneResult runScene(const std::string& path, int max_frames, const SolverOverri
   if (solver.contact_updates >= 0) scene.dynamics.pcg_contact_updates = solver.contact_updates;
   if (solver.extension_iterations >= 0) scene.dynamics.pcg_extension_iterations = solver.extension_iterations;
   rc::FemSimulation sim(scene);
+  sim.setCarryStateAcrossCuts(solver.carry_state);
   r.setup = std::chrono::duration<double>(Clock::now() - setup_start).count();
   r.name = scene.name;
   r.nodes_start = sim.numNodes();
@@ -123,6 +130,7 @@ SceneResult runScene(const std::string& path, int max_frames, const SolverOverri
   r.unconverged = sim.unconvergedSolves();
   r.recomputed = sim.recomputedElements();
   r.reused = sim.reusedElements();
+  r.solver = sim.solverCounts();
   return r;
 }
 
@@ -149,6 +157,10 @@ int main(int argc, char** argv) {
       bunny_solver.extension_iterations = std::atoi(argv[++i]);
     } else if (!std::strcmp(argv[i], "--dump-positions") && i + 1 < argc) {
       bunny_solver.positions_file = argv[++i];
+    } else if (!std::strcmp(argv[i], "--no-carry")) {
+      bunny_solver.carry_state = false;
+    } else if (!std::strcmp(argv[i], "--blas-thread-control")) {
+      rc::setCholmodBlasThreadControl(true);
     } else if (!std::strcmp(argv[i], "--skip-block")) {
       skip_block = true;
     } else if (!std::strcmp(argv[i], "--scene-dir") && i + 1 < argc) {
@@ -158,7 +170,8 @@ int main(int argc, char** argv) {
           stderr,
           "usage: %s [--bunny-frames N] [--bunny-solver cholmod|cholmod_pcg|cg_ic|cg] "
           "[--refactor-iterations N] [--tolerance T] [--contact-updates N] [--extension-iterations N] "
-          "[--dump-positions FILE] [--skip-block] [--scene-dir DIR]\n",
+          "[--dump-positions FILE] [--no-carry] [--blas-thread-control] [--skip-block] [--scene-dir "
+          "DIR]\n",
           argv[0]);
       return 2;
     }
@@ -204,6 +217,13 @@ int main(int argc, char** argv) {
   }
   std::printf("\nElements after cuts: integrated anew / reused from the cut body\n");
   for (const SceneResult& r : results) std::printf("%s: %ld / %ld\n", r.name.c_str(), r.recomputed, r.reused);
+  std::printf(
+      "\nCHOLMOD: analyses (ms) / factorisations (ms) over the run; bodies built (the first and by cuts) / "
+      "analyses carried over\n");
+  for (const SceneResult& r : results)
+    std::printf("%s: %ld (%.0f) / %ld (%.0f); %ld / %ld\n", r.name.c_str(), r.solver.analyses,
+                1e3 * r.solver.analysis_seconds, r.solver.factorizations,
+                1e3 * r.solver.factorization_seconds, r.solver.bodies_built, r.solver.analyses_carried);
   std::printf("\nUnconverged solves (CG short of its tolerance)\n");
   for (const SceneResult& r : results) std::printf("%s: %ld\n", r.name.c_str(), r.unconverged);
   return 0;

@@ -1,16 +1,76 @@
 #include "fem/cholmod_solver.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <stdexcept>
 #include <string>
 #include <utility>
+
+#include <dlfcn.h>
+#include <omp.h>
 
 #if RC_HAVE_CHOLMOD
 #include <cholmod.h>
 #endif
 
 namespace rc {
+
+namespace {
+
+// OpenBLAS's pool functions, when the process has OpenBLAS (CHOLMOD's BLAS).
+struct OpenBlasThreads {
+  using SetThreads = void (*)(int);
+  using Shutdown = int (*)();
+  SetThreads set_threads = nullptr;
+  Shutdown shutdown = nullptr;
+  bool enabled = false;
+  OpenBlasThreads() {
+    set_threads = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+    shutdown = reinterpret_cast<Shutdown>(dlsym(RTLD_DEFAULT, "blas_thread_shutdown_"));
+  }
+  bool active() const { return enabled && set_threads && shutdown; }
+  static OpenBlasThreads& instance() {
+    static OpenBlasThreads threads;
+    return threads;
+  }
+};
+
+// BLAS threads for a numeric factorisation; one thread and no spinning pool afterwards.
+class FactorizationBlasThreads {
+ public:
+  FactorizationBlasThreads() : threads_(OpenBlasThreads::instance()), active_(threads_.active()) {
+    if (active_) threads_.set_threads(omp_get_max_threads());
+  }
+  ~FactorizationBlasThreads() {
+    if (!active_) return;
+    threads_.set_threads(1);
+    threads_.shutdown();
+  }
+  FactorizationBlasThreads(const FactorizationBlasThreads&) = delete;
+  FactorizationBlasThreads& operator=(const FactorizationBlasThreads&) = delete;
+
+ private:
+  OpenBlasThreads& threads_;
+  bool active_;
+};
+
+}  // namespace
+
+void setCholmodBlasThreadControl(bool enabled) {
+  OpenBlasThreads& threads = OpenBlasThreads::instance();
+  threads.enabled = enabled;
+  if (!enabled && threads.set_threads) threads.set_threads(omp_get_max_threads());
+}
+
+bool cholmodBlasThreadControl() {
+  return OpenBlasThreads::instance().enabled;
+}
+
+bool openBlasThreadControlAvailable() {
+  const OpenBlasThreads& threads = OpenBlasThreads::instance();
+  return threads.set_threads && threads.shutdown;
+}
 
 bool cholmodAvailable() {
 #if RC_HAVE_CHOLMOD
@@ -21,6 +81,13 @@ bool cholmodAvailable() {
 }
 
 #if RC_HAVE_CHOLMOD
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+}  // namespace
 
 struct CholmodSolver::Impl {
   cholmod_common common;
@@ -87,6 +154,7 @@ void CholmodSolver::analyzePattern(const Eigen::SparseMatrix<double>& input) {
   if (input.rows() != input.cols() || input.rows() == 0)
     throw std::invalid_argument("CholmodSolver: the matrix must be square and non-empty, got " +
                                 std::to_string(input.rows()) + " x " + std::to_string(input.cols()));
+  const Clock::time_point start = Clock::now();
   const Eigen::SparseMatrix<double>& a = impl_->compressedView(input);
   cholmod_sparse view = Impl::view(a);
   cholmod_free_factor(&impl_->factor, &impl_->common);
@@ -98,14 +166,20 @@ void CholmodSolver::analyzePattern(const Eigen::SparseMatrix<double>& input) {
   outer_.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.cols() + 1);
   inner_.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
   ++num_analyses_;
+  analysis_seconds_ += secondsSince(start);
 }
 
 void CholmodSolver::factorize(const Eigen::SparseMatrix<double>& input) {
   const Eigen::SparseMatrix<double>& a = impl_->compressedView(input);
   if (!patternMatches(a)) analyzePattern(a);
+  const Clock::time_point start = Clock::now();
   cholmod_sparse view = Impl::view(a);
   factorized_ = false;
-  const int ok = cholmod_factorize(&view, impl_->factor, &impl_->common);
+  int ok = 0;
+  {
+    FactorizationBlasThreads blas_threads;
+    ok = cholmod_factorize(&view, impl_->factor, &impl_->common);
+  }
   if (!ok || impl_->common.status < CHOLMOD_OK)
     throw std::runtime_error("CholmodSolver: numeric factorisation failed (CHOLMOD status " +
                              std::to_string(impl_->common.status) + ")");
@@ -115,6 +189,7 @@ void CholmodSolver::factorize(const Eigen::SparseMatrix<double>& input) {
                              std::to_string(impl_->factor->n) + ")");
   factorized_ = true;
   ++num_factorizations_;
+  factorization_seconds_ += secondsSince(start);
 }
 
 void CholmodSolver::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {

@@ -16,6 +16,18 @@ namespace rc {
 /// Whether this build links CHOLMOD (RC_HAVE_CHOLMOD).
 bool cholmodAvailable();
 
+/// OpenBLAS thread pool control (process-wide, off by default: on the idle 2-core machine the bunny of
+/// Fig. 9.10 measured 307-319 ms/frame off against 322-350 on, since re-creating the pool after each of the
+/// 200 factorisations costs more than the spinning it saves). OpenBLAS's worker threads spin (yield) for
+/// ~0.1 s after every threaded BLAS call and compete with the OpenMP threads of the next phase (rotations)
+/// on few cores. On: numeric factorisations use omp_get_max_threads() BLAS threads, everything else one, and
+/// the pool is shut down after each factorisation (OpenBLAS re-creates it on demand). Off: OpenBLAS as
+/// configured (OPENBLAS_NUM_THREADS). No effect with another BLAS (the functions are looked up at run time).
+void setCholmodBlasThreadControl(bool enabled);
+bool cholmodBlasThreadControl();
+/// Whether the OpenBLAS thread functions were found in the process.
+bool openBlasThreadControlAvailable();
+
 class CholmodSolver {
  public:
   /// Starts a cholmod_common (supernodal, silent). Throws std::runtime_error when the build lacks CHOLMOD.
@@ -41,8 +53,13 @@ class CholmodSolver {
   void solve(const Eigen::MatrixXd& b, Eigen::MatrixXd& x);
 
   bool patternMatches(const Eigen::SparseMatrix<double>& a) const;
+  /// Whether the last factorize() succeeded (solve() may be called).
+  bool factorized() const { return factorized_; }
   int numAnalyses() const { return num_analyses_; }
   int numFactorizations() const { return num_factorizations_; }
+  /// Wall time spent in symbolic analyses / numeric factorisations so far, seconds.
+  double analysisSeconds() const { return analysis_seconds_; }
+  double factorizationSeconds() const { return factorization_seconds_; }
   /// Entries of L (0 before the first factorisation); supernodal() tells whether CHOLMOD chose supernodes.
   double factorNonZeros() const;
   bool supernodal() const;
@@ -53,6 +70,7 @@ class CholmodSolver {
   std::unique_ptr<Impl> impl_;
   std::vector<int> outer_, inner_;  // analysed pattern (compressed column, lower triangle)
   int num_analyses_ = 0, num_factorizations_ = 0;
+  double analysis_seconds_ = 0.0, factorization_seconds_ = 0.0;
   bool factorized_ = false;
 };
 

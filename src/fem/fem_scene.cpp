@@ -675,6 +675,78 @@ bool polygonMayMeetElements(const PolyhedralMesh& mesh, const std::vector<Vec3>&
   return false;
 }
 
+// Order-independent key of a node set (sum and xor of the ids; equal sets have equal keys).
+std::pair<long, int> nodeSetKey(const std::vector<int>& ids, const std::vector<int>* map = nullptr) {
+  std::pair<long, int> key(0, 0);
+  for (int id : ids) {
+    const int v = map ? (*map)[id] : id;
+    key.first += v;
+    key.second ^= v;
+  }
+  return key;
+}
+
+// Elements of a mesh around each node (compressed rows) and the node set key of each element.
+struct NodeElements {
+  std::vector<int> offset, elements;
+  std::vector<std::pair<long, int>> keys;
+  explicit NodeElements(const PolyhedralMesh& mesh) : offset(mesh.numNodes() + 1, 0) {
+    for (const ConvexPolyhedron& element : mesh.elements())
+      for (int id : element.globalNodeIds()) ++offset[id + 1];
+    for (int i = 0; i < mesh.numNodes(); ++i) offset[i + 1] += offset[i];
+    elements.resize(offset.back());
+    std::vector<int> fill(offset.begin(), offset.end() - 1);
+    keys.resize(mesh.numElements());
+    for (int e = 0; e < mesh.numElements(); ++e) {
+      for (int id : mesh.element(e).globalNodeIds()) elements[fill[id]++] = e;
+      keys[e] = nodeSetKey(mesh.element(e).globalNodeIds());
+    }
+  }
+};
+
+// R_e for the elements of `mesh`, cut from `from` (old_node: per node of mesh its node in from's mesh, -1
+// for nodes the cut created): the rotation of the old element with the same nodes (elements the cut left
+// whole), else of an old element sharing a node (a warm start: R varies smoothly), else I.
+std::vector<Eigen::Matrix3d> carriedRotations(const WarpedDynamics& from, const NodeElements& around,
+                                              const PolyhedralMesh& mesh, const std::vector<int>& old_node) {
+  const PolyhedralMesh& old_mesh = from.model().mesh();
+  std::vector<Eigen::Matrix3d> rotations(mesh.numElements(), Eigen::Matrix3d::Identity());
+  for (int e = 0; e < mesh.numElements(); ++e) {
+    const auto& ids = mesh.element(e).globalNodeIds();
+    int first = -1;
+    bool all_old = true;
+    for (int id : ids) {
+      all_old = all_old && old_node[id] >= 0;
+      if (first < 0) first = old_node[id];
+    }
+    if (first < 0) continue;
+    int match = around.elements[around.offset[first]];  // some element around the node
+    const std::pair<long, int> key = all_old ? nodeSetKey(ids, &old_node) : std::pair<long, int>(-1, 0);
+    if (all_old)
+      for (int k = around.offset[first]; k < around.offset[first + 1]; ++k) {
+        if (around.keys[around.elements[k]] != key) continue;
+        const auto& old_ids = old_mesh.element(around.elements[k]).globalNodeIds();
+        if (old_ids.size() != ids.size()) continue;
+        bool same = true;
+        for (size_t a = 0; a < ids.size() && same; ++a)
+          same = std::find(old_ids.begin(), old_ids.end(), old_node[ids[a]]) != old_ids.end();
+        if (same) {
+          match = around.elements[k];
+          break;
+        }
+      }
+    rotations[e] = from.rotations()[match];
+  }
+  return rotations;
+}
+
+// Per node of `from`: its dv (the CG warm start) as 3-vectors.
+std::vector<Vec3> nodeVelocityIncrements(const WarpedDynamics& from) {
+  std::vector<Vec3> dv(from.numNodes());
+  for (int i = 0; i < from.numNodes(); ++i) dv[i] = from.previousVelocityIncrement().segment<3>(3 * i);
+  return dv;
+}
+
 }  // namespace
 
 FemSimulation::FemSimulation(const FemScene& scene) : scene_(scene) {
@@ -686,8 +758,8 @@ FemSimulation::FemSimulation(const FemScene& scene) : scene_(scene) {
 std::unique_ptr<WarpedDynamics> FemSimulation::makeBody(PolyhedralMesh mesh,
                                                         const std::vector<Vec3>& displacements,
                                                         const std::vector<Vec3>& velocities,
-                                                        const LinearElasticModel* donor,
-                                                        FemCutReport* report) {
+                                                        const LinearElasticModel* donor, FemCutReport* report,
+                                                        CarriedState* carried) {
   const Clock::time_point start = Clock::now();
   const int n = mesh.numNodes();
   Eigen::VectorXd x(3 * n), v(3 * n);
@@ -704,8 +776,39 @@ std::unique_ptr<WarpedDynamics> FemSimulation::makeBody(PolyhedralMesh mesh,
   auto body = std::make_unique<WarpedDynamics>(std::move(model), scene_.dynamics);
   body->setPositions(x);
   body->setVelocities(v);
+  ++retired_counts_.bodies_built;
+  if (carried && carry_state_) {
+    if (!carried->rotations.empty()) body->setRotations(carried->rotations);
+    if (!carried->previous_dv.empty()) {
+      Eigen::VectorXd dv(3 * n);
+      for (int i = 0; i < n; ++i) dv.segment<3>(3 * i) = carried->previous_dv[i];
+      body->setPreviousVelocityIncrement(dv);
+    }
+    if (carried->solver && *carried->solver && body->adoptCholmodSolver(*carried->solver))
+      ++retired_counts_.analyses_carried;
+  }
   times_.integration += secondsSince(start);
   return body;
+}
+
+void FemSimulation::retireSolver(const CholmodSolver* solver) {
+  if (!solver) return;
+  retired_counts_.analyses += solver->numAnalyses();
+  retired_counts_.factorizations += solver->numFactorizations();
+  retired_counts_.analysis_seconds += solver->analysisSeconds();
+  retired_counts_.factorization_seconds += solver->factorizationSeconds();
+}
+
+FemSimulation::SolverCounts FemSimulation::solverCounts() const {
+  SolverCounts counts = retired_counts_;
+  for (const auto& body : bodies_)
+    if (const CholmodSolver* solver = body->cholmodSolver()) {
+      counts.analyses += solver->numAnalyses();
+      counts.factorizations += solver->numFactorizations();
+      counts.analysis_seconds += solver->analysisSeconds();
+      counts.factorization_seconds += solver->factorizationSeconds();
+    }
+  return counts;
 }
 
 std::vector<FemBodyState> FemSimulation::bodyStates() const {
@@ -813,21 +916,35 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
     int num_components = 0;
     cut_mesh.elementComponents(&num_components);
     if (num_components > 1) ++report.bodies_separated;
+    const std::vector<Vec3> cut_dv = cut_mesh.interpolateNodeValues(nodeVelocityIncrements(*body));
+    const NodeElements around(mesh);
     std::vector<PolyhedralMesh> meshes;
     std::vector<std::vector<Vec3>> side_u, side_v;
+    std::vector<CarriedState> carried(num_components);
+    std::unique_ptr<CholmodSolver> solver = body->releaseCholmodSolver();
     for (int c = 0; c < num_components; ++c) {
       std::vector<int> ids;
       meshes.push_back(cut_mesh.componentMesh(c, &ids));
       side_u.emplace_back();
       side_v.emplace_back();
-      for (int id : ids) {
+      std::vector<int> old_node(ids.size());
+      for (size_t k = 0; k < ids.size(); ++k) {
+        const int id = ids[k];
         side_u.back().push_back(cut_mesh.displacements()[id]);
         side_v.back().push_back(cut_velocities[id]);
+        carried[c].previous_dv.push_back(cut_dv[id]);
+        int original = id;  // follow duplicates back to a node of the cut body (-1: created by the cut)
+        while (original >= cut_mesh.numInitialNodes()) original = cut_mesh.duplicateOf()[original];
+        old_node[k] = original;
       }
+      carried[c].rotations = carriedRotations(*body, around, meshes.back(), old_node);
+      carried[c].solver = &solver;
     }
     times_.topology += secondsSince(start);
     for (int c = 0; c < num_components; ++c)
-      next.push_back(makeBody(std::move(meshes[c]), side_u[c], side_v[c], &body->model(), &report));
+      next.push_back(
+          makeBody(std::move(meshes[c]), side_u[c], side_v[c], &body->model(), &report, &carried[c]));
+    retireSolver(solver.get());
   }
   bodies_ = std::move(next);
   recomputed_elements_ += report.recomputed_elements;
@@ -885,6 +1002,8 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
     report.slivers_removed += result.slivers.num_removed;
     report.slivers_kept += result.slivers.num_rejected;
     const std::vector<Vec3> cut_velocities = interpolateCutValues(mesh, result, v);
+    const std::vector<Vec3> cut_dv = interpolateCutValues(mesh, result, nodeVelocityIncrements(*body));
+    std::unique_ptr<CholmodSolver> solver = body->releaseCholmodSolver();
     if (cut.separate && side_negative && side_positive && !crossed_whole) {
       const SeparatedMesh separated = separateAlongPlane(result);
       ++report.bodies_separated;
@@ -894,19 +1013,31 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
         return id < cut_nodes ? values[id] : values[separated.duplicate_of[id - cut_nodes]];
       };
       std::vector<std::vector<Vec3>> side_u(2), side_v(2);
-      for (int s = 0; s < 2; ++s)
+      std::vector<CarriedState> carried(2);
+      for (int s = 0; s < 2; ++s) {
         for (int id : separated.side_node_ids[s]) {
           side_u[s].push_back(combined(result.displacements, id));
           side_v[s].push_back(combined(cut_velocities, id));
+          carried[s].previous_dv.push_back(combined(cut_dv, id));
         }
+        for (int e : separated.side_element_ids[s])
+          carried[s].rotations.push_back(body->rotations()[result.parent_element[e]]);
+        carried[s].solver = &solver;
+      }
       times_.topology += secondsSince(start);
       for (int s = 0; s < 2; ++s)
-        next.push_back(makeBody(separated.sides[s], side_u[s], side_v[s], &body->model(), &report));
+        next.push_back(
+            makeBody(separated.sides[s], side_u[s], side_v[s], &body->model(), &report, &carried[s]));
     } else {
+      CarriedState carried;
+      carried.previous_dv = cut_dv;
+      for (int parent : result.parent_element) carried.rotations.push_back(body->rotations()[parent]);
+      carried.solver = &solver;
       times_.topology += secondsSince(start);
-      next.push_back(
-          makeBody(std::move(result.mesh), result.displacements, cut_velocities, &body->model(), &report));
+      next.push_back(makeBody(std::move(result.mesh), result.displacements, cut_velocities, &body->model(),
+                              &report, &carried));
     }
+    retireSolver(solver.get());
   }
   bodies_ = std::move(next);
   recomputed_elements_ += report.recomputed_elements;

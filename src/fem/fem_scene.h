@@ -199,6 +199,23 @@ class FemSimulation {
   long sliversRemoved() const { return slivers_removed_; }
   long sliversKept() const { return slivers_kept_; }
 
+  /// Whether bodies made by cuts start from the cut body's state (on by default): R_e of the elements (the
+  /// same element's where the cut left it whole, a neighbour's otherwise) as the registrations' warm start,
+  /// dv as the CG warm start, and its CHOLMOD analysis when the pattern did not change. Off: identity
+  /// rotations, zero dv, a fresh solver (the same physics up to the registration and CG tolerances).
+  void setCarryStateAcrossCuts(bool carry) { carry_state_ = carry; }
+  bool carryStateAcrossCuts() const { return carry_state_; }
+
+  /// CHOLMOD work of all bodies so far (also of bodies replaced by cuts): symbolic analyses, numeric
+  /// factorisations and their wall time in seconds; bodies built (the first and those made by cuts) and
+  /// the analyses they took over.
+  struct SolverCounts {
+    long analyses = 0, factorizations = 0;
+    double analysis_seconds = 0.0, factorization_seconds = 0.0;
+    long bodies_built = 0, analyses_carried = 0;
+  };
+  SolverCounts solverCounts() const;
+
   const FemPhaseTimes& phaseTimes() const { return times_; }
   FemPhaseTimes& phaseTimes() { return times_; }
   long solverIterations() const { return solver_iterations_; }
@@ -208,11 +225,21 @@ class FemSimulation {
   double minGroundDistance() const;
 
  private:
+  /// State of a cut body handed to a body made from it: R_e per new element (warm start of the
+  /// registrations), dv per new node (CG warm start), the cut body's CHOLMOD solver (its analysis is kept
+  /// when the pattern did not change; taken by the first body it fits).
+  struct CarriedState {
+    std::vector<Eigen::Matrix3d> rotations;
+    std::vector<Vec3> previous_dv;
+    std::unique_ptr<CholmodSolver>* solver = nullptr;
+  };
   /// donor: the model of the body the mesh was cut from (its unchanged elements' data is reused), or null.
   std::unique_ptr<WarpedDynamics> makeBody(PolyhedralMesh mesh, const std::vector<Vec3>& displacements,
                                            const std::vector<Vec3>& velocities,
                                            const LinearElasticModel* donor = nullptr,
-                                           FemCutReport* report = nullptr);
+                                           FemCutReport* report = nullptr, CarriedState* carried = nullptr);
+  /// Adds the counts of a solver that no body took over to retired_counts_ (null: none).
+  void retireSolver(const CholmodSolver* solver);
 
   FemScene scene_;
   std::vector<std::unique_ptr<WarpedDynamics>> bodies_;
@@ -222,6 +249,8 @@ class FemSimulation {
   long polygons_applied_ = 0, recomputed_elements_ = 0, reused_elements_ = 0;
   long slivers_removed_ = 0, slivers_kept_ = 0;
   FemPhaseTimes times_;
+  bool carry_state_ = true;
+  SolverCounts retired_counts_;  // of solvers no body took over (and builds / carried analyses of all)
   long solver_iterations_ = 0, unconverged_ = 0;
   int max_step_iterations_ = 0;
 };

@@ -23,8 +23,6 @@ double millisecondsSince(Clock::time_point start) {
 
 // Below this many elements the per-step loops run serially (thread start-up dominates).
 constexpr int kParallelElements = 512;
-// Solve / release rounds of the contact set per step.
-constexpr int kMaxContactRounds = 4;
 
 // to = from; only the values when the pattern is the same (it is per body).
 void copyValues(const Eigen::SparseMatrix<double>& from, Eigen::SparseMatrix<double>& to) {
@@ -133,6 +131,42 @@ void WarpedDynamics::setVelocities(const Eigen::VectorXd& velocities) {
 void WarpedDynamics::setExternalForces(const Eigen::VectorXd& forces) {
   checkVector(forces, numDofs(), "external forces");
   user_forces_ = forces;
+}
+
+void WarpedDynamics::setRotations(const std::vector<Eigen::Matrix3d>& rotations) {
+  if (rotations.size() != rotations_.size())
+    throw std::invalid_argument("WarpedDynamics: " + std::to_string(rotations.size()) + " rotations for " +
+                                std::to_string(rotations_.size()) + " elements");
+  for (size_t e = 0; e < rotations.size(); ++e)
+    if (!rotations[e].allFinite())
+      throw std::invalid_argument("WarpedDynamics: rotation of element " + std::to_string(e) +
+                                  " is not finite");
+  rotations_ = rotations;
+}
+
+void WarpedDynamics::setPreviousVelocityIncrement(const Eigen::VectorXd& dv) {
+  checkVector(dv, numDofs(), "previous velocity increment");
+  previous_dv_ = dv;
+}
+
+std::unique_ptr<CholmodSolver> WarpedDynamics::releaseCholmodSolver() {
+  if (!cholmod_) return nullptr;
+  std::unique_ptr<CholmodSolver> solver = std::move(cholmod_);
+  cholmod_ = std::make_unique<CholmodSolver>();
+  factored_active_.clear();
+  released_nodes_.clear();
+  added_nodes_.clear();
+  return solver;
+}
+
+bool WarpedDynamics::adoptCholmodSolver(std::unique_ptr<CholmodSolver>& solver) {
+  // The system and contact-filtered matrices have the stiffness pattern (system_matrix_).
+  if (!cholmod_ || !solver || !solver->patternMatches(system_matrix_)) return false;
+  cholmod_ = std::move(solver);
+  factored_active_.clear();  // unknown contact set: a plain stale factor until the next factorisation
+  released_nodes_.clear();
+  added_nodes_.clear();
+  return true;
 }
 
 void WarpedDynamics::gatherElement(int e, const Eigen::VectorXd& global, Eigen::VectorXd& local) const {
@@ -271,7 +305,7 @@ Eigen::VectorXd WarpedDynamics::solveSystem(const Eigen::SparseMatrix<double>& a
     stats.solver_iterations += 1;
   } else if (options_.solver == WarpedDynamicsOptions::Solver::kCholmodPcg) {
     // The system and contact-filtered matrices share one pattern for the life of the body.
-    const bool fresh = cholmod_->numFactorizations() == 0 || !prepareContactCorrection(active, stats);
+    const bool fresh = !cholmod_->factorized() || !prepareContactCorrection(active, stats);
     if (fresh) {
       factorizeCholmod(a, stats);
       recordFactoredContact(active);
@@ -520,92 +554,151 @@ StepStatistics WarpedDynamics::step() {
                                     alpha * masses3_.cwiseProduct(velocities_) - (beta + dt) * kv);
   const Eigen::VectorXd guess = options_.cg_warm_start ? previous_dv_ : Eigen::VectorXd::Zero(numDofs());
 
-  // Contact set: nodes on or below the ground get v+ . n = 0 inside the solve; nodes whose reaction
-  // n . (A dv - b) would pull are released and the step is solved again.
+  // Contact set: a node is held when it is on or below the ground or would cross it during the step. A held
+  // node gets n . v+ = w_i = min(0, (offset - n . x_i) / dt) inside the solve, so a landing node stops on the
+  // plane (no position jump afterwards) and its reaction J_i = n . (A dv - b)_i >= 0 only does work
+  // J_i w_i <= 0. Held nodes pulling by more than the solver's error are released, free nodes that would
+  // cross are added, and the step is solved again. Coulomb friction acts inside the solve as the tangential
+  // impulse -c_i (I - n n^T) v+_i (c_i: groundFrictionCoefficient), implicit and dissipative.
   const GroundPlane& g = options_.ground;
-  std::vector<char> active(numNodes(), 0);
+  const int num_nodes = numNodes();
+  if (contact_impulses_.size() != num_nodes) contact_impulses_ = Eigen::VectorXd::Zero(num_nodes);
+  Eigen::VectorXd system_rhs = rhs, bound = Eigen::VectorXd::Zero(num_nodes), friction;
+  std::vector<char> active(num_nodes, 0), released(num_nodes, 0), pinned(num_nodes, 0);
   int num_active = 0;
-  if (g.enabled)
-    for (int i = 0; i < numNodes(); ++i)
-      if (g.normal.dot(positions_.segment<3>(3 * i)) <= g.offset) {
+  if (g.enabled) {
+    friction = Eigen::VectorXd::Zero(num_nodes);
+    for (int i = 0; i < num_nodes; ++i) {
+      const double height = g.normal.dot(positions_.segment<3>(3 * i)) - g.offset;
+      bound[i] = std::min(0.0, -height / dt);
+      // Predicted n . v+: v plus the previous step's dv.
+      const double predicted = g.normal.dot(velocities_.segment<3>(3 * i) + previous_dv_.segment<3>(3 * i));
+      // Friction bound: the previous step's normal impulse, for a new contact m_i (w_i - predicted n . v+).
+      friction[i] = groundFrictionCoefficient(i, contact_impulses_[i] > 0.0
+                                                     ? contact_impulses_[i]
+                                                     : masses3_[3 * i] * std::max(0.0, bound[i] - predicted));
+      const double round_off = 1e-12 * (1.0 + positions_.segment<3>(3 * i).norm());  // on the plane
+      if (std::min(height, height + dt * predicted) <= round_off) {
         active[i] = 1;
         ++num_active;
+        addGroundFriction(i, friction[i], system_rhs);
       }
-  Eigen::VectorXd dv, reaction;
+    }
+  }
+  // Decisions tolerate the solver's error (relative residual cg_tolerance for every solver, so that CG and
+  // a direct solver decide alike): release when the pull exceeds kGroundDecisionMargin tol |b|, add when
+  // the predicted depth exceeds kGroundDecisionMargin tol dt |v+|. A released node added again stays held.
+  constexpr int kMaxGroundRounds = 8;
+  constexpr double kGroundDecisionMargin = 100.0;
+  const double rhs_norm = rhs.norm();
+  Eigen::VectorXd dv, reaction, z(numDofs()), b, y0;
   for (int round = 0;; ++round) {
     ++stats.contact_rounds;
+    double b_norm = rhs_norm;
     if (num_active == 0) {
       stats.assembly_ms += millisecondsSince(phase_start);
       phase_start = Clock::now();
-      dv = solveSystem(system_matrix_, rhs, guess, active, stats);
+      dv = solveSystem(system_matrix_, system_rhs, round == 0 ? guess : dv, active, stats);
       stats.solve_ms += millisecondsSince(phase_start);
       phase_start = Clock::now();
-      break;
+    } else {
+      z.setZero();  // prescribed part: dv . n = w - v . n
+      for (int i = 0; i < num_nodes; ++i)
+        if (active[i])
+          z.segment<3>(3 * i) = (bound[i] - g.normal.dot(velocities_.segment<3>(3 * i))) * g.normal;
+      // Later rounds start from the previous round's solution (only the changed nodes' rows differ).
+      b = system_rhs - system_matrix_ * z;
+      y0 = round == 0 ? guess : Eigen::VectorXd(dv - z);
+      for (int i = 0; i < num_nodes; ++i)
+        if (active[i]) {
+          b.segment<3>(3 * i) -= g.normal.dot(b.segment<3>(3 * i)) * g.normal;
+          y0.segment<3>(3 * i) -= g.normal.dot(y0.segment<3>(3 * i)) * g.normal;
+        }
+      b_norm = std::max(b_norm, b.norm());
+      buildConstrainedMatrix(active);
+      stats.assembly_ms += millisecondsSince(phase_start);
+      phase_start = Clock::now();
+      dv = solveSystem(constrained_matrix_, b, y0, active, stats) + z;
+      stats.solve_ms += millisecondsSince(phase_start);
+      phase_start = Clock::now();
+      reaction = system_matrix_ * dv - system_rhs;  // ground impulse on each node (M dv = dt f + J)
     }
-    Eigen::VectorXd z = Eigen::VectorXd::Zero(numDofs());  // prescribed part: dv . n = -v . n
-    for (int i = 0; i < numNodes(); ++i)
-      if (active[i]) z.segment<3>(3 * i) = -g.normal.dot(velocities_.segment<3>(3 * i)) * g.normal;
-    // Later rounds start from the previous round's solution (only the released nodes' rows changed).
-    Eigen::VectorXd b = rhs - system_matrix_ * z, y0 = round == 0 ? guess : Eigen::VectorXd(dv - z);
-    for (int i = 0; i < numNodes(); ++i)
+    if (!g.enabled || round + 1 >= kMaxGroundRounds) break;  // keep the last solve's contact set
+    const double pull_limit = kGroundDecisionMargin * options_.cg_tolerance * b_norm;
+    const double depth_limit = kGroundDecisionMargin * options_.cg_tolerance * dt * (velocities_ + dv).norm();
+    int changed = 0;
+    for (int i = 0; i < num_nodes; ++i) {
       if (active[i]) {
-        b.segment<3>(3 * i) -= g.normal.dot(b.segment<3>(3 * i)) * g.normal;
-        y0.segment<3>(3 * i) -= g.normal.dot(y0.segment<3>(3 * i)) * g.normal;
-      }
-    buildConstrainedMatrix(active);
-    stats.assembly_ms += millisecondsSince(phase_start);
-    phase_start = Clock::now();
-    dv = solveSystem(constrained_matrix_, b, y0, active, stats) + z;
-    stats.solve_ms += millisecondsSince(phase_start);
-    phase_start = Clock::now();
-    reaction = system_matrix_ * dv - rhs;       // ground impulse on each node (M dv = dt f + J)
-    if (round + 1 >= kMaxContactRounds) break;  // keep the last solve's contact set
-    int released = 0;
-    for (int i = 0; i < numNodes(); ++i)
-      if (active[i] && g.normal.dot(reaction.segment<3>(3 * i)) < 0.0) {
+        if (pinned[i] || g.normal.dot(reaction.segment<3>(3 * i)) >= -pull_limit) continue;
         active[i] = 0;
+        released[i] = 1;
         --num_active;
-        ++released;
+        addGroundFriction(i, -friction[i], system_rhs);
+        ++changed;
+      } else if (g.normal.dot(positions_.segment<3>(3 * i) +
+                              dt * (velocities_.segment<3>(3 * i) + dv.segment<3>(3 * i))) -
+                     g.offset <
+                 -depth_limit) {
+        active[i] = 1;
+        pinned[i] = released[i];
+        ++num_active;
+        addGroundFriction(i, friction[i], system_rhs);
+        ++changed;
       }
-    if (released == 0) break;
+    }
+    if (changed == 0) break;
   }
   previous_dv_ = dv;
   velocities_ += dv;
-  for (int i = 0; i < numNodes(); ++i) {
-    if (!active[i]) continue;
-    ++stats.contact_nodes;
-    // Coulomb friction: the tangential velocity shrinks by mu J_n / m_i. A pulling reaction (J_n < 0, left
-    // active after the last contact round) gives no friction: a negative limit would accelerate the node
-    // tangentially by mu |J_n| / m_i, unbounded for the tiny lumped masses of sliver-rich meshes.
-    auto v = velocities_.segment<3>(3 * i);
-    const Vec3 vt = v - g.normal.dot(v) * g.normal;
-    const double speed = vt.norm(),
-                 limit =
-                     g.friction * std::max(0.0, g.normal.dot(reaction.segment<3>(3 * i))) / masses3_[3 * i];
-    if (speed > 0.0) v -= std::min(1.0, limit / speed) * vt;
-  }
+  contact_impulses_.setZero();
+  for (int i = 0; i < num_nodes; ++i)
+    if (active[i]) {
+      ++stats.contact_nodes;
+      contact_impulses_[i] = std::max(0.0, g.normal.dot(reaction.segment<3>(3 * i)));
+    }
   positions_ += dt * velocities_;
   applyGroundContact(stats);
   return stats;
 }
 
 void WarpedDynamics::applyGroundContact(StepStatistics& stats) {
-  // Nodes that crossed the plane during the step: project back, remove the inward normal velocity.
+  // Safety net: nodes left below the plane (solver error, or a contact set still changing after the last
+  // round) are projected onto it; their velocities stay (the next step holds them at n . v+ = 0).
   if (!options_.ground.enabled) return;
   const GroundPlane& g = options_.ground;
   for (int i = 0; i < numNodes(); ++i) {
     auto x = positions_.segment<3>(3 * i);
     const double depth = g.offset - g.normal.dot(x);
     if (depth <= 0.0) continue;
-    ++stats.projected_nodes;
     x += depth * g.normal;
-    auto v = velocities_.segment<3>(3 * i);
-    const double vn = g.normal.dot(v);
-    if (vn >= 0.0) continue;
-    v -= vn * g.normal;  // inelastic: remove the inward normal velocity
-    const double vt = v.norm();
-    if (vt > 0.0) v *= std::max(0.0, 1.0 - g.friction * (-vn) / vt);  // Coulomb friction impulse
+    if (depth > 1e-12 * (1.0 + x.norm())) ++stats.projected_nodes;  // not counted: round-off on the plane
   }
+}
+
+double WarpedDynamics::groundFrictionCoefficient(int node, double normal_impulse) const {
+  // Coulomb: the impulse c |v+_t| stays below mu J when c = mu J / |v_t| (|v+_t| <= |v_t|); capped at
+  // kStickingFactor m_i, which stops a body resting on its contact nodes within a few steps (a cap on the
+  // stiffness-dominated diagonal of A changes the matrix more and costs the kCholmodPcg factor ~2x the
+  // refactorisations in the bunny scene).
+  constexpr double kStickingFactor = 10.0;
+  const GroundPlane& g = options_.ground;
+  const double limit = g.friction * normal_impulse;
+  if (!(limit > 0.0)) return 0.0;
+  const Vec3 v = velocities_.segment<3>(3 * node);
+  const double speed = (v - g.normal.dot(v) * g.normal).norm();
+  const double sticking = kStickingFactor * masses3_[3 * node];
+  return limit < sticking * speed ? limit / speed : sticking;
+}
+
+void WarpedDynamics::addGroundFriction(int node, double coefficient, Eigen::VectorXd& rhs) {
+  // (M + ... + D) dv = b - D v with D = c (I - n n^T) on the node's diagonal block: the impulse -D v+.
+  if (coefficient == 0.0) return;
+  const Vec3& n = options_.ground.normal;
+  const Eigen::Matrix3d d = coefficient * (Eigen::Matrix3d::Identity() - n * n.transpose());
+  double* values = system_matrix_.valuePtr();
+  for (int q = 0; q < 3; ++q)  // the node's rows are contiguous in each of its columns (full 3 x 3 blocks)
+    for (int p = 0; p < 3; ++p) values[diagonal_index_[3 * node + q] - q + p] += d(p, q);
+  rhs.segment<3>(3 * node) -= d * velocities_.segment<3>(3 * node);
 }
 
 double WarpedDynamics::kineticEnergy() const {

@@ -9,12 +9,13 @@
 //   (M + dt C + dt^2 K_w) dv = dt (f_ext + f_int(x) - C v - dt K_w v),   v+ = v + dv,   x+ = x + dt v+
 // (backward Euler with f_int(x+) ~ f_int(x) - K_w (x+ - x), rotations frozen over the step).
 // R_e maps rest to current offsets, so the thesis K'_e = R^T K_e R (R current to rest) is R_e K_e R_e^T here.
-// Ground contact (velocity clamp): nodes on or below the plane at the start of the step are constrained to
-// v+ . n = 0 inside the solve by the filter S_i = I - n n^T, i.e. (S A S + I - S) y = S (b - A z),
-// dv = y + z with z_i = -(n . v_i) n; nodes whose reaction J_i = n . (A dv - b)_i is negative (pulling) are
-// released and the step re-solved (at most 4 solves); Coulomb friction reduces the tangential speed by
-// mu max(J_i, 0) / m_i (nodes still pulling after the last solve get none). Nodes that cross the plane during
-// the step are projected back and lose their inward normal velocity.
+// Ground contact inside the solve: nodes on or below the plane, or predicted to cross it during the step, are
+// held at v+ . n = w_i = min(0, (offset - n . x_i) / dt) (a landing node stops on the plane) by the filter
+// S_i = I - n n^T, i.e. (S A S + I - S) y = S (b - A z), dv = y + z with z_i = (w_i - n . v_i) n; held nodes
+// whose reaction J_i = n . (A dv - b)_i pulls by more than the solver's error are released, free nodes that
+// would still cross are added, and the step re-solved (at most 8 solves). Coulomb friction is the implicit
+// tangential impulse -c_i (I - n n^T) v+_i, c_i = mu J_i / |v_t| from the previous step's J_i (capped), so it
+// cannot add energy. Nodes left below the plane (solver error) are projected onto it.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -35,7 +36,7 @@ struct GroundPlane {
   bool enabled = false;
   Vec3 normal = Vec3::UnitZ();  // normalised by WarpedDynamics
   double offset = 0.0;          // plane: normal . x = offset; admissible side normal . x >= offset
-  double friction = 0.5;        // Coulomb coefficient for the velocity clamp
+  double friction = 0.5;        // Coulomb coefficient, applied inside the implicit solve
 };
 
 struct WarpedDynamicsOptions {
@@ -78,7 +79,7 @@ struct StepStatistics {
   bool converged = true;
   int contact_nodes = 0;         // nodes held on the ground inside the solve (v+ . n = 0)
   int projected_nodes = 0;       // nodes that crossed the ground during the step and were projected back
-  int contact_rounds = 0;        // linear solves (contact set releases + 1)
+  int contact_rounds = 0;        // linear solves (1 + re-solves after contact releases or additions)
   int contact_updates = 0;       // kCholmodPcg: changed contact nodes absorbed by the preconditioner
   int degenerate_rotations = 0;  // elements that kept their previous rotation
   // Wall time of the step's phases, milliseconds: R_e, element forces and R_e K_e R_e^T (warping); scatter
@@ -113,6 +114,23 @@ class WarpedDynamics {
   /// Recomputes R_e, f_int and K_w from the current positions (step() does this first).
   void updateWarping();
   const std::vector<Eigen::Matrix3d>& rotations() const { return rotations_; }
+  /// Starting rotations (e.g. carried over from the body this one was cut from): the warm start of the next
+  /// registrations and the rotation kept by degenerate elements. Throws std::invalid_argument for a wrong
+  /// count or a non-finite matrix.
+  void setRotations(const std::vector<Eigen::Matrix3d>& rotations);
+  /// The previous step's dv, the CG warm start (cg_warm_start). Throws std::invalid_argument for a wrong size
+  /// or non-finite values.
+  const Eigen::VectorXd& previousVelocityIncrement() const { return previous_dv_; }
+  void setPreviousVelocityIncrement(const Eigen::VectorXd& dv);
+
+  /// kCholmod / kCholmodPcg: the CHOLMOD solver (null for the other solvers).
+  const CholmodSolver* cholmodSolver() const { return cholmod_.get(); }
+  /// Hands the CHOLMOD solver over (this body gets a fresh one), e.g. to the body cut from this one.
+  std::unique_ptr<CholmodSolver> releaseCholmodSolver();
+  /// Takes a solver released by another body when its analysed pattern is this body's (then `solver` is
+  /// left null and true returned): no re-analysis, and its factor preconditions the next kCholmodPcg solve
+  /// like a stale factor of this body. Otherwise (or for the non-CHOLMOD solvers) `solver` stays as it is.
+  bool adoptCholmodSolver(std::unique_ptr<CholmodSolver>& solver);
   const Eigen::VectorXd& elasticForces() const { return elastic_forces_; }
   const Eigen::SparseMatrix<double>& warpedStiffness() const { return warped_stiffness_; }
 
@@ -138,6 +156,12 @@ class WarpedDynamics {
   void gatherElement(int e, const Eigen::VectorXd& global, Eigen::VectorXd& local) const;
   Eigen::VectorXd elementDisplacement(int e, const ElementFrame& frame) const;  // u_e
   void applyGroundContact(StepStatistics& stats);
+  // Friction coefficient c of the node's tangential impulse -c (I - n n^T) v+ this step, for the normal
+  // ground impulse J (Coulomb bound mu J).
+  double groundFrictionCoefficient(int node, double normal_impulse) const;
+  // Adds c (I - n n^T) to the node's diagonal block of system_matrix_ and -c (I - n n^T) v_i to rhs.
+  void addGroundFriction(int node, double coefficient, Eigen::VectorXd& rhs);
+  Eigen::VectorXd contact_impulses_;  // per node: normal ground impulse of the last step (0: not held)
   Eigen::VectorXd solveSystem(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& b,
                               const Eigen::VectorXd& guess, const std::vector<char>& active,
                               StepStatistics& stats);
