@@ -245,7 +245,7 @@ class SphElasticSolid : public SphForceTerm {
   /// The neighbour rows of the solver whose force evaluation runs (SphFluidSolver sets it around its
   /// addForces calls and clears it after): with the same smoothing length as this term's kernels, the
   /// neighbourhoods are read from its rows (SphFluidSolver::neighborRow) instead of a search of their own.
-  void setNeighborSource(const SphFluidSolver* solver) { neighbor_source_ = solver; }
+  void setNeighborSource(const SphFluidSolver* solver) override { neighbor_source_ = solver; }
   /// The dt the next evaluation uses for docking and plasticity.
   double stepTime() const { return step_dt_; }
 

@@ -9,8 +9,6 @@
 #include <limits>
 #include <string>
 
-#include "sph/sph_elastic_solid.h"
-
 namespace rc {
 
 namespace {
@@ -249,10 +247,9 @@ void SphFluidSolver::addTermForces(const std::vector<Vec3>& velocities) {
   term_forces_.assign(n, Vec3::Zero());
   for (const auto& term : force_terms_) {
     // Elastic solids read their neighbourhoods from this evaluation's rows (no search of their own).
-    auto* solid = dynamic_cast<SphElasticSolid*>(term.get());
-    if (solid) solid->setNeighborSource(this);
+    term->setNeighborSource(this);
     term->addForces(particles_, velocities, term_forces_);
-    if (solid) solid->setNeighborSource(nullptr);
+    term->setNeighborSource(nullptr);
     stats_.term_energy += term->potentialEnergy();
   }
   for (size_t i = 0; i < n; ++i) {

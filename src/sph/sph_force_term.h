@@ -10,6 +10,8 @@
 
 namespace rc {
 
+class SphFluidSolver;
+
 /// A force term that SphFluidSolver adds to its integrated (kFluid kind) particles at every force
 /// evaluation, after density, pressure and viscosity. Forces on boundary particles are ignored.
 class SphForceTerm {
@@ -24,6 +26,9 @@ class SphForceTerm {
   /// locally implicit springs of SphElasticConfig::implicit_goal): the solver then evaluates the forces the
   /// first step starts from again once the adaptive step is chosen, rather than with dt = 0 (explicit).
   virtual bool implicitInStep() const { return false; }
+  /// The solver whose force evaluation runs, set around each addForces call and cleared (nullptr) after:
+  /// terms that need neighbourhoods may read its rows (SphFluidSolver::neighborRow) instead of searching.
+  virtual void setNeighborSource(const SphFluidSolver* /*solver*/) {}
   /// Adds the term's forces (mass * acceleration) at the particles' current positions and the given
   /// velocities to `forces` (original particle order, size particles.size()). May update internal state
   /// that persists between evaluations.
