@@ -249,6 +249,20 @@ void ConvexPolyhedron::validateAndBuild(std::vector<std::vector<Triangle>> face_
     }
 }
 
+ConvexPolyhedron ConvexPolyhedron::relabelled(std::vector<int> global_node_ids,
+                                              double relative_tolerance) const {
+  if (static_cast<int>(global_node_ids.size()) != numNodes())
+    fail("relabelled: " + std::to_string(global_node_ids.size()) + " global node ids for " +
+         std::to_string(numNodes()) + " nodes");
+  if (!(relative_tolerance >= 0.0 && relative_tolerance < 1e-2))
+    fail("relabelled: relative tolerance must be in [0, 1e-2), got " + std::to_string(relative_tolerance));
+  ConvexPolyhedron copy(*this);
+  copy.global_node_ids_ = std::move(global_node_ids);
+  copy.relative_tolerance_ = relative_tolerance;
+  copy.tolerance_ = relative_tolerance * scale_;
+  return copy;
+}
+
 Vec3 ConvexPolyhedron::faceCentroid(int f) const {
   const Face& face = faces_[f];
   const Vec3& origin = nodes_[face[0]];

@@ -47,6 +47,11 @@ class ConvexPolyhedron {
   static ConvexPolyhedron convexHull(const std::vector<Vec3>& points,
                                      double relative_tolerance = kDefaultRelativeTolerance);
 
+  /// This element with other global node ids (one per node) and relative tolerance, its built data copied
+  /// without validating again (the geometry is unchanged; e.g. an element a cut left whole). Throws
+  /// std::invalid_argument for a wrong id count or a tolerance outside [0, 1e-2).
+  ConvexPolyhedron relabelled(std::vector<int> global_node_ids, double relative_tolerance) const;
+
   int numNodes() const { return static_cast<int>(nodes_.size()); }
   int numFaces() const { return static_cast<int>(faces_.size()); }
   int numTriangles() const { return static_cast<int>(triangles_.size()); }

@@ -784,8 +784,6 @@ std::unique_ptr<WarpedDynamics> FemSimulation::makeBody(PolyhedralMesh mesh,
       for (int i = 0; i < n; ++i) dv.segment<3>(3 * i) = carried->previous_dv[i];
       body->setPreviousVelocityIncrement(dv);
     }
-    if (carried->solver && *carried->solver && body->adoptCholmodSolver(*carried->solver))
-      ++retired_counts_.analyses_carried;
   }
   times_.integration += secondsSince(start);
   return body;
@@ -921,10 +919,9 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
     std::vector<PolyhedralMesh> meshes;
     std::vector<std::vector<Vec3>> side_u, side_v;
     std::vector<CarriedState> carried(num_components);
-    std::unique_ptr<CholmodSolver> solver = body->releaseCholmodSolver();
     for (int c = 0; c < num_components; ++c) {
       std::vector<int> ids;
-      meshes.push_back(cut_mesh.componentMesh(c, &ids));
+      meshes.push_back(cut_mesh.componentMesh(c, &ids, &mesh));
       side_u.emplace_back();
       side_v.emplace_back();
       std::vector<int> old_node(ids.size());
@@ -938,13 +935,12 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
         old_node[k] = original;
       }
       carried[c].rotations = carriedRotations(*body, around, meshes.back(), old_node);
-      carried[c].solver = &solver;
     }
     times_.topology += secondsSince(start);
     for (int c = 0; c < num_components; ++c)
       next.push_back(
           makeBody(std::move(meshes[c]), side_u[c], side_v[c], &body->model(), &report, &carried[c]));
-    retireSolver(solver.get());
+    retireSolver(body->cholmodSolver());
   }
   bodies_ = std::move(next);
   recomputed_elements_ += report.recomputed_elements;
@@ -1003,7 +999,6 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
     report.slivers_kept += result.slivers.num_rejected;
     const std::vector<Vec3> cut_velocities = interpolateCutValues(mesh, result, v);
     const std::vector<Vec3> cut_dv = interpolateCutValues(mesh, result, nodeVelocityIncrements(*body));
-    std::unique_ptr<CholmodSolver> solver = body->releaseCholmodSolver();
     if (cut.separate && side_negative && side_positive && !crossed_whole) {
       const SeparatedMesh separated = separateAlongPlane(result);
       ++report.bodies_separated;
@@ -1022,7 +1017,6 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
         }
         for (int e : separated.side_element_ids[s])
           carried[s].rotations.push_back(body->rotations()[result.parent_element[e]]);
-        carried[s].solver = &solver;
       }
       times_.topology += secondsSince(start);
       for (int s = 0; s < 2; ++s)
@@ -1032,12 +1026,11 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
       CarriedState carried;
       carried.previous_dv = cut_dv;
       for (int parent : result.parent_element) carried.rotations.push_back(body->rotations()[parent]);
-      carried.solver = &solver;
       times_.topology += secondsSince(start);
       next.push_back(makeBody(std::move(result.mesh), result.displacements, cut_velocities, &body->model(),
                               &report, &carried));
     }
-    retireSolver(solver.get());
+    retireSolver(body->cholmodSolver());
   }
   bodies_ = std::move(next);
   recomputed_elements_ += report.recomputed_elements;

@@ -201,18 +201,17 @@ class FemSimulation {
 
   /// Whether bodies made by cuts start from the cut body's state (on by default): R_e of the elements (the
   /// same element's where the cut left it whole, a neighbour's otherwise) as the registrations' warm start,
-  /// dv as the CG warm start, and its CHOLMOD analysis when the pattern did not change. Off: identity
-  /// rotations, zero dv, a fresh solver (the same physics up to the registration and CG tolerances).
+  /// dv as the CG warm start. Off: identity rotations, zero dv (the same physics up to the registration and
+  /// CG tolerances). Every new body analyses and factorises its own system (a cut changes the pattern).
   void setCarryStateAcrossCuts(bool carry) { carry_state_ = carry; }
   bool carryStateAcrossCuts() const { return carry_state_; }
 
   /// CHOLMOD work of all bodies so far (also of bodies replaced by cuts): symbolic analyses, numeric
-  /// factorisations and their wall time in seconds; bodies built (the first and those made by cuts) and
-  /// the analyses they took over.
+  /// factorisations and their wall time in seconds; bodies built (the first and those made by cuts).
   struct SolverCounts {
     long analyses = 0, factorizations = 0;
     double analysis_seconds = 0.0, factorization_seconds = 0.0;
-    long bodies_built = 0, analyses_carried = 0;
+    long bodies_built = 0;
   };
   SolverCounts solverCounts() const;
 
@@ -226,19 +225,17 @@ class FemSimulation {
 
  private:
   /// State of a cut body handed to a body made from it: R_e per new element (warm start of the
-  /// registrations), dv per new node (CG warm start), the cut body's CHOLMOD solver (its analysis is kept
-  /// when the pattern did not change; taken by the first body it fits).
+  /// registrations), dv per new node (CG warm start).
   struct CarriedState {
     std::vector<Eigen::Matrix3d> rotations;
     std::vector<Vec3> previous_dv;
-    std::unique_ptr<CholmodSolver>* solver = nullptr;
   };
   /// donor: the model of the body the mesh was cut from (its unchanged elements' data is reused), or null.
   std::unique_ptr<WarpedDynamics> makeBody(PolyhedralMesh mesh, const std::vector<Vec3>& displacements,
                                            const std::vector<Vec3>& velocities,
                                            const LinearElasticModel* donor = nullptr,
                                            FemCutReport* report = nullptr, CarriedState* carried = nullptr);
-  /// Adds the counts of a solver that no body took over to retired_counts_ (null: none).
+  /// Adds the counts of the solver of a body replaced by a cut to retired_counts_ (null: none).
   void retireSolver(const CholmodSolver* solver);
 
   FemScene scene_;
@@ -250,7 +247,7 @@ class FemSimulation {
   long slivers_removed_ = 0, slivers_kept_ = 0;
   FemPhaseTimes times_;
   bool carry_state_ = true;
-  SolverCounts retired_counts_;  // of solvers no body took over (and builds / carried analyses of all)
+  SolverCounts retired_counts_;  // of the solvers of replaced bodies (and the builds of all)
   long solver_iterations_ = 0, unconverged_ = 0;
   int max_step_iterations_ = 0;
 };

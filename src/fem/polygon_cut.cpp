@@ -69,9 +69,14 @@ struct DisjointSets {
 // sorted once (a 64-bit prefix of the first three ids decides most comparisons).
 class FaceGroups {
  public:
-  explicit FaceGroups(const std::vector<ElementFaces>& elements) {
+  /// keep(e, f): whether face f of element e takes part (null: all faces); groups of the kept faces come
+  /// in the same order as among all faces.
+  explicit FaceGroups(const std::vector<ElementFaces>& elements,
+                      const std::function<bool(int, int)>& keep = nullptr) {
     int num_faces = 0;
-    for (const ElementFaces& faces : elements) num_faces += static_cast<int>(faces.size());
+    for (size_t e = 0; e < elements.size(); ++e)
+      for (size_t f = 0; f < elements[e].size(); ++f)
+        num_faces += !keep || keep(static_cast<int>(e), static_cast<int>(f));
     std::vector<int> key_start(num_faces + 1, 0), key_pool;
     std::vector<std::pair<int, int>> refs(num_faces);
     std::vector<uint64_t> prefix(num_faces);
@@ -79,7 +84,8 @@ class FaceGroups {
     bool packable = true;
     int g = 0;
     for (size_t e = 0; e < elements.size(); ++e)
-      for (size_t f = 0; f < elements[e].size(); ++f, ++g) {
+      for (size_t f = 0; f < elements[e].size(); ++f) {
+        if (keep && !keep(static_cast<int>(e), static_cast<int>(f))) continue;
         const Face& face = elements[e][f];
         key_pool.insert(key_pool.end(), face.begin(), face.end());
         std::sort(key_pool.end() - face.size(), key_pool.end());
@@ -91,7 +97,7 @@ class FaceGroups {
           packable = packable && v >= 0 && v < (1 << 21);
           packed = (packed << 21) | static_cast<uint64_t>(v & ((1 << 21) - 1));
         }
-        prefix[g] = packed;
+        prefix[g++] = packed;
       }
     if (!packable) std::fill(prefix.begin(), prefix.end(), 0);
     // Sort by (prefix, face), then runs of equal prefix by the whole key (ties in element order).
@@ -170,6 +176,9 @@ ProgressiveCutMesh::ProgressiveCutMesh(const PolyhedralMesh& mesh, std::vector<V
     relative_tolerance_ = std::max(relative_tolerance_, element.tolerance() / element.scale());
   }
   duplicate_of_.assign(nodes_.size(), -1);
+  num_input_elements_ = mesh.numElements();
+  input_element_.resize(num_input_elements_);
+  std::iota(input_element_.begin(), input_element_.end(), 0);
   snap_distance_ = options.snap_relative_distance * boundingDiagonal(nodes_);
 }
 
@@ -286,13 +295,14 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
   std::set<std::vector<int>> split_faces;
   std::vector<ElementFaces> elements;
   std::vector<std::vector<char>> crack;
-  std::vector<int> parent;
+  std::vector<int> parent, input_element;
   double max_snapped_distance = 0.0, min_part_scale = INFINITY;
   for (int e = 0; e < num_elements; ++e) {
     if (!selected[e]) {
       elements.push_back(std::move(elements_[e]));
       crack.push_back(std::move(crack_[e]));
       parent.push_back(e);
+      input_element.push_back(input_element_[e]);
       continue;
     }
     ++stats.num_split_elements;
@@ -324,6 +334,8 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
     crack.push_back(std::move(positive_crack));
     parent.push_back(e);
     parent.push_back(e);
+    input_element.push_back(-1);
+    input_element.push_back(-1);
   }
   // Crossed elements left whole split their faces shared with split elements alike (coplanar faces).
   for (size_t e = 0; e < elements.size(); ++e) {
@@ -337,6 +349,7 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
         flags.push_back(crack[e][f]);
         continue;
       }
+      input_element[e] = -1;
       FaceSplit halves = splitFace(face, side, plane_crossing);
       faces.push_back(std::move(halves.positive));
       faces.push_back(std::move(halves.negative));
@@ -348,6 +361,7 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
   }
   elements_ = std::move(elements);
   crack_ = std::move(crack);
+  input_element_ = std::move(input_element);
   if (max_snapped_distance > 0.0 && std::isfinite(min_part_scale))
     relative_tolerance_ = std::max(relative_tolerance_, 4.0 * max_snapped_distance / min_part_scale);
 
@@ -355,7 +369,11 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
   // pieces (sequential clipping by the edge lines); pieces inside the polygon become crack faces.
   std::map<std::tuple<int, int, int>, int> clip_node;  // (segment end, segment end, line) -> node
   std::map<std::pair<int, int>, std::vector<std::pair<Face, char>>> replacement;  // (element, face)
-  const FaceGroups groups = FaceGroups(elements_);
+  const FaceGroups groups = FaceGroups(elements_, [&](int e, int f) {
+    for (int v : elements_[e][f])
+      if (side[v] != 0) return false;
+    return true;
+  });  // faces in the plane only
   for (int g = 0; g < groups.size(); ++g) {
     if (groups.numUsers(g) != 2) continue;
     const auto [e0, f0] = groups.user(g, 0);
@@ -460,6 +478,7 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
     bool changed = false;
     for (size_t f = 0; f < elements_[e].size() && !changed; ++f) changed = replacement.count({e, int(f)}) > 0;
     if (!changed) continue;
+    input_element_[e] = -1;
     ElementFaces faces;
     std::vector<char> flags;
     for (size_t f = 0; f < elements_[e].size(); ++f) {
@@ -484,21 +503,34 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
     std::sort(ids.begin(), ids.end());
     ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   }
-  for (ElementFaces& faces : elements_)
-    for (Face& face : faces) {
-      Face refined;
+  std::vector<char> refined_edge_end(nodes_.size(), 0);  // faces without such a node keep their edges
+  for (const auto& entry : edge_refinement) {
+    refined_edge_end[entry.first.first] = 1;
+    refined_edge_end[entry.first.second] = 1;
+  }
+  Face refined;
+  std::vector<std::pair<double, int>> along;
+  for (int e = 0; e < numElements(); ++e)
+    for (Face& face : elements_[e]) {
+      int ends = 0;
+      for (int v : face) ends += refined_edge_end[v];
+      if (ends < 2) continue;
+      refined.clear();
       for (size_t k = 0; k < face.size(); ++k) {
         const int a = face[k], b = face[(k + 1) % face.size()];
         refined.push_back(a);
+        if (!refined_edge_end[a] || !refined_edge_end[b]) continue;
         auto it = edge_refinement.find({std::min(a, b), std::max(a, b)});
         if (it == edge_refinement.end()) continue;
-        std::vector<std::pair<double, int>> along;
+        along.clear();
         for (int m : it->second)
           if (m != a && m != b) along.emplace_back((nodes_[m] - nodes_[a]).dot(nodes_[b] - nodes_[a]), m);
         std::sort(along.begin(), along.end());
         for (const auto& entry : along) refined.push_back(entry.second);
       }
-      face = std::move(refined);
+      if (refined.size() == face.size()) continue;
+      face = refined;
+      input_element_[e] = -1;
     }
 
   // Duplicate nodes the crack separates; crack faces that cannot open get a centroid node (pocket).
@@ -518,6 +550,10 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
     displacements_ = std::move(edit.displacements);
     elements_ = std::move(edit.elements);
     crack_ = std::move(edit.crack_faces);
+    std::vector<int> input_element(edits.kept_elements.size());
+    for (size_t e = 0; e < edits.kept_elements.size(); ++e)
+      input_element[e] = input_element_[edits.kept_elements[e]];
+    input_element_ = std::move(input_element);
     for (NodeStencil& stencil : edits.new_node_stencils) {
       stencils_.push_back(std::move(stencil));
       duplicate_of_.push_back(-1);
@@ -576,7 +612,7 @@ void ProgressiveCutMesh::duplicateSeparatedNodes(PolygonCutStats& stats) {
 
 int ProgressiveCutMesh::openClosedCracks() {
   int num_pockets = 0;
-  const FaceGroups groups = FaceGroups(elements_);
+  const FaceGroups groups = FaceGroups(elements_, [&](int e, int f) { return crack_[e][f] != 0; });
   for (int g = 0; g < groups.size(); ++g) {
     if (groups.numUsers(g) != 2) continue;
     const auto [e0, f0] = groups.user(g, 0);
@@ -603,6 +639,7 @@ int ProgressiveCutMesh::openClosedCracks() {
       }
       elements_[e] = std::move(faces);
       crack_[e] = std::move(flags);
+      input_element_[e] = -1;
     }
   }
   return num_pockets;
@@ -725,12 +762,18 @@ int ProgressiveCutMesh::numComponents() const {
   return count;
 }
 
-PolyhedralMesh ProgressiveCutMesh::componentMesh(int c, std::vector<int>* node_ids) const {
+PolyhedralMesh ProgressiveCutMesh::componentMesh(int c, std::vector<int>* node_ids,
+                                                 const PolyhedralMesh* input) const {
   int count = 0;
   const std::vector<int> component = elementComponents(&count);
   if (c < 0 || c >= count)
     throw std::invalid_argument("ProgressiveCutMesh::componentMesh: component " + std::to_string(c) +
                                 " out of range (" + std::to_string(count) + " components)");
+  if (input && input->numElements() != num_input_elements_)
+    throw std::invalid_argument("ProgressiveCutMesh::componentMesh: the input mesh has " +
+                                std::to_string(input->numElements()) +
+                                " elements, this mesh was built from " + std::to_string(num_input_elements_));
+  std::vector<const ConvexPolyhedron*> prebuilt;
   std::vector<int> local(nodes_.size(), -1), ids;
   std::vector<ElementFaces> elements;
   std::vector<PolyhedralMesh::FaceRef> crack_faces;
@@ -748,13 +791,14 @@ PolyhedralMesh ProgressiveCutMesh::componentMesh(int c, std::vector<int>* node_i
         v = local[v];
       }
     elements.push_back(std::move(faces));
+    if (input) prebuilt.push_back(input_element_[e] >= 0 ? &input->element(input_element_[e]) : nullptr);
   }
   std::vector<Vec3> points;
   for (int v : ids) points.push_back(nodes_[v]);
   if (node_ids) *node_ids = ids;
   try {
-    return PolyhedralMesh(std::move(points), std::move(elements), relative_tolerance_,
-                          std::move(crack_faces));
+    return PolyhedralMesh(std::move(points), std::move(elements), relative_tolerance_, std::move(crack_faces),
+                          prebuilt);
   } catch (const std::invalid_argument& problem) {
     throw std::invalid_argument("ProgressiveCutMesh::componentMesh: component " + std::to_string(c) +
                                 " is not a valid PolyhedralMesh: " + problem.what());

@@ -85,8 +85,15 @@ class ProgressiveCutMesh {
   int numComponents() const;
   /// A validated PolyhedralMesh for component c (its nodes renumbered in order of first use; node_ids
   /// receives the mesh node of each) whose crack faces are listed (PolyhedralMesh::crackFaces), so a
-  /// partially cut component is one mesh. Throws std::invalid_argument naming the problem otherwise.
-  PolyhedralMesh componentMesh(int c, std::vector<int>* node_ids = nullptr) const;
+  /// partially cut component is one mesh. input: null or the mesh this one was built from; its elements
+  /// that the cuts left unchanged are taken over instead of built and validated again (PolyhedralMesh's
+  /// prebuilt elements). Throws std::invalid_argument naming the problem otherwise, or for an input mesh
+  /// with another element count.
+  PolyhedralMesh componentMesh(int c, std::vector<int>* node_ids = nullptr,
+                               const PolyhedralMesh* input = nullptr) const;
+  /// Per element: the element of the input mesh it is unchanged from (same faces up to duplicated node
+  /// ids), -1 for elements a cut created or changed.
+  const std::vector<int>& unchangedInputElements() const { return input_element_; }
 
  private:
   struct Frame;
@@ -98,6 +105,8 @@ class ProgressiveCutMesh {
   std::vector<PolyhedralMesh::ElementFaces> elements_;
   std::vector<std::vector<char>> crack_;  // per element face
   std::vector<int> duplicate_of_;
+  std::vector<int> input_element_;  // per element, see unchangedInputElements()
+  int num_input_elements_ = 0;
   std::vector<NodeStencil> stencils_;    // per node created after the input mesh's
   mutable std::vector<int> components_;  // elementComponents() of the current mesh; empty after a cut
   mutable int num_components_ = 0;

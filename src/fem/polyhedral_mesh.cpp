@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <random>
 #include <stdexcept>
@@ -36,12 +37,6 @@ int cyclicRelation(const PolyhedralMesh::Face& a, const PolyhedralMesh::Face& b)
 
 std::string faceName(int element, int face) {
   return "element " + std::to_string(element) + " face " + std::to_string(face);
-}
-
-std::vector<std::array<int, 3>> canonicalTriangleSet(std::vector<PolyhedralMesh::Triangle> triangles) {
-  for (auto& t : triangles) std::sort(t.begin(), t.end());
-  std::sort(triangles.begin(), triangles.end());
-  return triangles;
 }
 
 void checkGridArguments(const char* builder, const Vec3& lo, const Vec3& hi, int nx, int ny, int nz) {
@@ -112,13 +107,49 @@ bool trianglesOverlap(const std::array<Eigen::Vector2d, 3>& a, const std::array<
   return true;
 }
 
+// Whether `built` is the element this mesh would build from `faces` (global ids; local: global -> local
+// id of its nodes ids, in order of first use) with the face triangulations `triangles` (global ids): the
+// same nodes bitwise, faces and triangles in local ids.
+bool sameBuiltElement(const std::vector<Vec3>& nodes, const ConvexPolyhedron& built,
+                      const std::vector<int>& ids, const PolyhedralMesh::ElementFaces& faces,
+                      const std::vector<PolyhedralMesh::Triangle>* triangles, const std::vector<int>& local) {
+  if (built.numNodes() != static_cast<int>(ids.size()) || built.numFaces() != static_cast<int>(faces.size()))
+    return false;
+  for (size_t k = 0; k < ids.size(); ++k) {
+    const Vec3& a = built.node(static_cast<int>(k));
+    const Vec3& b = nodes[ids[k]];
+    if (std::memcmp(a.data(), b.data(), sizeof(double) * 3) != 0) return false;
+  }
+  size_t t = 0;
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const ConvexPolyhedron::Face& built_face = built.faces()[f];
+    if (built_face.size() != faces[f].size()) return false;
+    for (size_t j = 0; j < built_face.size(); ++j)
+      if (built_face[j] != local[faces[f][j]]) return false;
+    for (const PolyhedralMesh::Triangle& tri : triangles[f]) {
+      if (t >= built.triangles().size() || built.triangleFace()[t] != static_cast<int>(f)) return false;
+      const ConvexPolyhedron::Triangle& b = built.triangles()[t++];
+      if (b[0] != local[tri[0]] || b[1] != local[tri[1]] || b[2] != local[tri[2]]) return false;
+    }
+  }
+  return t == built.triangles().size();
+}
+
 }  // namespace
 
 PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
                                double relative_tolerance, std::vector<FaceRef> crack_faces)
+    : PolyhedralMesh(std::move(nodes), std::move(elements), relative_tolerance, std::move(crack_faces), {}) {}
+
+PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
+                               double relative_tolerance, std::vector<FaceRef> crack_faces,
+                               const std::vector<const ConvexPolyhedron*>& prebuilt)
     : nodes_(std::move(nodes)), element_faces_(std::move(elements)), crack_faces_(std::move(crack_faces)) {
   const int n = numNodes();
   if (element_faces_.empty()) fail("the mesh has no elements");
+  if (!prebuilt.empty() && prebuilt.size() != element_faces_.size())
+    fail("the prebuilt list has " + std::to_string(prebuilt.size()) + " entries for " +
+         std::to_string(element_faces_.size()) + " elements");
   for (int i = 0; i < n; ++i)
     if (!nodes_[i].allFinite()) fail("node " + std::to_string(i) + " is not finite");
   std::vector<char> used(n, 0);
@@ -175,9 +206,30 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
            std::equal(key_pool.begin() + key_start[x], key_pool.begin() + key_start[x + 1],
                       key_pool.begin() + key_start[y]);
   };
+  // Equal keys adjacent, in element order: sorted by a 64-bit prefix of the first three ids (decides most
+  // comparisons), runs of equal prefix by the whole key.
+  std::vector<std::pair<uint64_t, int>> prefixed(num_faces);
+  bool packable = true;
+  for (int g = 0; g < num_faces; ++g) {
+    uint64_t packed = 0;
+    for (int k = 0; k < 3; ++k) {
+      const int v = key_pool[key_start[g] + k] + 1;  // faces have >= 3 nodes
+      packable = packable && v < (1 << 21);
+      packed = (packed << 21) | static_cast<uint64_t>(v & ((1 << 21) - 1));
+    }
+    prefixed[g] = {packed, g};
+  }
+  if (!packable)
+    for (auto& entry : prefixed) entry.first = 0;
+  std::sort(prefixed.begin(), prefixed.end());
   std::vector<int> order(num_faces);
-  for (int g = 0; g < num_faces; ++g) order[g] = g;
-  std::sort(order.begin(), order.end(), keyLess);
+  for (int k = 0; k < num_faces;) {
+    int end = k + 1;
+    while (end < num_faces && prefixed[end].first == prefixed[k].first) ++end;
+    for (int j = k; j < end; ++j) order[j] = prefixed[j].second;
+    if (end - k > 1) std::sort(order.begin() + k, order.begin() + end, keyLess);
+    k = end;
+  }
   std::vector<int> other_user(num_faces, -1);  // the other element face of an interior face
   // Problems are reported for the first face in element order that shows one (the third user of a face,
   // the second user of a badly oriented pair).
@@ -197,12 +249,12 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
     if (end - k > 2) report(order[k + 2], name(order[k + 2]) + " is used by more than two elements");
     if (end - k >= 2) {
       const int second = order[k + 1];
-      const std::string pair = name(second) + " and " + name(first);
+      auto pair = [&]() { return name(second) + " and " + name(first); };
       const int relation = cyclicRelation(element_faces_[face_element[first]][face_local[first]],
                                           element_faces_[face_element[second]][face_local[second]]);
       if (relation == 1)
-        report(second, pair + " have the same orientation (overlapping or inverted elements)");
-      if (relation == 0) report(second, pair + " have the same nodes in a different cyclic order");
+        report(second, pair() + " have the same orientation (overlapping or inverted elements)");
+      if (relation == 0) report(second, pair() + " have the same nodes in a different cyclic order");
       other_user[first] = second;
       other_user[second] = first;
     }
@@ -231,6 +283,13 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
           local[v] = static_cast<int>(ids.size());
           ids.push_back(v);
         }
+    const ConvexPolyhedron* built = prebuilt.empty() ? nullptr : prebuilt[e];
+    if (built && sameBuiltElement(nodes_, *built, ids, faces, face_triangles.data() + face_start[e], local)) {
+      for (int v : ids) local[v] = -1;
+      elements_.push_back(built->relabelled(std::move(ids), relative_tolerance));
+      ++num_prebuilt_elements_;
+      continue;
+    }
     std::vector<Vec3> element_nodes;
     element_nodes.reserve(ids.size());
     for (int v : ids) element_nodes.push_back(nodes_[v]);
@@ -253,18 +312,6 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
     }
   }
 
-  // Shared faces: identical triangulation seen from both elements (in global ids).
-  auto elementFaceTriangles = [this](int e, int f) {
-    const ConvexPolyhedron& element = elements_[e];
-    std::vector<Triangle> triangles;
-    for (int t = 0; t < element.numTriangles(); ++t)
-      if (element.triangleFace()[t] == f) {
-        const auto& lt = element.triangles()[t];
-        const auto& ids = element.globalNodeIds();
-        triangles.push_back({ids[lt[0]], ids[lt[1]], ids[lt[2]]});
-      }
-    return triangles;
-  };
   is_boundary_node_.assign(n, 0);
   std::vector<std::pair<int, int>> boundary_edges;  // directed boundary polygon edges
   std::vector<char> boundary_triangle_is_crack;
@@ -275,13 +322,7 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
         if (isCrackFace(int(e), int(f)))
           fail(faceName(int(e), int(f)) + " is listed as crack face but still connects two elements");
         const int other = other_user[g];
-        if (other < g) {
-          if (canonicalTriangleSet(elementFaceTriangles(int(e), int(f))) !=
-              canonicalTriangleSet(elementFaceTriangles(face_element[other], face_local[other])))
-            fail(faceName(int(e), int(f)) + " and " + faceName(face_element[other], face_local[other]) +
-                 " triangulate their shared face differently");
-          ++num_interior_faces_;
-        }
+        if (other < g) ++num_interior_faces_;  // triangulated by the first user, reversed by the second
         continue;
       }
       const Face& face = element_faces_[e][f];
@@ -290,7 +331,7 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
         boundary_edges.emplace_back(face[k], face[(k + 1) % face.size()]);
       }
       const char crack = isCrackFace(int(e), int(f)) ? 1 : 0;
-      for (const Triangle& t : elementFaceTriangles(int(e), int(f))) {
+      for (const Triangle& t : face_triangles[g]) {
         boundary_triangles_.push_back(t);
         boundary_triangle_is_crack.push_back(crack);
       }

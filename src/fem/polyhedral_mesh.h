@@ -36,6 +36,14 @@ class PolyhedralMesh {
   PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
                  double relative_tolerance = ConvexPolyhedron::kDefaultRelativeTolerance,
                  std::vector<FaceRef> crack_faces = {});
+  /// The same, taking over prebuilt elements (e.g. elements a cut left whole; empty: none): prebuilt[e]
+  /// (null: none) becomes element e, relabelled to this mesh's node ids and tolerance
+  /// (ConvexPolyhedron::relabelled) without validating it again, when its nodes (bitwise, in local order of
+  /// first use), faces and face triangulation are exactly those this constructor would build; otherwise
+  /// element e is built and validated. The mesh checks run as above. Throws std::invalid_argument also for
+  /// a prebuilt list whose size is not the element count.
+  PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements, double relative_tolerance,
+                 std::vector<FaceRef> crack_faces, const std::vector<const ConvexPolyhedron*>& prebuilt);
 
   /// nx x ny x nz boxes of the axis-aligned box [lo, hi] as hexahedra.
   static PolyhedralMesh hexahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz);
@@ -69,6 +77,8 @@ class PolyhedralMesh {
   const std::vector<FaceRef>& crackFaces() const { return crack_faces_; }
   int numCrackFaces() const { return static_cast<int>(crack_faces_.size()); }
   bool isCrackFace(int e, int f) const;
+  /// Elements taken over from the prebuilt list (not built and validated again).
+  int numPrebuiltElements() const { return num_prebuilt_elements_; }
 
  private:
   std::vector<Vec3> nodes_;
@@ -77,7 +87,7 @@ class PolyhedralMesh {
   std::vector<Triangle> boundary_triangles_;
   std::vector<char> is_boundary_node_;
   std::vector<FaceRef> crack_faces_;
-  int num_interior_faces_ = 0;
+  int num_interior_faces_ = 0, num_prebuilt_elements_ = 0;
   double volume_ = 0.0;
 };
 

@@ -149,26 +149,6 @@ void WarpedDynamics::setPreviousVelocityIncrement(const Eigen::VectorXd& dv) {
   previous_dv_ = dv;
 }
 
-std::unique_ptr<CholmodSolver> WarpedDynamics::releaseCholmodSolver() {
-  if (!cholmod_) return nullptr;
-  std::unique_ptr<CholmodSolver> solver = std::move(cholmod_);
-  cholmod_ = std::make_unique<CholmodSolver>();
-  factored_active_.clear();
-  released_nodes_.clear();
-  added_nodes_.clear();
-  return solver;
-}
-
-bool WarpedDynamics::adoptCholmodSolver(std::unique_ptr<CholmodSolver>& solver) {
-  // The system and contact-filtered matrices have the stiffness pattern (system_matrix_).
-  if (!cholmod_ || !solver || !solver->patternMatches(system_matrix_)) return false;
-  cholmod_ = std::move(solver);
-  factored_active_.clear();  // unknown contact set: a plain stale factor until the next factorisation
-  released_nodes_.clear();
-  added_nodes_.clear();
-  return true;
-}
-
 void WarpedDynamics::gatherElement(int e, const Eigen::VectorXd& global, Eigen::VectorXd& local) const {
   const auto& ids = model_.mesh().element(e).globalNodeIds();
   local.resize(3 * ids.size());

@@ -125,12 +125,6 @@ class WarpedDynamics {
 
   /// kCholmod / kCholmodPcg: the CHOLMOD solver (null for the other solvers).
   const CholmodSolver* cholmodSolver() const { return cholmod_.get(); }
-  /// Hands the CHOLMOD solver over (this body gets a fresh one), e.g. to the body cut from this one.
-  std::unique_ptr<CholmodSolver> releaseCholmodSolver();
-  /// Takes a solver released by another body when its analysed pattern is this body's (then `solver` is
-  /// left null and true returned): no re-analysis, and its factor preconditions the next kCholmodPcg solve
-  /// like a stale factor of this body. Otherwise (or for the non-CHOLMOD solvers) `solver` stays as it is.
-  bool adoptCholmodSolver(std::unique_ptr<CholmodSolver>& solver);
   const Eigen::VectorXd& elasticForces() const { return elastic_forces_; }
   const Eigen::SparseMatrix<double>& warpedStiffness() const { return warped_stiffness_; }
 

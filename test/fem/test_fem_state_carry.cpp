@@ -1,6 +1,6 @@
 // State carried across cuts (FemSimulation::setCarryStateAcrossCuts): bodies made by a cut start from the
-// cut body's rotations (warm start of the registrations), dv (CG warm start) and, with an unchanged pattern,
-// its CHOLMOD analysis; the physics equals a fresh start up to the registration and CG tolerances. And the
+// cut body's rotations (warm start of the registrations) and dv (CG warm start); the physics equals a fresh
+// start up to the registration and CG tolerances. And the
 // OpenBLAS thread control around CHOLMOD factorisations leaves the solutions as they are.
 #include <gtest/gtest.h>
 
@@ -151,63 +151,11 @@ TEST(FemStateCarry, CarriedStateMovesLikeAFreshStartCg) {
 TEST(FemStateCarry, CarriedStateMovesLikeAFreshStartCholmodPcg) {
   if (!cholmodAvailable()) GTEST_SKIP() << "build without CHOLMOD";
   expectSameMotion(WarpedDynamicsOptions::Solver::kCholmodPcg);
-  // Counts: one body, then two made by the cut (a new pattern each: analysed anew, nothing carried).
+  // Counts: one body, then two made by the cut (a new pattern each: analysed anew).
   const CutRun carried = runCut(WarpedDynamicsOptions::Solver::kCholmodPcg, true, 12);
   EXPECT_EQ(carried.counts.bodies_built, 3);
   EXPECT_EQ(carried.counts.analyses, 3);
-  EXPECT_EQ(carried.counts.analyses_carried, 0);
   EXPECT_GE(carried.counts.factorizations, 3);
-}
-
-TEST(FemStateCarry, AdoptedSolverWithTheSamePatternSkipsTheAnalysisAndContinuesExactly) {
-  if (!cholmodAvailable()) GTEST_SKIP() << "build without CHOLMOD";
-  const FemScene scene = spinningBarScene(WarpedDynamicsOptions::Solver::kCholmodPcg);
-  auto makeDynamics = [&](const LinearElasticModel* donor) {
-    auto body = std::make_unique<WarpedDynamics>(
-        LinearElasticModel(*scene.mesh, scene.youngs_modulus, scene.poisson_ratio, scene.density,
-                           ElementQuadratureOptions(), donor),
-        scene.dynamics);
-    Eigen::VectorXd v(body->numDofs());
-    for (int i = 0; i < body->numNodes(); ++i) v.segment<3>(3 * i) = scene.initial_velocities[i];
-    body->setVelocities(v);
-    return body;
-  };
-  auto continued = makeDynamics(nullptr), original = makeDynamics(nullptr);
-  for (int s = 0; s < 5; ++s) {
-    continued->step();
-    original->step();
-  }
-  // Rebuild `original` as a new body (as a cut does) with everything carried.
-  auto rebuilt = makeDynamics(&original->model());
-  rebuilt->setPositions(original->positions());
-  rebuilt->setVelocities(original->velocities());
-  rebuilt->setRotations(original->rotations());
-  rebuilt->setPreviousVelocityIncrement(original->previousVelocityIncrement());
-  std::unique_ptr<CholmodSolver> solver = original->releaseCholmodSolver();
-  ASSERT_TRUE(solver);
-  const int analyses = solver->numAnalyses(), factorizations = solver->numFactorizations();
-  EXPECT_EQ(analyses, 1);
-  EXPECT_TRUE(rebuilt->adoptCholmodSolver(solver));
-  EXPECT_FALSE(solver);
-  for (int s = 0; s < 5; ++s) {
-    continued->step();
-    rebuilt->step();
-  }
-  EXPECT_EQ(rebuilt->cholmodSolver()->numAnalyses(), analyses);  // no re-analysis
-  EXPECT_GE(rebuilt->cholmodSolver()->numFactorizations(), factorizations);
-  const double scale = continued->positions().cwiseAbs().maxCoeff();
-  EXPECT_LT((rebuilt->positions() - continued->positions()).cwiseAbs().maxCoeff(), 1e-10 * scale);
-  EXPECT_LT((rebuilt->velocities() - continued->velocities()).cwiseAbs().maxCoeff(),
-            1e-10 * continued->velocities().cwiseAbs().maxCoeff());
-
-  // A solver of another pattern is left with the caller.
-  FemScene other = scene;
-  other.mesh =
-      std::make_shared<PolyhedralMesh>(PolyhedralMesh::tetrahedralGrid(Vec3::Zero(), Vec3(2, 1, 1), 4, 2, 2));
-  WarpedDynamics small(LinearElasticModel(*other.mesh, 2e4, 0.3), other.dynamics);
-  std::unique_ptr<CholmodSolver> foreign = rebuilt->releaseCholmodSolver();
-  EXPECT_FALSE(small.adoptCholmodSolver(foreign));
-  EXPECT_TRUE(foreign);
 }
 
 TEST(FemStateCarry, CarriedStateIsValidated) {
@@ -219,8 +167,7 @@ TEST(FemStateCarry, CarriedStateIsValidated) {
   rotations[2](1, 1) = NAN;
   EXPECT_THROW(body.setRotations(rotations), std::invalid_argument);
   EXPECT_THROW(body.setPreviousVelocityIncrement(Eigen::VectorXd::Zero(5)), std::invalid_argument);
-  EXPECT_EQ(body.cholmodSolver(), nullptr);  // CG: no CHOLMOD solver to carry
-  EXPECT_EQ(body.releaseCholmodSolver(), nullptr);
+  EXPECT_EQ(body.cholmodSolver(), nullptr);  // CG: no CHOLMOD solver
 }
 
 TEST(FemStateCarry, BlasThreadControlLeavesCholmodSolutionsUnchanged) {

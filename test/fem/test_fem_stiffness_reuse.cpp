@@ -1,6 +1,6 @@
 // Element integration data reused after cuts (thesis 9.3): a body cut by a polygon gets new integration data
 // (samples, basis gradients, K_e) only for the elements the cut changed; every other element shares the cut
-// body's data, which equals a fresh integration bit for bit.
+// body's data, which equals a fresh integration bit for bit, and its built element (no new validation).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -122,6 +122,7 @@ TEST(StiffnessReuse, PartialAndObliqueCutsRecomputeExactlyTheChangedElements) {
   EXPECT_EQ(partial.recomputed_elements, changed);
   EXPECT_EQ(partial.reused_elements, sim.numElements() - changed);
   EXPECT_GT(partial.reused_elements, grid.numElements() / 2);
+  EXPECT_EQ(sim.body(0).model().mesh().numPrebuiltElements(), partial.reused_elements);
   expectEqualsFreshIntegration(sim.body(0).model());
 
   kept.clear();
@@ -135,6 +136,10 @@ TEST(StiffnessReuse, PartialAndObliqueCutsRecomputeExactlyTheChangedElements) {
   EXPECT_EQ(second.recomputed_elements, changed_second);
   EXPECT_EQ(second.recomputed_elements + second.reused_elements, sim.numElements());
   for (int b = 0; b < sim.numBodies(); ++b) expectEqualsFreshIntegration(sim.body(b).model());
+  // The elements the cut left unchanged were also taken over as built elements (not validated again).
+  int prebuilt = 0;
+  for (const PolyhedralMesh* mesh : bodyMeshes(sim)) prebuilt += mesh->numPrebuiltElements();
+  EXPECT_EQ(prebuilt, second.reused_elements);
 }
 
 TEST(StiffnessReuse, DonorWithOtherMaterialOrQuadratureSharesNothing) {
