@@ -36,6 +36,14 @@ uint32_t latticeKey(const Eigen::Vector3i& n) {
   return (c(n.x()) << 20) | (c(n.y()) << 10) | c(n.z());
 }
 
+/// Slot of lattice index n in the keeper table of the indices [-8, 8)^3 (x fastest), -1 outside.
+int32_t latticeTableSlot(const Eigen::Vector3i& n) {
+  constexpr int kHalf = SphLatticeAssignment::kTableHalfWidth, kWidth = 2 * kHalf;
+  const unsigned ux = unsigned(n.x() + kHalf), uy = unsigned(n.y() + kHalf), uz = unsigned(n.z() + kHalf);
+  if (ux >= unsigned(kWidth) || uy >= unsigned(kWidth) || uz >= unsigned(kWidth)) return -1;
+  return int32_t((uz * kWidth + uy) * kWidth + ux);
+}
+
 /// Probability of a Poisson event of `rate` within dt (8.34); an infinite rate gives 1.
 double eventProbability(double rate, double dt) {
   return std::isinf(rate) ? 1.0 : -std::expm1(-rate * dt);
@@ -69,6 +77,16 @@ bool isRotation(const Mat3& q) {
   m(0, 0) += w * (yy + zz), m(1, 1) += w * (xx + zz), m(2, 2) += w * (xx + yy);
   const double xy = -w * p.x() * p.y(), xz = -w * p.x() * p.z(), yz = -w * p.y() * p.z();
   m(0, 1) += xy, m(1, 0) += xy, m(0, 2) += xz, m(2, 0) += xz, m(1, 2) += yz, m(2, 1) += yz;
+}
+
+/// w (|c|^2 I - c c^T), the value of this Eigen expression formed element by element (Eigen's temporaries
+/// here stall on store forwarding).
+[[gnu::always_inline]] inline Mat3 pointInertia(double w, const Vec3& c) {
+  const double norm2 = c.squaredNorm(), off = norm2 * 0.0;
+  Mat3 inertia;
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) inertia(r, k) = w * ((r == k ? norm2 * 1.0 : off) - c[r] * c[k]);
+  return inertia;
 }
 
 }  // namespace
@@ -118,68 +136,68 @@ void assignLatticePoints(const SphLattice& lattice, const Mat3& transform, const
                          SphLatticeAssignment& out) {
   const size_t n = offsets.size();
   out.indices.resize(n);
-  out.assigned.assign(n, 1);
-  std::vector<double>& dist2 = out.sq_dists;
-  dist2.resize(n);
+  out.assigned.resize(n);
+  out.sq_dists.resize(n);
+  Eigen::Vector3i* idx = out.indices.data();
+  uint8_t* assigned = out.assigned.data();
+  double* dist2 = out.sq_dists.data();
+  const Vec3* offset = offsets.data();
   const Mat3 to_coordinates = lattice.inverseBasis() * transform.inverse();  // B^-1 A^-1
   constexpr int kHalf = SphLatticeAssignment::kTableHalfWidth, kWidth = 2 * kHalf;
-  bool in_table = true;
-  for (size_t k = 0; k < n; ++k) {  // (8.21)
-    const Eigen::Vector3i i = lattice.nearestIndexOfCoordinates(to_coordinates * offsets[k], &dist2[k]);
-    out.indices[k] = i;
-    if (i.isZero()) out.assigned[k] = 0;  // the centre particle's own point
-    in_table = in_table && unsigned(i.x() + kHalf) < unsigned(kWidth) &&
-               unsigned(i.y() + kHalf) < unsigned(kWidth) && unsigned(i.z() + kHalf) < unsigned(kWidth);
-  }
   // One particle per lattice point: the closest keeps it (ties: lower index). A table of the lattice points
-  // around the centre (entries of older calls are told apart by a stamp, so it is never cleared) or, for
-  // far points, a small open-addressing hash table holds the current keeper of each point.
-  const auto& idx = out.indices;
+  // around the centre (entries of older calls are told apart by a stamp, so it is never cleared) or, when a
+  // point lies outside it, a small open-addressing hash table holds the current keeper of each point.
   const auto compete = [&](int32_t& keeper, size_t k) {
     const int32_t other = keeper;  // k comes after `other`: it wins only when strictly closer.
     if (dist2[k] < dist2[size_t(other)]) {
-      out.assigned[size_t(other)] = 0;
+      assigned[size_t(other)] = 0;
       keeper = int32_t(k);
     } else {
-      out.assigned[k] = 0;
+      assigned[k] = 0;
     }
   };
-  if (in_table) {
-    if (out.table_stamps.size() != size_t(kWidth * kWidth * kWidth)) {
-      out.table_stamps.assign(kWidth * kWidth * kWidth, 0);
-      out.table_keepers.assign(kWidth * kWidth * kWidth, -1);
-      out.stamp = 0;
-    }
-    if (++out.stamp == 0) {  // wrapped: forget all entries
-      std::fill(out.table_stamps.begin(), out.table_stamps.end(), 0u);
-      out.stamp = 1;
-    }
-    const uint32_t stamp = out.stamp;
-    uint32_t* stamps = out.table_stamps.data();
-    int32_t* keepers = out.table_keepers.data();
-    for (size_t k = 0; k < n; ++k) {
-      const Eigen::Vector3i& i = idx[k];
-      const size_t slot =
-          (size_t(i.z() + kHalf) * kWidth + size_t(i.y() + kHalf)) * kWidth + size_t(i.x() + kHalf);
-      if (stamps[slot] != stamp) {
-        stamps[slot] = stamp;
-        keepers[slot] = int32_t(k);
-      } else {
-        compete(keepers[slot], k);
-      }
-    }
-    return;
+  if (out.table_stamps.size() != size_t(kWidth * kWidth * kWidth)) {
+    out.table_stamps.assign(kWidth * kWidth * kWidth, 0);
+    out.table_keepers.assign(kWidth * kWidth * kWidth, -1);
+    out.stamp = 0;
   }
-  size_t slots = 64;
-  while (slots < 4 * n) slots *= 2;
+  if (++out.stamp == 0) {  // wrapped: forget all entries
+    std::fill(out.table_stamps.begin(), out.table_stamps.end(), 0u);
+    out.stamp = 1;
+  }
+  const uint32_t stamp = out.stamp;
+  uint32_t* stamps = out.table_stamps.data();
+  int32_t* keepers = out.table_keepers.data();
+  size_t k = 0;
+  for (; k < n; ++k) {  // (8.21), the competition in the same pass while all points lie in the table
+    const Eigen::Vector3i i = lattice.nearestIndexOfCoordinates(to_coordinates * offset[k], &dist2[k]);
+    idx[k] = i;
+    assigned[k] = !i.isZero();  // the origin is the centre particle's own point
+    const int32_t slot = latticeTableSlot(i);
+    if (slot < 0) break;
+    if (stamps[slot] != stamp) {
+      stamps[slot] = stamp;
+      keepers[slot] = int32_t(k);
+    } else {
+      compete(keepers[slot], k);
+    }
+  }
+  if (k == n) return;
+  // A point outside the table: the rest of the indices, then the competition anew in the hash table.
+  for (++k; k < n; ++k) {
+    idx[k] = lattice.nearestIndexOfCoordinates(to_coordinates * offset[k], &dist2[k]);
+  }
+  for (k = 0; k < n; ++k) assigned[k] = !idx[k].isZero();
+  size_t hash_slots = 64;
+  while (hash_slots < 4 * n) hash_slots *= 2;
   std::vector<int32_t>& keeper = out.keepers;
-  keeper.assign(slots, -1);
-  for (size_t k = 0; k < n; ++k) {
+  keeper.assign(hash_slots, -1);
+  for (k = 0; k < n; ++k) {
     const Eigen::Vector3i& i = idx[k];
     const uint64_t key = uint64_t(uint32_t(i.x())) * 0x9E3779B97F4A7C15ull ^
                          uint64_t(uint32_t(i.y())) * 0xC2B2AE3D27D4EB4Full ^
                          uint64_t(uint32_t(i.z())) * 0x165667B19E3779F9ull;
-    for (size_t slot = size_t(key >> 32) & (slots - 1);; slot = (slot + 1) & (slots - 1)) {
+    for (size_t slot = size_t(key >> 32) & (hash_slots - 1);; slot = (slot + 1) & (hash_slots - 1)) {
       const int32_t other = keeper[slot];
       if (other < 0) {
         keeper[slot] = int32_t(k);
@@ -375,7 +393,6 @@ void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<V
     s_vel_[s] = velocities[i];
     s_mass_[s] = particles.masses[i];
   }
-  contributions_.resize(m);
   lost_.resize(m);
   if (global_implicit) springs_.resize(m);
   net_force_.resize(m);
@@ -531,14 +548,7 @@ void SphElasticSolid::updatePlasticity(uint32_t i, const Mat3& v, const Vec3& si
   plastic_strain_[i] = log_stretch;
 }
 
-void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
-  const int dim = lattice_.dimension();
-  const uint32_t i = solid_[s];
-  std::vector<Contribution>& out = contributions_[s];
-  out.clear();
-  lost_[s].clear();
-  const bool global_implicit = globalImplicit();
-  if (global_implicit) springs_[s].clear();
+size_t SphElasticSolid::gatherNeighbors(size_t s, Scratch& sc) const {
   // Current neighbours of the same solid: from the solver's row or from a search of the solid's grid.
   const Vec3 xi = s_pos_[s];
   SphSortedGrid::Run runs[9];
@@ -573,7 +583,7 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     const double dx = pos[jj].x() - xi.x(), dy = pos[jj].y() - xi.y(), dz = pos[jj].z() - xi.z();
     offsets[nn] = Vec3(dx, dy, dz);
     neighbors[nn] = jj;
-    weights[nn] = kernels_.poly6(dx * dx + dy * dy + dz * dz);  // d < h on the row
+    weights[nn] = dx * dx + dy * dy + dz * dz;  // d < h on the row
     nn += size_t(member);
   }
   for (int r = 0; r < num_runs; ++r)
@@ -585,68 +595,138 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
       weights[nn] = d2;
       nn += size_t((d2 < h2) & (j != s));
     }
-  if (!row)
-    for (size_t k = 0; k < nn; ++k) weights[k] = kernels_.poly6(weights[k]);
+  for (size_t k = 0; k < nn; ++k) weights[k] = kernels_.poly6(weights[k]);  // apart: vectorised
   sc.offsets.resize(nn);
   sc.neighbors.resize(nn);
   sc.weights.resize(nn);
+  return nn;
+}
+
+void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
+  const int dim = lattice_.dimension();
+  const uint32_t i = solid_[s];
+  net_force_[s].setZero();
+  net_torque_[s].setZero();
+  lost_[s].clear();
+  if (globalImplicit()) springs_[s].clear();
+  const size_t nn = gatherNeighbors(s, sc);
   // Lattice assignment from the previous transform (8.21).
   assignLatticePoints(lattice_, transform_[i], sc.offsets, sc.assignment);
   const uint8_t* assigned = sc.assignment.assigned.data();
-  // Rest points of the (plastically deformed) lattice: P_i l_ij; neighbours left without a point.
-  sc.rest.resize(nn);
+  const Eigen::Vector3i* indices = sc.assignment.indices.data();
+  const Vec3* offsets = sc.offsets.data();
+  const uint32_t* neighbors = sc.neighbors.data();
+  const double* weights = sc.weights.data();
+  // Rest points of the (plastically deformed) lattice: P_i l_ij (B n, as SphLattice::point).
   const bool plastic = config_.plasticity();
   const Vec3 b0 = lattice_.basis().col(0), b1 = lattice_.basis().col(1), b2 = lattice_.basis().col(2);
   const bool three = dim == 3;
-  for (size_t k = 0; k < nn; ++k) {
-    const Eigen::Vector3i& n = sc.assignment.indices[k];  // B n, as SphLattice::point
-    Vec3& l = sc.rest[k];
-    l = b0 * n.x() + b1 * n.y();
+  const Mat3 plastic_transform = plastic ? plastic_[i] : Mat3::Identity();
+  const auto restPoint = [&](size_t k) {
+    const Eigen::Vector3i& n = indices[k];
+    Vec3 l = b0 * n.x() + b1 * n.y();
     if (three) l += b2 * n.z();
-    if (plastic) l = plastic_[i] * l;
-    if (!assigned[k]) {
-      ++unassigned_[s];
-      lost_[s].push_back(solid_[neighbors[k]]);
+    if (plastic) l = plastic_transform * l;
+    return l;
+  };
+  const bool docking = config_.docking;
+  if (docking) {  // 8.2.5: only docked lattice points count
+    sc.rest.resize(nn);
+    for (size_t k = 0; k < nn; ++k) {
+      sc.rest[k] = restPoint(k);
+      if (!assigned[k]) {
+        ++unassigned_[s];
+        lost_[s].push_back(solid_[neighbors[k]]);
+      }
     }
+    updateDocking(s, sc);
   }
-  if (config_.docking) updateDocking(s, sc);  // 8.2.5: only docked lattice points count
-  // One pass for the fit (8.23), the weighted centre of the momentum correction (8.32) and the weighted
-  // sums of the implicit springs (separate accumulators, each in neighbour order).
-  const double w_centre = kernels_.poly6(0.0);
-  double w_sum = w_centre, w_neighbors = 0.0;
-  Vec3 c = Vec3::Zero(), weighted_r = Vec3::Zero(), weighted_v = Vec3::Zero();
+  // One pass: the neighbours left without a point, the assigned ones gathered in order, and the sums of the
+  // fit (8.23), the weighted centre of the momentum correction (8.32) and the implicit springs (separate
+  // accumulators, each in neighbour order).
+  if (sc.a_offset.size() < nn) {
+    sc.a_offset.resize(nn);
+    sc.a_rest.resize(nn);
+    sc.a_velocity.resize(nn);
+    sc.a_force.resize(nn);
+    sc.a_weight.resize(nn);
+    sc.a_neighbor.resize(nn);
+  }
+  Vec3 *a_offset = sc.a_offset.data(), *a_rest = sc.a_rest.data(), *a_velocity = sc.a_velocity.data();
+  double* a_weight = sc.a_weight.data();
+  uint32_t* a_neighbor = sc.a_neighbor.data();
+  FitSums sums;
+  sums.w_sum = kernels_.poly6(0.0);
   Mat3 rl = Mat3::Zero(), ll = Mat3::Zero();
+  Vec3 c = Vec3::Zero(), weighted_v = Vec3::Zero();
+  double w_sum = sums.w_sum, w_neighbors = 0.0;
   size_t count = 0;
+  const Vec3* vel = s_vel_.data();
   for (size_t k = 0; k < nn; ++k) {
-    if (!assigned[k]) continue;
-    const Vec3& l = sc.rest[k];
+    if (!assigned[k]) {
+      if (!docking) {
+        ++unassigned_[s];
+        lost_[s].push_back(solid_[neighbors[k]]);
+      }
+      continue;
+    }
+    const Vec3 l = docking ? sc.rest[k] : restPoint(k);
+    const Vec3 r = offsets[k];
     const double w = weights[k];
-    addOuter(rl, w, offsets[k], l);
+    const uint32_t j = neighbors[k];
+    const Vec3 v = vel[j];
+    a_offset[count] = r;
+    a_rest[count] = l;
+    a_weight[count] = w;
+    a_neighbor[count] = j;
+    a_velocity[count] = v;
+    ++count;
+    addOuter(rl, w, r, l);
     addOuter(ll, w, l, l);
     w_sum += w;
-    addScaled(c, w, offsets[k]);
+    addScaled(c, w, r);
     w_neighbors += w;
-    addScaled(weighted_r, w, offsets[k]);
-    addScaled(weighted_v, w, s_vel_[neighbors[k]]);
-    ++count;
+    addScaled(weighted_v, w, v);
   }
+  sums.rl = rl;
+  sums.ll = ll;
+  sums.w_sum = w_sum;
+  sums.w_neighbors = w_neighbors;
+  sums.weighted_r = c;  // sum_j W_ij r_ij, also the (unnormalised) centre of (8.32)
+  sums.weighted_v = weighted_v;
+  sums.count = count;
   assigned_[s] = static_cast<uint32_t>(count);
-  if (dim == 2) rl(2, 2) = ll(2, 2) = 1.0;
+  if (dim == 2) sums.rl(2, 2) = sums.ll(2, 2) = 1.0;
   if (count < size_t(config_.min_neighbors)) return;
+  ShapeFit fit;
+  if (!fitShape(s, sums, fit)) return;
+  const Vec3 centre_force = config_.model == SphElasticModel::kStrain ? strainForces(s, sums, fit, sc)
+                                                                      : goalForces(s, sums, fit, sc);
+  correctAndScatter(s, sums, centre_force, sc);
+}
+
+bool SphElasticSolid::fitShape(size_t s, const FitSums& sums, ShapeFit& fit) {
+  const int dim = lattice_.dimension();
+  const uint32_t i = solid_[s];
+  const bool plastic = config_.plasticity();
+  const Mat3& ll = sums.ll;
   const double scale = ll.trace() / dim;
   const double det = dim == 3 ? ll.determinant() : ll.topLeftCorner<2, 2>().determinant();
-  if (!(det > 1e-6 * std::pow(scale, dim))) return;  // (near) planar neighbourhood: no fit
+  const double scale_dim = dim == 3 ? scale * scale * scale : scale * scale;
+  if (!(det > 1e-6 * scale_dim)) return false;  // (near) planar neighbourhood: no fit
   // (8.23) fitted to the rest points: with plasticity the elastic part A_i P_i^-1.
-  const Mat3 ll_inverse = ll.inverse();
-  const Mat3 a = rl * ll_inverse;
-  if (!a.allFinite()) return;
+  fit.ll_inverse = ll.inverse();
+  fit.a = sums.rl * fit.ll_inverse;
+  const Mat3& a = fit.a;
+  if (!a.allFinite()) return false;
   // Rotation (8.24) by the warm-started quaternion iteration; the stretch S = R^T A (symmetric at the
   // optimum) has the singular values as eigenvalues. The SVD is kept where its factors are needed: plastic
   // flow, a stretch outside the clamp [0.25, 4] of the next assignment's transform (or inverted), a goal
   // stretch (8.30) at its clamp, or no convergence.
   const double s_allow = config_.deformation_allowance;
   const bool goal_model = config_.model == SphElasticModel::kGoalPosition;
-  Mat3 rot, goal;
+  Mat3& rot = fit.rot;
+  Mat3& goal = fit.goal;
   bool polar = false;
   double max_strain = -1.0;  // from the stretch's eigenvalues where the polar path has them
   if (!plastic) {
@@ -713,7 +793,6 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
   // neighbourhood, and its diagonal form is not exact for linear displacements on the rotated fcc lattice.
   // With D = sum_j W_ij g_ij g_ij^T = R ll R^T and sum_j W_ij (r_ij - g_ij) g_ij^T = (rl - R ll) R^T the fit
   // is G = A R^T - I (no second pass over the neighbours).
-  const Mat3 den_inverse = rot * ll_inverse * rot.transpose();
   Mat3 strain = a * rot.transpose();
   strain = 0.5 * (strain + strain.transpose()) - Mat3::Identity();
   if (dim == 2) {
@@ -728,110 +807,135 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     eigen.computeDirect(strain, Eigen::EigenvaluesOnly);
     max_strain_[s] = eigen.eigenvalues().cwiseAbs().maxCoeff();
   }
+  return true;
+}
 
+Vec3 SphElasticSolid::strainForces(size_t s, const FitSums& sums, const ShapeFit& fit, Scratch& sc) {
+  // Linear elasticity: sigma = lambda tr(eps) I + 2 mu eps. Forces are the negative gradient of the
+  // neighbourhood's energy V_i sigma:eps / 2 through the strain fit (R_i held fixed, corotational):
+  // F_j = -V_i W_ij sigma_i D_i^-1 g_ij with D_i = sum_j W_ij g_ij g_ij^T, F_i = -sum_j F_j. This is the
+  // SPH stress divergence with the kernel gradient corrected to match the strain estimate; the plain V_i
+  // V_j sigma_i grad W form showed the tensile instability (a 10% stretched block blew up at any dt).
+  const int dim = lattice_.dimension();
   const double volume = lattice_.cellVolume();
-  out.resize(count + 1);  // the centre particle first, then the assigned neighbours in order
-  out[0] = {uint32_t(s), Vec3::Zero()};
-  Contribution* next_out = out.data() + 1;
+  const Mat3& strain = strain_[solid_[s]];
+  const Mat3& rot = fit.rot;
+  const Mat3& a = fit.a;
+  const Mat3 den_inverse = rot * fit.ll_inverse * rot.transpose();
+  Mat3 identity = Mat3::Identity();
+  if (dim == 2) identity(2, 2) = 0.0;
+  const Mat3 stress = lame_lambda_ * strain.trace() * identity + 2.0 * lame_mu_ * strain;
+  energy_[s] = 0.5 * volume * (stress.cwiseProduct(strain)).sum();
+  const Mat3 stress_den = stress * den_inverse;
+  // Hourglass control: the strain fit does not see non-affine (zero-energy) modes; they are penalised
+  // by pulling each neighbour towards the fitted affine position A_i l_ij, with energy
+  // gamma Y V / (2 tr D_i) sum_j W_ij |A_i l_ij - r_ij|^2 (zero for any affine deformation; A_i minimises
+  // the sum, so the force is its exact gradient).
+  const double hourglass = config_.hourglass_control * config_.youngs_modulus * volume / sums.ll.trace();
+  const Vec3* offsets = sc.a_offset.data();
+  const Vec3* rest = sc.a_rest.data();
+  const double* weights = sc.a_weight.data();
+  Vec3* forces = sc.a_force.data();
   Vec3 centre_force = Vec3::Zero();
-  if (config_.model == SphElasticModel::kStrain) {
-    // Linear elasticity: sigma = lambda tr(eps) I + 2 mu eps. Forces are the negative gradient of the
-    // neighbourhood's energy V_i sigma:eps / 2 through the strain fit (R_i held fixed, corotational):
-    // F_j = -V_i W_ij sigma_i D_i^-1 g_ij with D_i = sum_j W_ij g_ij g_ij^T, F_i = -sum_j F_j. This is the
-    // SPH stress divergence with the kernel gradient corrected to match the strain estimate; the plain V_i
-    // V_j sigma_i grad W form showed the tensile instability (a 10% stretched block blew up at any dt).
-    Mat3 identity = Mat3::Identity();
-    if (dim == 2) identity(2, 2) = 0.0;
-    const Mat3 stress = lame_lambda_ * strain.trace() * identity + 2.0 * lame_mu_ * strain;
-    energy_[s] = 0.5 * volume * (stress.cwiseProduct(strain)).sum();
-    const Mat3 stress_den = stress * den_inverse;
-    // Hourglass control: the strain fit does not see non-affine (zero-energy) modes; they are penalised
-    // by pulling each neighbour towards the fitted affine position A_i l_ij, with energy
-    // gamma Y V / (2 tr D_i) sum_j W_ij |A_i l_ij - r_ij|^2 (zero for any affine deformation; A_i minimises
-    // the sum, so the force is its exact gradient).
-    const double hourglass = config_.hourglass_control * config_.youngs_modulus * volume / ll.trace();
-    for (size_t k = 0; k < nn; ++k) {
-      if (!assigned[k]) continue;
-      const Vec3& l = sc.rest[k];
-      const Vec3 g = rot * l;
-      const Vec3 residual = a * l - offsets[k];
-      energy_[s] += 0.5 * hourglass * weights[k] * residual.squaredNorm();
-      const Vec3 f = (-volume * weights[k]) * (stress_den * g) + (hourglass * weights[k]) * residual;
-      *next_out++ = {neighbors[k], f};
+  for (size_t k = 0; k < sums.count; ++k) {
+    const Vec3& l = rest[k];
+    const Vec3 g = rot * l;
+    const Vec3 residual = a * l - offsets[k];
+    energy_[s] += 0.5 * hourglass * weights[k] * residual.squaredNorm();
+    const Vec3 f = (-volume * weights[k]) * (stress_den * g) + (hourglass * weights[k]) * residual;
+    forces[k] = f;
+    centre_force -= f;
+  }
+  return centre_force;
+}
+
+Vec3 SphElasticSolid::goalForces(size_t s, const FitSums& sums, const ShapeFit& fit, Scratch& sc) {
+  // F_ij (8.31) towards the goal positions, half to j and minus half to i.
+  const int dim = lattice_.dimension();
+  const double volume = lattice_.cellVolume();
+  const double k_e = config_.goal_stiffness * s_mass_[s] * volume;
+  const Mat3& goal = fit.goal;
+  const size_t count = sums.count;
+  const Vec3* offsets = sc.a_offset.data();
+  const Vec3* rest = sc.a_rest.data();
+  const Vec3* velocities = sc.a_velocity.data();
+  const double* weights = sc.a_weight.data();
+  Vec3* forces = sc.a_force.data();
+  Vec3 centre_force = Vec3::Zero();
+  double energy = 0.0;
+  if (config_.implicit_goal && !config_.global_implicit_goal && step_dt_ > 0.0) {
+    // Locally implicit springs (see SphElasticConfig::implicit_goal): the forces scaled by
+    // 1 / (1 + dt^2 k), and the damping -dt k u / (4 (1 + dt^2 k)) of the members' velocities u relative
+    // to the neighbourhood's rigid motion (weights W_j, the centre weighted sum_j W_j: its velocity is half
+    // the neighbourhood's mean, which keeps the damping stable for any dt). The damping forces have no net
+    // force or torque.
+    const double w_neighbors = sums.w_neighbors;
+    const double w_all = 2.0 * w_neighbors;
+    const Vec3 vi = s_vel_[s];
+    const Vec3 mean_v = (w_neighbors * vi + sums.weighted_v) / w_all;
+    const Vec3 centre = sums.weighted_r / w_all;  // relative to x_i
+    // Angular velocity of the neighbourhood: I omega = sum_k W_k p_k x (v_k - mean_v).
+    Mat3 inertia = pointInertia(w_neighbors, centre);
+    const Vec3 centre_momentum = crossOf(-centre, vi - mean_v);
+    Vec3 momentum(w_neighbors * centre_momentum.x(), w_neighbors * centre_momentum.y(),
+                  w_neighbors * centre_momentum.z());
+    for (size_t k = 0; k < count; ++k) {
+      const Vec3 p = offsets[k] - centre;
+      addInertia(inertia, weights[k], p);
+      addScaled(momentum, weights[k], crossOf(p, velocities[k] - mean_v));
+    }
+    Vec3 spin = Vec3::Zero();
+    if (dim == 3) {
+      const double det = inertia.determinant(), size = inertia.trace();
+      if (det > 1e-9 * size * size * size) spin = inertia.inverse() * momentum;
+    } else if (inertia(2, 2) > 0.0) {
+      spin.z() = momentum.z() / inertia(2, 2);
+    }
+    const double dt = step_dt_;
+    const double scale = 1.0 / (1.0 + dt * dt * config_.goal_stiffness * volume * w_neighbors);
+    const double damping = 0.25 * scale * dt * k_e;
+    for (size_t k = 0; k < count; ++k) {
+      const Vec3 delta = goal * rest[k] - offsets[k];
+      const Vec3 u = velocities[k] - mean_v - crossOf(spin, offsets[k] - centre);
+      const Vec3 f = (0.5 * scale * k_e * weights[k]) * delta - (damping * weights[k]) * u;
+      energy += 0.5 * k_e * weights[k] * delta.squaredNorm();
+      forces[k] = f;
       centre_force -= f;
     }
+    // The centre's damping -damping w_neighbors u_i equals minus the neighbours' sum (sum_k W_k u_k = 0),
+    // so centre_force = -sum_j f_j holds it exactly.
   } else {
-    // F_ij (8.31) towards the goal positions, half to j and minus half to i.
-    const double k_e = config_.goal_stiffness * s_mass_[s] * volume;
-    double energy = 0.0;
-    if (config_.implicit_goal && !config_.global_implicit_goal && step_dt_ > 0.0) {
-      // Locally implicit springs (see SphElasticConfig::implicit_goal): the forces scaled by
-      // 1 / (1 + dt^2 k), and the damping -dt k u / (4 (1 + dt^2 k)) of the members' velocities u relative
-      // to the neighbourhood's rigid motion (weights W_j, the centre weighted sum_j W_j: its velocity is half
-      // the neighbourhood's mean, which keeps the damping stable for any dt). The damping forces have no net
-      // force or torque.
-      const double w_all = 2.0 * w_neighbors;
-      const Vec3 vi = s_vel_[s];
-      const Vec3 mean_v = (w_neighbors * vi + weighted_v) / w_all;
-      const Vec3 centre = weighted_r / w_all;  // relative to x_i
-      // Angular velocity of the neighbourhood: I omega = sum_k W_k p_k x (v_k - mean_v).
-      Mat3 inertia = w_neighbors * (centre.squaredNorm() * Mat3::Identity() - centre * centre.transpose());
-      Vec3 momentum = w_neighbors * (-centre).cross(vi - mean_v);
-      for (size_t k = 0; k < nn; ++k) {
-        if (!assigned[k]) continue;
-        const Vec3 p = offsets[k] - centre;
-        addInertia(inertia, weights[k], p);
-        addScaled(momentum, weights[k], crossOf(p, s_vel_[neighbors[k]] - mean_v));
-      }
-      Vec3 spin = Vec3::Zero();
-      if (dim == 3) {
-        const double det = inertia.determinant(), size = inertia.trace();
-        if (det > 1e-9 * size * size * size) spin = inertia.inverse() * momentum;
-      } else if (inertia(2, 2) > 0.0) {
-        spin.z() = momentum.z() / inertia(2, 2);
-      }
-      const double dt = step_dt_;
-      const double scale = 1.0 / (1.0 + dt * dt * config_.goal_stiffness * volume * w_neighbors);
-      const double damping = 0.25 * scale * dt * k_e;
-      for (size_t k = 0; k < nn; ++k) {
-        if (!assigned[k]) continue;
-        const Vec3 delta = goal * sc.rest[k] - offsets[k];
-        const Vec3 u = s_vel_[neighbors[k]] - mean_v - crossOf(spin, offsets[k] - centre);
-        const Vec3 f = (0.5 * scale * k_e * weights[k]) * delta - (damping * weights[k]) * u;
-        energy += 0.5 * k_e * weights[k] * delta.squaredNorm();
-        *next_out++ = {neighbors[k], f};
-        centre_force -= f;
-      }
-      // The centre's damping -damping w_neighbors u_i equals minus the neighbours' sum (sum_k W_k u_k = 0),
-      // so centre_force = -sum_j f_j holds it exactly.
-    } else {
-      for (size_t k = 0; k < nn; ++k) {
-        if (!assigned[k]) continue;
-        const Vec3 delta = goal * sc.rest[k] - offsets[k];
-        const Vec3 f = (0.5 * k_e * weights[k]) * delta;
-        energy += 0.5 * k_e * weights[k] * delta.squaredNorm();
-        *next_out++ = {neighbors[k], f};
-        centre_force -= f;
-      }
-      if (global_implicit)  // the stiffness of these forces in x_j - x_i, goal held fixed
-        for (size_t k = 0; k < nn; ++k)
-          if (assigned[k]) springs_[s].push_back({neighbors[k], 0.5 * k_e * weights[k]});
+    for (size_t k = 0; k < count; ++k) {
+      const Vec3 delta = goal * rest[k] - offsets[k];
+      const Vec3 f = (0.5 * k_e * weights[k]) * delta;
+      energy += 0.5 * k_e * weights[k] * delta.squaredNorm();
+      forces[k] = f;
+      centre_force -= f;
     }
-    energy_[s] = energy;
+    if (globalImplicit())  // the stiffness of these forces in x_j - x_i, goal held fixed
+      for (size_t k = 0; k < count; ++k) springs_[s].push_back({sc.a_neighbor[k], 0.5 * k_e * weights[k]});
   }
-  out[0].force = centre_force;
+  energy_[s] = energy;
+  return centre_force;
+}
 
+void SphElasticSolid::correctAndScatter(size_t s, const FitSums& sums, Vec3 centre_force, Scratch& sc) {
   // Angular momentum (8.32)-(8.33): the torque of the neighbourhood's forces about the weighted centre c_i
   // is removed by forces w_k omega x (x_k - c_i), which sum to zero; omega solves I omega = -tau with the
   // weighted inertia tensor I, so the correction is exact (8.33 spreads tau with weights W/|x - c|).
-  size_t e = 1;
-  c /= w_sum;  // relative to x_i
-  Vec3 torque = (-c).cross(out[0].force);
-  Mat3 inertia = w_centre * (c.squaredNorm() * Mat3::Identity() - c * c.transpose());
-  for (size_t k = 0; k < nn; ++k) {
-    if (!assigned[k]) continue;
+  const int dim = lattice_.dimension();
+  const size_t count = sums.count;
+  const Vec3* offsets = sc.a_offset.data();
+  const double* weights = sc.a_weight.data();
+  const uint32_t* neighbors = sc.a_neighbor.data();
+  Vec3* forces = sc.a_force.data();
+  const double w_centre = kernels_.poly6(0.0);
+  const Vec3 c = sums.weighted_r / sums.w_sum;  // relative to x_i
+  Vec3 torque = (-c).cross(centre_force);
+  Mat3 inertia = pointInertia(w_centre, c);
+  for (size_t k = 0; k < count; ++k) {
     const Vec3 p = offsets[k] - c;
-    torque += crossOf(p, out[e++].force);
+    torque += crossOf(p, forces[k]);
     addInertia(inertia, weights[k], p);
   }
   if (dim == 2) {
@@ -841,13 +945,32 @@ void SphElasticSolid::processNeighborhood(size_t s, Scratch& sc) {
     inertia(0, 2) = inertia(1, 2) = inertia(2, 0) = inertia(2, 1) = 0.0;
   }
   const Vec3 omega = -inertia.inverse() * torque;
-  if (!omega.allFinite()) return;
-  out[0].force += w_centre * omega.cross(-c);
-  e = 1;
-  for (size_t k = 0; k < nn; ++k) {
-    if (!assigned[k]) continue;
-    addScaled(out[e++].force, weights[k], crossOf(omega, offsets[k] - c));
+  const bool correct = omega.allFinite();  // else the forces stay uncorrected
+  if (correct) centre_force += w_centre * omega.cross(-c);
+  // Scatter: the centre first, then the neighbours in order; the net force and torque (diagnostics) in the
+  // same order.
+  Vec3* target = force_target_;
+  const uint32_t* scatter = scatter_.data();
+  const uint32_t thread = sc.thread;
+  Vec3 net_force = Vec3::Zero(), net_torque = Vec3::Zero();
+  const auto emit = [&](uint32_t j, const Vec3& f) {
+    net_force += f;
+    net_torque += crossOf(s_pos_[j], f);
+    const uint32_t info = scatter[j];
+    if (info == ((thread << 1) | 1u)) {
+      target[solid_[j]] += f;  // owned by this thread, no lower thread contributes
+    } else {
+      sc.deferred[info >> 1].push_back({j, f});
+    }
+  };
+  emit(uint32_t(s), centre_force);
+  for (size_t k = 0; k < count; ++k) {
+    Vec3 f = forces[k];
+    if (correct) addScaled(f, weights[k], crossOf(omega, offsets[k] - c));
+    emit(neighbors[k], f);
   }
+  net_force_[s] = net_force;
+  net_torque_[s] = net_torque;
 }
 
 void SphElasticSolid::beginStep(double dt) {
@@ -877,42 +1000,47 @@ void SphElasticSolid::addForces(const SphParticles& particles, const std::vector
   // nine 249-particle dice of Fig. 8.8 ran 3x slower on 2 threads than on 1 with 64 per thread).
   const int threads = static_cast<int>(std::max<long>(1, std::min<long>(threadLimit(), m / 512)));
   if (scratch_.size() < size_t(threads)) scratch_.resize(threads);
-  target_lo_.resize(m);
-  target_hi_.resize(m);
+  scatter_.resize(m);
   const bool global_implicit = globalImplicit();
   // Global implicit springs: the explicit forces f0 are gathered (original order) for the solve.
   std::vector<Vec3>& target = global_implicit ? s_force_ : forces;
   if (global_implicit) s_force_.assign(particles.size(), Vec3::Zero());
+  force_target_ = target.data();
 #pragma omp parallel num_threads(threads)
   {
-    Scratch& scratch = scratch_[omp_get_thread_num()];
-#pragma omp for schedule(static)
-    for (long s = 0; s < m; ++s) {
-      processNeighborhood(static_cast<size_t>(s), scratch);
-      // The neighbourhood's net force and torque (diagnostics), summed here in parallel.
-      Vec3 net_force = Vec3::Zero(), net_torque = Vec3::Zero();
-      uint32_t lo = uint32_t(s), hi = uint32_t(s);
-      for (const Contribution& c : contributions_[s]) {
-        net_force += c.force;
-        net_torque += crossOf(s_pos_[c.target], c.force);
-        lo = std::min(lo, c.target);
-        hi = std::max(hi, c.target);
-      }
-      net_force_[s] = net_force;
-      net_torque_[s] = net_torque;
-      target_lo_[s] = lo;
-      target_hi_[s] = hi;
-    }
-    // Scatter (after the loop's barrier): each thread adds the contributions to its own range of targets, in
-    // neighbourhood order, so every sum is formed in the same order for any thread count.
     const int t = omp_get_thread_num(), nt = omp_get_num_threads();
     const uint32_t first = uint32_t(m * t / nt), last = uint32_t(m * (t + 1) / nt);
-    for (long s = 0; s < m; ++s) {
-      if (target_hi_[s] < first || target_lo_[s] >= last) continue;
-      for (const Contribution& c : contributions_[s])
-        if (c.target >= first && c.target < last) target[solid_[c.target]] += c.force;
+    Scratch& scratch = scratch_[t];
+    scratch.thread = uint32_t(t);
+    scratch.deferred.resize(nt);
+    for (auto& list : scratch.deferred) list.clear();
+    // A particle's forces come from its own neighbourhood and its neighbours' (neighbour rows are
+    // symmetric and ascending in the sorted order; the grid's runs ascend and hold all neighbours).
+    for (uint32_t j = first; j < last; ++j) {
+      uint32_t lo = j;
+      if (nt > 1 && !solid_row_.empty()) {
+        uint32_t count = 0;
+        const uint32_t* row = neighbor_source_->neighborRow(solid_row_[j], count);
+        for (uint32_t e = 0; e < count; ++e)
+          if (row_to_solid_[row[e]] != kNoSolid) {
+            lo = std::min(lo, row_to_solid_[row[e]]);
+            break;
+          }
+      } else if (nt > 1) {
+        SphSortedGrid::Run runs[9];
+        if (grid_.neighborRuns(grid_.cellOfSorted(j), runs) > 0) lo = std::min(lo, runs[0].begin);
+      }
+      scatter_[j] = (uint32_t(t) << 1) | uint32_t(lo >= first);
     }
+#pragma omp barrier
+    for (uint32_t s = first; s < last; ++s) processNeighborhood(s, scratch);
+#pragma omp barrier
+    // The deferred contributions to this thread's particles (after the barrier), in neighbourhood order:
+    // the threads' lists in thread order, each in the order of its neighbourhoods.
+    for (int u = 0; u < nt; ++u)
+      for (const Scratch::Contribution& c : scratch_[u].deferred[t]) target[solid_[c.target]] += c.force;
   }
+  force_target_ = nullptr;
   SphElasticStats st;
   st.solid_particles = solid_.size();
   st.solver_neighbor_rows = !solid_row_.empty();

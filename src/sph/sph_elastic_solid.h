@@ -287,22 +287,55 @@ class SphElasticSolid : public SphForceTerm {
     uint8_t docked;
     double rate;  // lambda_d^q
   };
-  struct Contribution {
-    uint32_t target;  // sorted solid index
-    Vec3 force;
-  };
   struct Scratch {
     std::vector<Vec3> offsets;
     std::vector<uint32_t> neighbors;
     std::vector<double> weights;
-    std::vector<Vec3> rest;  // P_i l_ij (l_ij without plasticity)
+    std::vector<Vec3> rest;  // P_i l_ij (l_ij without plasticity), filled with docking only
     SphLatticeAssignment assignment;
     std::vector<std::pair<uint32_t, uint32_t>> keyed;  // (lattice key, neighbour) of assigned neighbours
     std::vector<DockPoint> next;
+    // The assigned neighbours only, in neighbour order: offset r_ij, rest point, weight W_ij, sorted solid
+    // index, velocity, and the force on them.
+    std::vector<Vec3> a_offset, a_rest, a_velocity, a_force;
+    std::vector<double> a_weight;
+    std::vector<uint32_t> a_neighbor;
+    // The thread's contributions that wait for the scatter, per owner thread (see scatter_).
+    struct Contribution {
+      uint32_t target;  // sorted solid index
+      Vec3 force;
+    };
+    std::vector<std::vector<Contribution>> deferred;
+    uint32_t thread = 0;
+  };
+  /// Weighted sums over the assigned neighbours of a neighbourhood (one pass).
+  struct FitSums {
+    Eigen::Matrix3d rl, ll;  // sum_j W_ij r_ij l_ij^T, sum_j W_ij l_ij l_ij^T (8.23)
+    double w_sum = 0.0;      // W_ii + sum_j W_ij
+    double w_neighbors = 0.0;
+    Vec3 weighted_r, weighted_v;  // sum_j W_ij r_ij, sum_j W_ij v_j
+    size_t count = 0;
+  };
+  /// The lattice fit of a neighbourhood: A_i (8.23), its rotation R_i (8.24), the goal transform of (8.29)-
+  /// (8.30) (goal model) and (sum_j W_ij l_ij l_ij^T)^-1.
+  struct ShapeFit {
+    Eigen::Matrix3d a, rot, goal, ll_inverse;
   };
   void prepare(const SphParticles& particles, const std::vector<Vec3>& velocities);
   /// Shape matching and forces of the neighbourhood of solid particle s (sorted order).
   void processNeighborhood(size_t s, Scratch& scratch);
+  /// The neighbours of solid particle s (offsets, sorted solid indices, weights W_ij) into the scratch.
+  size_t gatherNeighbors(size_t s, Scratch& scratch) const;
+  /// (8.23)-(8.24) and the strain (8.26) of particle i from the fit sums; updates A_i, R_i, the warm start
+  /// and the strain; false for a degenerate fit (no forces).
+  bool fitShape(size_t s, const FitSums& sums, ShapeFit& fit);
+  /// Forces of the goal model (8.31) (explicit or locally implicit) on the assigned neighbours into
+  /// scratch.a_force; returns the centre's force.
+  Vec3 goalForces(size_t s, const FitSums& sums, const ShapeFit& fit, Scratch& scratch);
+  /// Forces of the strain model (8.26)-(8.28) with hourglass control; returns the centre's force.
+  Vec3 strainForces(size_t s, const FitSums& sums, const ShapeFit& fit, Scratch& scratch);
+  /// Momentum correction (8.32)-(8.33) of the neighbourhood's forces, then their scatter (see addForces).
+  void correctAndScatter(size_t s, const FitSums& sums, Vec3 centre_force, Scratch& scratch);
   /// Docking decisions of the neighbourhood of solid particle s (8.2.5): clears assignment.assigned of
   /// the neighbours whose lattice point is not docked.
   void updateDocking(size_t s, Scratch& scratch);
@@ -364,10 +397,14 @@ class SphElasticSolid : public SphForceTerm {
   std::vector<Vec3> s_pos_, s_vel_;
   std::vector<double> s_mass_;
   SphSortedGrid grid_;
-  std::vector<Scratch> scratch_;                          // per thread, kept between evaluations
-  std::vector<std::vector<Contribution>> contributions_;  // per sorted solid particle
-  // Scatter of the contributions: per neighbourhood the range of its targets (sorted solid indices).
-  std::vector<uint32_t> target_lo_, target_hi_;
+  std::vector<Scratch> scratch_;  // per thread, kept between evaluations
+  // Scatter: thread t evaluates the neighbourhoods [m t / T, m (t + 1) / T) in order and owns the particles
+  // of that range. A particle receives its forces in neighbourhood order: directly from its owner while it
+  // evaluates, when no lower thread's neighbourhood contributes to it (its neighbours all lie at or above
+  // the owner's range); the other contributions wait in the evaluating thread's Scratch::deferred (per owner,
+  // in neighbourhood order) and the owner adds them after the evaluation, lower threads' first.
+  std::vector<uint32_t> scatter_;  // per sorted solid particle: owner thread << 1 | direct
+  Vec3* force_target_ = nullptr;   // forces (original order) of this evaluation
   // Neighbour rows of the solver (setNeighborSource): per sorted solid particle its row in the solver's
   // order, per solver row the sorted solid index (kNoSolid: not of this solid). Empty: own grid search.
   static constexpr uint32_t kNoSolid = 0xFFFFFFFFu;

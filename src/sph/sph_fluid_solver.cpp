@@ -1,6 +1,9 @@
 #include "sph/sph_fluid_solver.h"
 
 #include <omp.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #include <algorithm>
 #include <chrono>
@@ -173,6 +176,7 @@ void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
   row_count_.resize(n);
   if (thread_lists_.size() < size_t(threads)) thread_lists_.resize(threads);
   if (thread_sq_dists_.size() < size_t(threads)) thread_sq_dists_.resize(threads);
+  if (thread_candidates_.size() < size_t(threads)) thread_candidates_.resize(threads);
   thread_first_.assign(threads + 1, 0);
   for (int t = 0; t <= threads; ++t) thread_first_[t] = n * t / threads;
 
@@ -266,42 +270,81 @@ void SphFluidSolver::densityPass(int t) {
   size_t used = 0;
   const double h2 = kernels_.h2;
   std::vector<double>& sq_dists = thread_sq_dists_[t];
+  CellCandidates& cand = thread_candidates_[t];
   SphSortedGrid::Run runs[9];
-  int num_runs = 0;
-  size_t candidates = 0;
+  size_t candidates = 0, padded = 0;
   uint32_t current_cell = std::numeric_limits<uint32_t>::max();
   const Vec3* pos = s_pos_.data();
   const double* mass = s_mass_.data();
   for (size_t s = first; s < last; ++s) {
     const uint32_t c = grid_.cellOfSorted(s);
     if (c != current_cell) {
+      // The candidates of the cell's block, shared by its particles, as structure of arrays (in run order),
+      // padded to an even count by a point that is no neighbour of any particle.
       current_cell = c;
-      num_runs = grid_.neighborRuns(c, runs);
+      const int num_runs = grid_.neighborRuns(c, runs);
       candidates = 0;
       for (int r = 0; r < num_runs; ++r) candidates += runs[r].end - runs[r].begin;
+      padded = candidates + (candidates & 1);
+      if (cand.x.size() < padded) {
+        cand.x.resize(padded + 64);
+        cand.y.resize(padded + 64);
+        cand.z.resize(padded + 64);
+        cand.index.resize(padded + 64);
+      }
+      size_t e = 0;
+      for (int r = 0; r < num_runs; ++r)
+        for (uint32_t j = runs[r].begin; j < runs[r].end; ++j, ++e) {
+          cand.x[e] = pos[j].x();
+          cand.y[e] = pos[j].y();
+          cand.z[e] = pos[j].z();
+          cand.index[e] = j;
+        }
+      if (padded != candidates) {
+        cand.x[e] = cand.y[e] = cand.z[e] = std::numeric_limits<double>::infinity();
+        cand.index[e] = std::numeric_limits<uint32_t>::max();
+      }
     }
-    if (used + candidates > list.size()) list.resize(std::max(2 * list.size(), used + candidates + 4096));
-    if (sq_dists.size() < candidates) sq_dists.resize(candidates);
+    if (used + padded > list.size()) list.resize(std::max(2 * list.size(), used + padded + 4096));
+    if (sq_dists.size() < padded) sq_dists.resize(padded);
     uint32_t* out = list.data() + used;
     double* d2s = sq_dists.data();
     const double px = pos[s].x(), py = pos[s].y(), pz = pos[s].z();
-    double sum = 0.0;  // sum_j m_j (1 - d^2/h^2)^3
+    const uint32_t self = uint32_t(s);
     size_t found = 0;
-    for (int r = 0; r < num_runs; ++r) {
-      for (uint32_t j = runs[r].begin; j < runs[r].end; ++j) {
-        const double dx = pos[j].x() - px, dy = pos[j].y() - py, dz = pos[j].z() - pz;
-        const double d2 = dx * dx + dy * dy + dz * dz;
-        // Branch-free: every candidate is written, the count advances only for neighbours.
-        out[found] = j;
-        d2s[found] = d2;
-        found += size_t((d2 < h2) & (j != s));
-      }
+    // Branch-free: every candidate is written, the count advances only for neighbours (d < h, not s).
+#ifdef __SSE2__
+    const __m128d vx = _mm_set1_pd(px), vy = _mm_set1_pd(py), vz = _mm_set1_pd(pz), vh2 = _mm_set1_pd(h2);
+    for (size_t e = 0; e < padded; e += 2) {  // two candidates at a time, the same arithmetic per lane
+      const __m128d dx = _mm_sub_pd(_mm_loadu_pd(&cand.x[e]), vx);
+      const __m128d dy = _mm_sub_pd(_mm_loadu_pd(&cand.y[e]), vy);
+      const __m128d dz = _mm_sub_pd(_mm_loadu_pd(&cand.z[e]), vz);
+      const __m128d d2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz));
+      const int inside = _mm_movemask_pd(_mm_cmplt_pd(d2, vh2));
+      const uint32_t j0 = cand.index[e], j1 = cand.index[e + 1];
+      out[found] = j0;
+      _mm_store_sd(&d2s[found], d2);
+      found += size_t((inside & 1) & (j0 != self));
+      out[found] = j1;
+      _mm_storeh_pd(&d2s[found], d2);
+      found += size_t(((inside >> 1) & 1) & (j1 != self));
     }
-    for (size_t e = 0; e < found; ++e) {  // in neighbour order, as the sum always was
+#else
+    for (size_t e = 0; e < candidates; ++e) {
+      const double dx = cand.x[e] - px, dy = cand.y[e] - py, dz = cand.z[e] - pz;
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      out[found] = cand.index[e];
+      d2s[found] = d2;
+      found += size_t((d2 < h2) & (cand.index[e] != self));
+    }
+#endif
+    for (size_t e = 0; e < found; ++e) {  // (1 - d^2/h^2)^3, apart from the sum: vectorised
       const double q = 1.0 - d2s[e] / h2;
-      sum += mass[out[e]] * (q * q * q);
+      d2s[e] = q * q * q;
     }
-    const double rho = kernels_.poly6_coeff * (mass[s] + sum);  // (8.4), self term included
+    double sum = 0.0;                                                 // sum_j m_j (1 - d^2/h^2)^3
+    for (size_t e = 0; e < found; ++e) sum += mass[out[e]] * d2s[e];  // in neighbour order, as always
+    const double rho = kernels_.poly6_coeff * (mass[s] + sum);        // (8.4), self term included
     row_begin_[s] = static_cast<uint32_t>(used);
     row_count_[s] = static_cast<uint32_t>(found);
     used += found;
@@ -350,46 +393,63 @@ void SphFluidSolver::boundaryPressurePass(int t) {
 // correction (8.19), of the sorted fluid particles [first, last). Pair terms are computed so that the term of
 // (i, j) is exactly the negative of the term of (j, i).
 void SphFluidSolver::forcePass(int t) {
+  const bool poly6_pressure = config_.pressure_kernel == SphPressureKernel::kPoly6;
+  // Without viscosity its terms are zero (adding them changes no sum), so they are left out.
+  if (config_.viscosity != 0.0) {
+    poly6_pressure ? forcePassOf<true, true>(t) : forcePassOf<false, true>(t);
+  } else {
+    poly6_pressure ? forcePassOf<true, false>(t) : forcePassOf<false, false>(t);
+  }
+}
+
+template <bool kPoly6Pressure, bool kViscosity>
+void SphFluidSolver::forcePassOf(int t) {
   const size_t first = thread_first_[t], last = thread_first_[t + 1];
   const uint32_t* list = thread_lists_[t].data();
   const double inv_h = kernels_.inv_h;
   const double spiky_grad = -3.0 * kernels_.spiky_coeff * inv_h;  // w^'(d) = spiky_grad (1 - d/h)^2
   const double poly6_grad = -6.0 * kernels_.poly6_coeff / kernels_.h2;
-  const bool poly6_pressure = config_.pressure_kernel == SphPressureKernel::kPoly6;
   const double visc = config_.viscosity * kernels_.viscosity_coeff;
   const double xi = config_.xsph, poly6 = kernels_.poly6_coeff, h2 = kernels_.h2;
   const Vec3 gravity = config_.gravity;
+  const Vec3* pos = s_pos_.data();
+  const Vec3* vel = s_vel_.data();
+  const double* mass = s_mass_.data();
+  const double* rho = s_rho_.data();
+  const double* press_term = s_press_term_.data();
+  const SphParticleKind* kind = s_kind_.data();
   for (size_t s = first; s < last; ++s) {
-    if (s_kind_[s] != SphParticleKind::kFluid) {
+    if (kind[s] != SphParticleKind::kFluid) {
       s_acc_[s].setZero();
       s_xsph_[s].setZero();
       continue;
     }
-    const Vec3 xi_pos = s_pos_[s], vi = s_vel_[s];
-    const double mi = s_mass_[s], rhoi = s_rho_[s], pti = s_press_term_[s];
+    const Vec3 xi_pos = pos[s], vi = vel[s];
+    const double mi = mass[s], rhoi = rho[s], pti = press_term[s];
     Vec3 force = Vec3::Zero(), smooth = Vec3::Zero();
     const uint32_t* row = list + row_begin_[s];
     for (uint32_t e = 0, ne = row_count_[s]; e < ne; ++e) {
       const uint32_t j = row[e];
-      const Vec3 r = xi_pos - s_pos_[j];
+      const Vec3 r = xi_pos - pos[j];
       const double d2 = r.squaredNorm();
-      const double d = std::sqrt(d2);
-      const double mm = mi * s_mass_[j];
-      const double u = 1.0 - d * inv_h;
+      const double mm = mi * mass[j];
+      const double q = 1.0 - d2 / h2;
       // -grad_i of pressure: -m_i m_j (p_i/rho_i^2 + p_j/rho_j^2) grad W^(r_ij)   (8.17)
-      if (poly6_pressure) {
-        const double q = 1.0 - d2 / h2;  // grad W = poly6_grad q^2 r
-        force -= ((pti + s_press_term_[j]) * mm * (poly6_grad * q * q)) * r;
-      } else if (d > 0.0) {
-        force -= ((pti + s_press_term_[j]) * mm * (spiky_grad * u * u / d)) * r;
+      if (kPoly6Pressure) {
+        force -= ((pti + press_term[j]) * mm * (poly6_grad * q * q)) * r;  // grad W = poly6_grad q^2 r
+      } else {
+        const double d = std::sqrt(d2);
+        const double u = 1.0 - d * inv_h;
+        if (d > 0.0) force -= ((pti + press_term[j]) * mm * (spiky_grad * u * u / d)) * r;
       }
-      const Vec3 dv = s_vel_[j] - vi;
-      // mu V_i V_j lap W (v_j - v_i)   (8.12), (8.18)
-      force += (visc * mm / (rhoi * s_rho_[j]) * u) * dv;
-      if (s_kind_[j] == SphParticleKind::kFluid) {
-        const double q = 1.0 - d2 / h2;
-        smooth += (s_mass_[j] / (0.5 * (rhoi + s_rho_[j])) * poly6 * q * q * q) * dv;  // (8.19)
+      const Vec3 dv = vel[j] - vi;
+      if (kViscosity) {
+        // mu V_i V_j lap W (v_j - v_i)   (8.12), (8.18)
+        const double u = 1.0 - std::sqrt(d2) * inv_h;
+        force += (visc * mm / (rhoi * rho[j]) * u) * dv;
       }
+      if (kind[j] == SphParticleKind::kFluid)
+        smooth += (mass[j] / (0.5 * (rhoi + rho[j])) * poly6 * q * q * q) * dv;  // (8.19)
     }
     s_acc_[s] = force / mi + gravity;
     s_xsph_[s] = xi * smooth;
