@@ -25,6 +25,14 @@ namespace rc {
 ///         the gradient of any energy and pumps energy into the fluid wherever pressures are non-zero: 2D dam
 ///         break (mu = 1, XSPH 0.1, zeta = 0.01) +28% in 0.25 s; inviscid 2D sloshing in a closed
 ///         particle-walled box +454% in 0.5 s (poly6: -0.2%).
+///  3D (test/sph/test_sph_hydrostatic_3d.cpp): use kPoly6 with h = 2.5 dx. The poly6 gradient vanishes at
+///  r -> 0 (w'' < 0 for r < h / sqrt(5)), so under compression close pairs lose their repulsion and particles
+///  pair up; pairing raises the gradient moment M = -(1/3) sum_j V_j r_ij . grad W_ij and the pressures that
+///  balance gravity read low (settled 3D tank from a jittered lattice, p / rho g (H - y) after 1 s: 0.84 at
+///  h = 2 and 2.2 dx, 1.00 at 2.5 dx, 0.88 at 3 dx; at 2.5 dx pairs appear only after ~1.2 s). Not the
+///  walls, time step or XSPH (extrapolated walls, cfl 0.1, xsph 0 pair as fast). kSpiky does not cure it:
+///  it reads 1/M = 5.6-6.4% high at h = 2-2.2 dx, pairs under negative pressure (zeta > 0) and gains 15%
+///  energy in a 3D dam break at h = 2.5-3 dx.
 enum class SphPressureKernel { kSpiky, kPoly6 };
 
 /// Pressure of boundary particles, which enter the pair force (8.17) like fluid particles.
@@ -167,7 +175,7 @@ class SphFluidSolver {
   /// The cell grid of the last force computation: grid().order()[s] is the particle at sorted position s.
   const SphSortedGrid& neighborGrid() const { return grid_; }
   /// Neighbours (d < h, self excluded) of the particle at sorted position s as sorted positions, in the
-  /// grid's stable cell order; `count` receives their number. Valid while neighborsCurrent().
+  /// grid's stable cell order (ascending); `count` receives their number. Valid while neighborsCurrent().
   const uint32_t* neighborRow(size_t s, uint32_t& count) const;
 
  private:
@@ -176,6 +184,9 @@ class SphFluidSolver {
   void densityPass(int t);
   void boundaryPressurePass(int t);
   void forcePass(int t);
+  /// forcePass for one pressure kernel, with or without viscosity (without it no distance is needed).
+  template <bool kPoly6Pressure, bool kViscosity>
+  void forcePassOf(int t);
   void addTermForces(const std::vector<Vec3>& velocities);
   /// SphForceTerm::beginStep(dt) of every force term.
   void announceStep(double dt);
@@ -212,6 +223,12 @@ class SphFluidSolver {
   std::vector<uint32_t> row_begin_, row_count_;  // neighbour rows in the owning thread's buffer
   std::vector<std::vector<uint32_t>> thread_lists_;
   std::vector<std::vector<double>> thread_sq_dists_;  // per thread: squared distances of a row (scratch)
+  /// Per thread: the candidates of the current cell's 27-cell block as structure of arrays (scratch).
+  struct CellCandidates {
+    std::vector<double> x, y, z;
+    std::vector<uint32_t> index;
+  };
+  std::vector<CellCandidates> thread_candidates_;
   std::vector<size_t> thread_first_;
 };
 

@@ -52,6 +52,7 @@ TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
   const std::map<std::string, ExpectedCounts> expected = {
       {"dam_break_2d", {20 * 40, 106 * 53 - 100 * 50, 0, 0, 0, 0}},
       {"hydrostatic_tank_2d", {20 * 20, 26 * 27 - 20 * 24, 0, 0, 0, 0}},
+      {"hydrostatic_tank_3d", {10 * 15 * 10, 16 * 19 * 16 - 10 * 16 * 10, 0, 0, 0, 0}},
       {"dam_break_3d", {20 * 30 * 30, 64 * 52 * 34 - 60 * 50 * 30, 0, 5, 0, 0}},
       // 11 hexagonal rows of 10 or 11 particles.
       {"elastic_cube_2d", {0, 0, 0, 3, 1, 115}},
