@@ -31,13 +31,13 @@ uint64_t splitMix64(uint64_t x) {
 }
 
 /// Lattice index packed into 30 bits (10 per coordinate, offset 512).
-uint32_t latticeKey(const Eigen::Vector3i& n) {
+[[gnu::always_inline]] inline uint32_t latticeKey(const Eigen::Vector3i& n) {
   const auto c = [](int v) { return uint32_t(std::clamp(v + 512, 0, 1023)); };
   return (c(n.x()) << 20) | (c(n.y()) << 10) | c(n.z());
 }
 
 /// Slot of lattice index n in the keeper table of the indices [-8, 8)^3 (x fastest), -1 outside.
-int32_t latticeTableSlot(const Eigen::Vector3i& n) {
+[[gnu::always_inline]] inline int32_t latticeTableSlot(const Eigen::Vector3i& n) {
   constexpr int kHalf = SphLatticeAssignment::kTableHalfWidth, kWidth = 2 * kHalf;
   const unsigned ux = unsigned(n.x() + kHalf), uy = unsigned(n.y() + kHalf), uz = unsigned(n.z() + kHalf);
   if (ux >= unsigned(kWidth) || uy >= unsigned(kWidth) || uz >= unsigned(kWidth)) return -1;
@@ -288,6 +288,15 @@ SphElasticSolid::SphElasticSolid(const SphElasticConfig& config, const SphKernel
   strain_omega2_mass_ =
       4.0 * lattice_.cellVolume() *
       ((lame_lambda_ + 2.0 * lame_mu_) * sum_a * sum_a + config_.hourglass_control * y * sum_w / trace);
+  // The nearest lattice neighbours (|B step| = d) lie in [-1, 1]^3.
+  const double d2 = lattice_.spacing() * lattice_.spacing(), eps = 1e-9 * d2;
+  const int kz = lattice_.dimension() == 3 ? 1 : 0;
+  for (int sz = -kz; sz <= kz; ++sz)
+    for (int sy = -1; sy <= 1; ++sy)
+      for (int sx = -1; sx <= 1; ++sx) {
+        const Eigen::Vector3i step(sx, sy, sz);
+        if (std::abs(lattice_.point(step).squaredNorm() - d2) <= eps) nearest_steps_.push_back(step);
+      }
 }
 
 size_t SphElasticSolid::addParticles(SphParticles& particles, const std::vector<Vec3>& positions, double mass,
@@ -426,25 +435,24 @@ SphElasticSolid::RateStep SphElasticSolid::growDockingRate(double rate, double g
   return {cap, 0.5 * (rate + cap) * t + cap * (dt - t)};
 }
 
-bool SphElasticSolid::dockedInnerNeighbor(const std::vector<DockPoint>& state,
+bool SphElasticSolid::dockedInnerNeighbor(const std::vector<DockPoint>& state, const DockTable& table,
                                           const Eigen::Vector3i& index) const {
   const double d2 = lattice_.spacing() * lattice_.spacing(), eps = 1e-9 * d2;
   const double norm2 = lattice_.point(index).squaredNorm();
-  const int kz = lattice_.dimension() == 3 ? 1 : 0;
-  for (int z = -kz; z <= kz; ++z)
-    for (int y = -1; y <= 1; ++y)
-      for (int x = -1; x <= 1; ++x) {
-        const Eigen::Vector3i step(x, y, z);  // the nearest neighbours (|B step| = d) lie in [-1, 1]^3
-        if (std::abs(lattice_.point(step).squaredNorm() - d2) > eps) continue;
-        const Eigen::Vector3i inner = index + step;
-        if (!(lattice_.point(inner).squaredNorm() < norm2 - eps)) continue;
-        if (inner.isZero()) return true;  // next to the centre particle
-        const uint32_t key = latticeKey(inner);
-        const auto it = std::lower_bound(state.begin(), state.end(), key,
-                                         [](const DockPoint& q, uint32_t k) { return q.key < k; });
-        if (it != state.end() && it->key == key && it->docked) return true;
-      }
+  for (const Eigen::Vector3i& step : nearest_steps_) {  // |B step| = d
+    const Eigen::Vector3i inner = index + step;
+    if (!(lattice_.point(inner).squaredNorm() < norm2 - eps)) continue;
+    if (inner.isZero()) return true;  // next to the centre particle
+    const int32_t entry = table.find(state, latticeTableSlot(inner), latticeKey(inner));
+    if (entry >= 0 && state[size_t(entry)].docked) return true;
+  }
   return false;
+}
+
+int32_t SphElasticSolid::DockTable::findOutside(const std::vector<DockPoint>& state, uint32_t key) {
+  for (size_t e = 0; e < state.size(); ++e)
+    if (state[e].slot < 0 && state[e].key == key) return int32_t(e);
+  return -1;
 }
 
 void SphElasticSolid::updateDocking(size_t s, Scratch& sc) {
@@ -455,67 +463,133 @@ void SphElasticSolid::updateDocking(size_t s, Scratch& sc) {
   const double up = config_.docking_rate_increase, down = config_.docking_rate_decrease * dt;
   const double max_rate = config_.max_docking_rate;
   const double near2 = std::pow(config_.docking_distance * d, 2);
-  const double p_break = eventProbability(config_.fracture_rate, dt);
+  const double fracture_strain = config_.fracture_strain;
+  const bool can_break = !(std::isinf(fracture_strain) && fracture_strain > 0.0);  // stretch > inf: never
+  const double p_break = can_break ? eventProbability(config_.fracture_rate, dt) : 0.0;
   // Lattice points at the rim of the kernel (rest weight below kMinDockingWeight W(0)) carry no force at
   // rest; a particle that reaches one from outside would dock a gap of a lattice spacing shut.
   const double min_weight = kMinDockingWeight * kernels_.poly6(0.0);
   const bool first = !dock_initialized_[i];
-  std::vector<DockPoint>& state = dock_[i];  // sorted by key
-  sc.keyed.clear();
-  for (size_t k = 0; k < nn; ++k)
-    if (sc.assignment.assigned[k])
-      sc.keyed.emplace_back(latticeKey(sc.assignment.indices[k]), static_cast<uint32_t>(k));
-  std::sort(sc.keyed.begin(), sc.keyed.end());
-  const Mat3 inverse = transform_[i].inverse();
-  sc.next.clear();
+  std::vector<DockPoint>& state = dock_[i];  // the last evaluation's points (any order)
+  // The states lie scattered in memory: fetch the next neighbourhoods' ahead (list, then its entries).
+  if (s + 2 < solid_.size()) __builtin_prefetch(&dock_[solid_[s + 2]]);
+  if (s + 1 < solid_.size()) {
+    const std::vector<DockPoint>& next_state = dock_[solid_[s + 1]];
+    const char* bytes = reinterpret_cast<const char*>(next_state.data());
+    for (size_t o = 0; o < next_state.size() * sizeof(DockPoint); o += 64) __builtin_prefetch(bytes + o);
+  }
+  // The old points by lattice table slot (stamped, never cleared); each is taken by at most one neighbour.
+  DockTable& table = sc.dock_table;
+  if (table.stamps.empty()) {
+    table.stamps.assign(size_t(kDockTableSize), 0u);
+    table.entries.assign(size_t(kDockTableSize), -1);
+  }
+  if (++table.stamp == 0) {
+    std::fill(table.stamps.begin(), table.stamps.end(), 0u);
+    table.stamp = 1;
+  }
+  const size_t old_count = state.size();
+  for (size_t e = old_count; e-- > 0;) {  // descending: the first of a slot wins
+    const int32_t slot = state[e].slot;
+    if (slot < 0) continue;
+    table.stamps[size_t(slot)] = table.stamp;
+    table.entries[size_t(slot)] = int32_t(e);
+  }
+  sc.taken.assign(old_count, 0);
+  // A' = A^-1 of the nearness test, only when a free point needs it.
+  Mat3 inverse;
+  bool have_inverse = false;
+  // The new state is written field by field into scratch that only grows (a DockPoint built on the stack
+  // and copied whole stalls on store forwarding), then copied into the particle's list.
+  if (sc.next.size() < nn + old_count) sc.next.resize(nn + old_count);
+  DockPoint* out = sc.next.data();
+  size_t out_count = 0;
   uint32_t docked = 0;
-  size_t old = 0;
-  // Lattice points without a particle: a docked one detaches, the rate decays.
-  const auto unoccupied = [&](const DockPoint& q) {
-    if (q.docked) ++separated_[s];
-    const double rate = std::max(0.0, q.rate - down);
-    if (rate > 0.0) sc.next.push_back({q.key, 0, rate});
-  };
-  for (const auto& [key, k] : sc.keyed) {
-    while (old < state.size() && state[old].key < key) unoccupied(state[old++]);
-    DockPoint q{key, 0, 0.0};
-    if (old < state.size() && state[old].key == key) q = state[old++];
-    const Eigen::Vector3i& index = sc.assignment.indices[k];
-    const bool near = (lattice_.point(index) - inverse * sc.offsets[k]).squaredNorm() <= near2;
-    const double stretch = sc.offsets[k].norm() / sc.rest[k].norm() - 1.0;
-    if (first) {  // the sampled lattice: every occupied point starts docked
-      q.docked = near ? 1 : 0;
-      q.rate = near ? max_rate : 0.0;
-    } else if (q.docked) {
-      if (stretch > config_.fracture_strain &&
-          uniformRandom(config_.seed, evaluations_, i, key) < p_break) {  // (8.34)
-        q.docked = 0;
-        q.rate = 0.0;  // a crack: it has to heal from zero
-        ++detached_[s];
-      } else {
-        q.rate = growDockingRate(q.rate, up, max_rate, dt).rate;
+  const uint8_t* assigned = sc.assignment.assigned.data();
+  const Eigen::Vector3i* indices = sc.assignment.indices.data();
+  for (size_t k = 0; k < nn; ++k) {
+    if (!assigned[k]) continue;
+    const Eigen::Vector3i& index = indices[k];
+    const uint32_t key = latticeKey(index);
+    const int32_t slot = latticeTableSlot(index);
+    uint8_t q_docked = 0;
+    double q_rate = 0.0;
+    int32_t entry = table.find(state, slot, key);
+    if (entry >= 0 && slot < 0 && sc.taken[size_t(entry)]) {  // clamped key taken: the next free of it
+      entry = -1;
+      for (size_t e = 0; e < old_count; ++e)
+        if (state[e].slot < 0 && state[e].key == key && !sc.taken[e]) {
+          entry = int32_t(e);
+          break;
+        }
+    }
+    if (entry >= 0 && !sc.taken[size_t(entry)]) {
+      sc.taken[size_t(entry)] = 1;
+      q_docked = state[size_t(entry)].docked;
+      q_rate = state[size_t(entry)].rate;
+    }
+    const auto isNear = [&]() {
+      if (!have_inverse) {
+        inverse = transform_[i].inverse();
+        have_inverse = true;
       }
-    } else if (near && stretch <= config_.fracture_strain &&
-               kernels_.poly6(sc.rest[k].squaredNorm()) >= min_weight && dockedInnerNeighbor(state, index)) {
+      return (lattice_.point(index) - inverse * sc.offsets[k]).squaredNorm() <= near2;
+    };
+    const auto stretch = [&]() { return sc.offsets[k].norm() / sc.rest[k].norm() - 1.0; };
+    if (first) {  // the sampled lattice: every occupied point starts docked
+      const bool near = isNear();
+      q_docked = near ? 1 : 0;
+      q_rate = near ? max_rate : 0.0;
+    } else if (q_docked) {
+      if (can_break && stretch() > fracture_strain &&
+          uniformRandom(config_.seed, evaluations_, i, key) < p_break) {  // (8.34)
+        q_docked = 0;
+        q_rate = 0.0;  // a crack: it has to heal from zero
+        ++detached_[s];
+      } else if (q_rate != max_rate) {  // at the cap it stays there (up, dt >= 0)
+        q_rate = growDockingRate(q_rate, up, max_rate, dt).rate;
+      }
+    } else if (isNear() && stretch() <= fracture_strain &&
+               kernels_.poly6(sc.rest[k].squaredNorm()) >= min_weight &&
+               dockedInnerNeighbor(state, table, index)) {
       // Occupied: docks within the step with probability 1 - exp(-integral of lambda_d^q dt) (8.34).
-      const RateStep grown = growDockingRate(q.rate, up, max_rate, dt);
-      q.rate = grown.rate;
+      const RateStep grown = growDockingRate(q_rate, up, max_rate, dt);
+      q_rate = grown.rate;
       if (uniformRandom(config_.seed, evaluations_, i, key) < -std::expm1(-grown.integral)) {
-        q.docked = 1;
+        q_docked = 1;
         ++redocked_[s];
       }
     } else {
-      q.rate = std::max(0.0, q.rate - down);
+      q_rate = std::max(0.0, q_rate - down);
     }
-    if (q.docked) {
+    if (q_docked) {
       ++docked;
     } else {
       sc.assignment.assigned[k] = 0;  // free: no shape matching, no forces
     }
-    if (q.docked || q.rate > 0.0) sc.next.push_back(q);
+    if (q_docked || q_rate > 0.0) {
+      DockPoint& o = out[out_count++];
+      o.key = key;
+      o.slot = int16_t(slot);
+      o.docked = q_docked;
+      o.rate = q_rate;
+    }
   }
-  while (old < state.size()) unoccupied(state[old++]);
-  state.assign(sc.next.begin(), sc.next.end());
+  // Lattice points without a particle: a docked one detaches, the rate decays.
+  for (size_t e = 0; e < old_count; ++e) {
+    if (sc.taken[e]) continue;
+    const DockPoint& q = state[e];
+    if (q.docked) ++separated_[s];
+    const double rate = std::max(0.0, q.rate - down);
+    if (rate > 0.0) {
+      DockPoint& o = out[out_count++];
+      o.key = q.key;
+      o.slot = q.slot;
+      o.docked = 0;
+      o.rate = rate;
+    }
+  }
+  state.assign(out, out + out_count);
   docked_count_[i] = docked;
   dock_initialized_[i] = 1;
 }

@@ -284,8 +284,25 @@ class SphElasticSolid : public SphForceTerm {
   /// Per particle and lattice point: docking state and rate (8.2.5).
   struct DockPoint {
     uint32_t key;  // packed lattice index
+    int16_t slot;  // in the keeper table of SphLatticeAssignment (-1: outside)
     uint8_t docked;
     double rate;  // lambda_d^q
+  };
+  static constexpr int kDockTableSize = 8 * SphLatticeAssignment::kTableHalfWidth *
+                                        SphLatticeAssignment::kTableHalfWidth *
+                                        SphLatticeAssignment::kTableHalfWidth;
+  /// A particle's docking state by lattice table slot (stamped per neighbourhood, never cleared).
+  struct DockTable {
+    std::vector<uint32_t> stamps;
+    std::vector<int32_t> entries;  // index into the particle's DockPoint list
+    uint32_t stamp = 0;
+    /// The entry of lattice point (slot, key) in `state`, -1 if it has none.
+    int32_t find(const std::vector<DockPoint>& state, int32_t slot, uint32_t key) const {
+      if (slot >= 0) return stamps[size_t(slot)] == stamp ? entries[size_t(slot)] : -1;
+      return findOutside(state, key);
+    }
+    /// find() for a point outside the table (rare): the first entry of that key.
+    static int32_t findOutside(const std::vector<DockPoint>& state, uint32_t key);
   };
   struct Scratch {
     std::vector<Vec3> offsets;
@@ -293,7 +310,8 @@ class SphElasticSolid : public SphForceTerm {
     std::vector<double> weights;
     std::vector<Vec3> rest;  // P_i l_ij (l_ij without plasticity), filled with docking only
     SphLatticeAssignment assignment;
-    std::vector<std::pair<uint32_t, uint32_t>> keyed;  // (lattice key, neighbour) of assigned neighbours
+    DockTable dock_table;
+    std::vector<uint8_t> taken;  // per old DockPoint: occupied by a neighbour
     std::vector<DockPoint> next;
     // The assigned neighbours only, in neighbour order: offset r_ij, rest point, weight W_ij, sorted solid
     // index, velocity, and the force on them.
@@ -345,8 +363,9 @@ class SphElasticSolid : public SphForceTerm {
   };
   static RateStep growDockingRate(double rate, double growth, double cap, double dt);
   /// Whether lattice point `index` is a nearest neighbour of the centre or of a lattice point nearer to the
-  /// centre that is docked in `state` (sorted by key): docking proceeds from the centre outwards.
-  bool dockedInnerNeighbor(const std::vector<DockPoint>& state, const Eigen::Vector3i& index) const;
+  /// centre that is docked in `state` (indexed by `table`): docking proceeds from the centre outwards.
+  bool dockedInnerNeighbor(const std::vector<DockPoint>& state, const DockTable& table,
+                           const Eigen::Vector3i& index) const;
   /// Free lattice points whose rest weight is below this fraction of W(0) do not dock.
   static constexpr double kMinDockingWeight = 1e-3;
   /// Plastic flow of particle i from the elastic fit A_i P_i^-1 = U diag(sigma) V^T.
@@ -434,6 +453,7 @@ class SphElasticSolid : public SphForceTerm {
   std::vector<uint8_t> matched_;
   // Docking and plasticity state (per particle, sized only when on).
   std::vector<std::vector<DockPoint>> dock_;
+  std::vector<Eigen::Vector3i> nearest_steps_;  // lattice steps of length d (the nearest neighbours)
   std::vector<uint8_t> dock_initialized_;
   std::vector<uint32_t> docked_count_;
   std::vector<uint32_t> detached_, separated_, redocked_;
