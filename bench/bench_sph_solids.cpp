@@ -10,7 +10,8 @@
 // our equivalents run through runSphScene: seconds per frame, steps per frame, dt and its limit, and the
 // speed-up over the thesis. `--quick`: 10k only and one frame per scene; `--no-1m`: skip the 1M rows;
 // `--dice N`: only the Fig. 8.8 rows, N frames each (`--only TEXT`, repeatable: only the rows whose label
-// contains TEXT).
+// contains TEXT); `--sizes`: only table (a); `--threads T`: table (a) with T threads only (default 1 and 2;
+// 1M particles take ~2.5 GB and 3 steps per row).
 #include <omp.h>
 
 #include <algorithm>
@@ -145,7 +146,7 @@ PerParticle timeScene(const SphScene& scene, int threads, int steps) {
   return r;
 }
 
-void perParticleTable(bool quick, bool million) {
+void perParticleTable(bool quick, bool million, const std::vector<int>& thread_counts) {
   std::printf(
       "## (a) Time per particle per step (median; solver step + thermal step), d = 0.02, h = 2 d\n\n");
   std::printf(
@@ -158,8 +159,6 @@ void perParticleTable(bool quick, bool million) {
   for (Kind kind : {Kind::kFluid, Kind::kFluidElastic, Kind::kElasticThermal})
     for (size_t n : sizes) {
       const SphScene scene = parseSphScene(sceneText(kind, n), "bench");
-      // 1M: 2 threads and 3 steps only (whole bench under ~3 minutes on 2 cores).
-      const std::vector<int> thread_counts = n >= 1000000 ? std::vector<int>{2} : std::vector<int>{1, 2};
       for (int threads : thread_counts) {
         const PerParticle r = timeScene(scene, threads, n >= 1000000 ? 3 : n >= 100000 ? 5 : 9);
         std::printf("| %s | %zu | %zu | %d | %.1f | %.3f | %.3f | %.0f%% | %.2e | %s |\n", kindName(kind),
@@ -378,7 +377,8 @@ void thesisTable(bool quick, int dice_only = 0, const std::vector<std::string>& 
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool quick = false, million = true;
+  bool quick = false, million = true, sizes_only = false;
+  std::vector<int> thread_counts = {1, 2};
   int dice_frames = 0;
   std::vector<std::string> only;
   for (int a = 1; a < argc; ++a) {
@@ -386,13 +386,16 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[a], "--quick")) quick = true;
     if (!std::strcmp(argv[a], "--no-1m")) million = false;
     if (!std::strcmp(argv[a], "--dice") && a + 1 < argc) dice_frames = std::max(1, std::atoi(argv[++a]));
+    if (!std::strcmp(argv[a], "--sizes")) sizes_only = true;
+    if (!std::strcmp(argv[a], "--threads") && a + 1 < argc)
+      thread_counts = {std::max(1, std::atoi(argv[++a]))};
   }
   if (dice_frames > 0) {  // the Fig. 8.8 rows only
     thesisTable(true, dice_frames, only);
     return 0;
   }
   if (quick) million = false;
-  perParticleTable(quick, million);
-  thesisTable(quick);
+  perParticleTable(quick, million, thread_counts);
+  if (!sizes_only) thesisTable(quick);
   return 0;
 }
