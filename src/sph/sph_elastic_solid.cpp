@@ -1194,6 +1194,7 @@ void SphElasticSolid::solveGlobalImplicit(const SphParticles& particles, const s
     }
     if (c.count > 0) constraints_.push_back(c);
   }
+  implicit_solver_.setThreads(threadLimit());
   implicit_solver_.setSystem(s_pos_, s_mass_, springs_);
   implicit_solver_.setConstraints(constraints_);
   // Solved with the other coupled solids and their contact springs by the coupling's term after this one,

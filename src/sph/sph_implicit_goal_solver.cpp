@@ -1,5 +1,7 @@
 #include "sph/sph_implicit_goal_solver.h"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -54,50 +56,139 @@ void SphImplicitGoalSolver::setSystem(const std::vector<Vec3>& positions, const 
     throw std::invalid_argument("SphImplicitGoalSolver::setSystem: arrays differ in size");
   masses_ = masses;
   constraints_.clear();
-  // Symmetric rows: the spring (s, j) enters row s and row j.
-  row_begin_.assign(n + 1, 0);
-  for (size_t s = 0; s < n; ++s)
-    for (const SphGoalSpring& e : springs[s]) {
-      if (e.other >= n)
-        throw std::invalid_argument("SphImplicitGoalSolver::setSystem: spring to no particle");
-      ++row_begin_[s + 1];
-      ++row_begin_[e.other + 1];
+  // Symmetric rows: the spring (s, j) enters row s and row j, in the order of the centres s (thread t takes
+  // the centres [n t / T, n (t + 1) / T) and writes after the lower threads' entries of each row, so the
+  // rows are those of one pass over s for any thread count).
+  const int threads = n >= 4096 ? threads_ : 1;
+  thread_counts_.resize(size_t(threads));
+  thread_markers_.resize(size_t(threads));
+  raw_begin_.resize(n + 1);
+  merged_count_.resize(n);
+  diag_.resize(n);
+  row_begin_.resize(n + 1);
+  bool valid = true;
+#pragma omp parallel num_threads(threads)
+  {
+    const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+    const size_t first = n * size_t(t) / size_t(nt), last = n * size_t(t + 1) / size_t(nt);
+    std::vector<uint32_t>& count = thread_counts_[size_t(t)];
+    count.assign(n, 0);
+    bool thread_valid = true;
+    for (size_t s = first; s < last; ++s)
+      for (const SphGoalSpring& e : springs[s]) {
+        const bool inside = e.other < n;
+        thread_valid = thread_valid && inside;
+        ++count[s];
+        ++count[inside ? e.other : s];
+      }
+    if (!thread_valid) {
+#pragma omp atomic write
+      valid = false;
     }
-  for (size_t s = 0; s < n; ++s) row_begin_[s + 1] += row_begin_[s];
-  cols_.resize(row_begin_[n]);
-  coefs_.resize(row_begin_[n]);
-  std::vector<uint32_t> next(row_begin_.begin(), row_begin_.end() - 1);
-  diag_.assign(n, 0.0);
-  for (size_t s = 0; s < n; ++s)
-    for (const SphGoalSpring& e : springs[s]) {
-      cols_[next[s]] = e.other;
-      coefs_[next[s]++] = e.stiffness;
-      cols_[next[e.other]] = uint32_t(s);
-      coefs_[next[e.other]++] = e.stiffness;
-      diag_[s] += e.stiffness;
-      diag_[e.other] += e.stiffness;
-    }
-  // Merge the entries of a pair that both neighbourhoods hold (most pairs): half the work per product.
-  marker_.assign(n, UINT32_MAX);
-  uint32_t out = 0;
-  for (size_t s = 0; s < n; ++s) {
-    const uint32_t begin = row_begin_[s], end = row_begin_[s + 1];
-    row_begin_[s] = out;
-    const uint32_t first = out;
-    for (uint32_t e = begin; e < end; ++e) {
-      const uint32_t j = cols_[e];
-      if (marker_[j] != UINT32_MAX && marker_[j] >= first) {
-        coefs_[marker_[j]] += coefs_[e];
+#pragma omp barrier
+    bool all_valid;
+#pragma omp atomic read
+    all_valid = valid;
+    if (all_valid) {  // the same branch on all threads
+#pragma omp single
+      {
+        // Row starts, and each thread's first write position per row.
+        uint32_t total = 0;
+        for (size_t j = 0; j < n; ++j) {
+          raw_begin_[j] = total;
+          for (int u = 0; u < nt; ++u) {
+            const uint32_t c = thread_counts_[size_t(u)][j];
+            thread_counts_[size_t(u)][j] = total;
+            total += c;
+          }
+        }
+        raw_begin_[n] = total;
+        raw_cols_.resize(total);
+        raw_coefs_.resize(total);
+      }
+      uint32_t* next = count.data();
+      for (size_t s = first; s < last; ++s)
+        for (const SphGoalSpring& e : springs[s]) {
+          raw_cols_[next[s]] = e.other;
+          raw_coefs_[next[s]++] = e.stiffness;
+          raw_cols_[next[e.other]] = uint32_t(s);
+          raw_coefs_[next[e.other]++] = e.stiffness;
+        }
+#pragma omp barrier
+      // Per row: the diagonal (sum of the row's entries in order) and the entries of a pair that both
+      // neighbourhoods hold merged (most pairs: half the work per product); one thread writes the rows
+      // packed, several in place at each row's start and then packed.
+      std::vector<uint32_t>& marker = thread_markers_[size_t(t)];
+      marker.assign(n, UINT32_MAX);
+      if (nt == 1) {
+        cols_.resize(raw_begin_[n]);
+        coefs_.resize(raw_begin_[n]);
+        uint32_t out = 0;
+        for (size_t s = 0; s < n; ++s) {
+          const uint32_t first_out = out;
+          row_begin_[s] = out;
+          double diag = 0.0;
+          for (uint32_t e = raw_begin_[s]; e < raw_begin_[s + 1]; ++e) {
+            const uint32_t j = raw_cols_[e];
+            const double c = raw_coefs_[e];
+            diag += c;
+            if (marker[j] != UINT32_MAX && marker[j] >= first_out) {
+              coefs_[marker[j]] += c;
+            } else {
+              marker[j] = out;
+              cols_[out] = j;
+              coefs_[out++] = c;
+            }
+          }
+          diag_[s] = diag;
+        }
+        row_begin_[n] = out;
+        cols_.resize(out);
+        coefs_.resize(out);
       } else {
-        marker_[j] = out;
-        cols_[out] = j;
-        coefs_[out++] = coefs_[e];
+#pragma omp for schedule(static)
+        for (size_t s = 0; s < n; ++s) {
+          const uint32_t begin = raw_begin_[s], end = raw_begin_[s + 1];
+          double diag = 0.0;
+          uint32_t out = begin;
+          for (uint32_t e = begin; e < end; ++e) {
+            const uint32_t j = raw_cols_[e];
+            const double c = raw_coefs_[e];
+            diag += c;
+            if (marker[j] != UINT32_MAX && marker[j] >= begin) {
+              raw_coefs_[marker[j]] += c;
+            } else {
+              marker[j] = out;
+              raw_cols_[out] = j;
+              raw_coefs_[out++] = c;
+            }
+          }
+          diag_[s] = diag;
+          merged_count_[s] = out - begin;
+        }
+#pragma omp single
+        {
+          uint32_t total = 0;
+          for (size_t s = 0; s < n; ++s) {
+            row_begin_[s] = total;
+            total += merged_count_[s];
+          }
+          row_begin_[n] = total;
+          cols_.resize(total);
+          coefs_.resize(total);
+        }
+#pragma omp for schedule(static)
+        for (size_t s = 0; s < n; ++s) {
+          const uint32_t from = raw_begin_[s], to = row_begin_[s];
+          std::copy(raw_cols_.begin() + from, raw_cols_.begin() + from + merged_count_[s],
+                    cols_.begin() + to);
+          std::copy(raw_coefs_.begin() + from, raw_coefs_.begin() + from + merged_count_[s],
+                    coefs_.begin() + to);
+        }
       }
     }
   }
-  row_begin_[n] = out;
-  cols_.resize(out);
-  coefs_.resize(out);
+  if (!valid) throw std::invalid_argument("SphImplicitGoalSolver::setSystem: spring to no particle");
   // Rigid motions of the whole solid, about its centre of mass.
   rigid_projection_ = n > 0;
   total_mass_ = 0.0;
@@ -158,7 +249,7 @@ void SphImplicitGoalSolver::constraintImpulses(const std::vector<Vec3>& f0, cons
 void SphImplicitGoalSolver::applyLaplacian(const std::vector<Vec3>& u, std::vector<Vec3>& y) const {
   const size_t n = masses_.size();
   y.resize(n);
-  for (size_t s = 0; s < n; ++s) {
+  const auto row = [&](size_t s) {
     double x = diag_[s] * u[s].x(), yy = diag_[s] * u[s].y(), z = diag_[s] * u[s].z();
     for (uint32_t e = row_begin_[s]; e < row_begin_[s + 1]; ++e) {
       const Vec3& o = u[cols_[e]];
@@ -168,7 +259,14 @@ void SphImplicitGoalSolver::applyLaplacian(const std::vector<Vec3>& u, std::vect
       z -= c * o.z();
     }
     y[s] = Vec3(x, yy, z);
+  };
+  const int threads = n >= 4096 ? threads_ : 1;
+  if (threads == 1) {
+    for (size_t s = 0; s < n; ++s) row(s);
+    return;
   }
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (size_t s = 0; s < n; ++s) row(s);
 }
 
 void SphImplicitGoalSolver::removeRigidMotion(std::vector<Vec3>& u) const {

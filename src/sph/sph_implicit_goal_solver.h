@@ -54,6 +54,8 @@ class SphImplicitGoalSolver {
   void setConstraints(const std::vector<SphVelocityConstraint>& constraints);
   const std::vector<SphVelocityConstraint>& constraints() const { return constraints_; }
 
+  /// OpenMP threads of setSystem and the stiffness products (>= 1; results are the same for any count).
+  void setThreads(int threads) { threads_ = threads > 1 ? threads : 1; }
   size_t size() const { return masses_.size(); }
   const std::vector<double>& masses() const { return masses_; }
   /// L_ss: the diagonal of the spring Laplacian (the Jacobi preconditioner is m_s + dt^2 L_ss).
@@ -87,7 +89,12 @@ class SphImplicitGoalSolver {
   // Symmetric rows of L: y_s = diag_s u_s - sum_e coefs_e u_{cols_e}.
   std::vector<uint32_t> row_begin_, cols_;
   std::vector<double> coefs_, diag_;
-  std::vector<uint32_t> marker_;  // scratch of setSystem
+  int threads_ = 1;
+  // Scratch of setSystem: per thread the row counts and write positions of its centres' springs and a marker
+  // per column; the unmerged rows.
+  std::vector<std::vector<uint32_t>> thread_counts_, thread_markers_;
+  std::vector<uint32_t> raw_begin_, raw_cols_, merged_count_;
+  std::vector<double> raw_coefs_;
   std::vector<double> masses_;
   std::vector<Vec3> arms_;  // x_s - centre of mass
   std::vector<SphVelocityConstraint> constraints_;
