@@ -1,8 +1,11 @@
 #include "sph/sph_scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+
+#include <Eigen/Geometry>
 
 namespace rc {
 
@@ -83,6 +86,60 @@ size_t addBoundaryWalls(SphParticles& particles, const Vec3& lo, const Vec3& hi,
         ++added;
       }
   return added;
+}
+
+std::vector<Vec3> latticeDisc(const Vec3& axis, double radius, double dx, int dimension) {
+  if (dimension != 2 && dimension != 3)
+    throw std::invalid_argument("latticeDisc: dimension must be 2 or 3, got " + std::to_string(dimension));
+  if (!axis.allFinite() || !(axis.norm() > 0.0))
+    throw std::invalid_argument("latticeDisc: axis must be finite and non-zero");
+  if (dimension == 2 && axis.z() != 0.0)
+    throw std::invalid_argument("latticeDisc: axis must have z = 0 in 2D");
+  if (!(radius >= 0.0) || !std::isfinite(radius))
+    throw std::invalid_argument("latticeDisc: radius must be finite and >= 0, got " + std::to_string(radius));
+  if (!(dx > 0.0) || !std::isfinite(dx))
+    throw std::invalid_argument("latticeDisc: dx must be finite and > 0, got " + std::to_string(dx));
+  const Vec3 n = axis.normalized();
+  Vec3 u, w = Vec3::Zero();
+  if (dimension == 2) {
+    u = Vec3(-n.y(), n.x(), 0.0);
+  } else {
+    int least = 0;
+    for (int k = 1; k < 3; ++k)
+      if (std::abs(n[k]) < std::abs(n[least])) least = k;
+    u = n.cross(Vec3::Unit(least)).normalized();
+    w = n.cross(u);
+  }
+  const long r = static_cast<long>(std::floor(radius / dx + 1e-9));
+  const long rj = dimension == 3 ? r : 0;
+  const double limit = radius * radius * (1.0 + 1e-9) / (dx * dx);
+  std::vector<Vec3> points;
+  for (long j = -rj; j <= rj; ++j)
+    for (long i = -r; i <= r; ++i)
+      if (double(i * i + j * j) <= limit) points.push_back((double(i) * dx) * u + (double(j) * dx) * w);
+  return points;
+}
+
+size_t addLatticeCylinder(SphParticles& particles, const Vec3& from, const Vec3& to, double radius, double dx,
+                          double mass, SphParticleKind kind) {
+  checkSpacing("addLatticeCylinder", dx, mass, 3);
+  if (!from.allFinite() || !to.allFinite())
+    throw std::invalid_argument("addLatticeCylinder: from and to must be finite");
+  const Vec3 axis = to - from;
+  const double length = axis.norm();
+  if (!(length > 0.0)) throw std::invalid_argument("addLatticeCylinder: from and to must differ");
+  if (!(radius > 0.0) || !std::isfinite(radius))
+    throw std::invalid_argument("addLatticeCylinder: radius must be finite and > 0, got " +
+                                std::to_string(radius));
+  const std::vector<Vec3> disc = latticeDisc(axis, radius, dx, 3);
+  const Vec3 n = axis / length;
+  const long count = std::max<long>(1, latticeCount(0.0, length, dx));
+  const double first = 0.5 * (length - double(count) * dx) + 0.5 * dx;
+  for (long k = 0; k < count; ++k) {
+    const Vec3 c = from + (first + double(k) * dx) * n;
+    for (const Vec3& p : disc) particles.add(c + p, Vec3::Zero(), mass, kind);
+  }
+  return static_cast<size_t>(count) * disc.size();
 }
 
 std::vector<SphPlane> boxPlanes(const Vec3& lo, const Vec3& hi, int dimension, bool closed_top,

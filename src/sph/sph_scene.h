@@ -27,6 +27,21 @@ size_t addLatticeBox(SphParticles& particles, const Vec3& lo, const Vec3& hi, do
 size_t addBoundaryWalls(SphParticles& particles, const Vec3& lo, const Vec3& hi, double dx, int layers,
                         double mass, int dimension, bool closed_top = false);
 
+/// Points of the square lattice of spacing dx in the disc of `radius` (centres within radius, relative
+/// tolerance 1e-9) perpendicular to `axis` around the origin, the origin included: i u + j w for integers i,
+/// j with u, w an orthonormal basis of the plane (u = normalised axis x e_k, e_k the coordinate axis least
+/// aligned with `axis`; w = axis x u), in the order j, then i, ascending. In 2D (dimension 2; axis with z =
+/// 0) the "disc" is the segment perpendicular to axis in the x-y plane. Throws std::invalid_argument for a
+/// zero or non-finite axis, a bad radius or dx, or (2D) an axis with z != 0.
+std::vector<Vec3> latticeDisc(const Vec3& axis, double radius, double dx, int dimension);
+
+/// Fills the cylinder from `from` to `to` (3D) with particles of `kind`: cross-sections latticeDisc(to -
+/// from, radius, dx) at the axial positions (k + 1/2) dx + (length - n dx) / 2, k < n = max(1, floor(length /
+/// dx)), i.e. cell-centred along the axis and centred on it. Returns the number added. Throws
+/// std::invalid_argument for from == to, a bad radius, dx or mass.
+size_t addLatticeCylinder(SphParticles& particles, const Vec3& from, const Vec3& to, double radius, double dx,
+                          double mass, SphParticleKind kind = SphParticleKind::kStaticBoundary);
+
 /// Planes bounding [lo, hi] (normals pointing inside): floor, side walls (x, and z in 3D), ceiling if
 /// `closed_top`.
 std::vector<SphPlane> boxPlanes(const Vec3& lo, const Vec3& hi, int dimension, bool closed_top = false,

@@ -60,6 +60,18 @@ Box readBox(const Source& src, const YAML::Node& node, const std::string& where,
   return b;
 }
 
+/// A cylinder of `radius` around the segment from -> to (from != to).
+struct Cylinder {
+  Vec3 from = Vec3::Zero(), to = Vec3::Zero();
+  double radius = 0.0;
+  /// Distance of x to the segment within radius (relative tolerance 1e-9).
+  bool contains(const Vec3& x) const {
+    const Vec3 axis = to - from;
+    const double t = std::clamp((x - from).dot(axis) / axis.squaredNorm(), 0.0, 1.0);
+    return (x - (from + t * axis)).squaredNorm() <= radius * radius * (1.0 + 1e-9);
+  }
+};
+
 /// Reads the scene after the YAML has been parsed.
 class SceneReader {
  public:
@@ -68,7 +80,7 @@ class SceneReader {
   void read(const YAML::Node& root) {
     src_.allowKeys(root,
                    {"name", "dimension", "spacing", "enable", "solver", "fluid", "solids", "boundary",
-                    "moving", "frames", "output", "temperature", "phase_transition", "collisions"},
+                    "moving", "frames", "output", "temperature", "phase_transition", "collisions", "sources"},
                    "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
     dimension_ = int(src_.integer(src_.require(root, "dimension", "scene"), "dimension", 2, 3));
@@ -79,7 +91,8 @@ class SceneReader {
     const YAML::Node fluid = root["fluid"], solids = root["solids"];
     if (solids && !enabled("elasticity"))
       src_.fail(solids, "solids: needs 'elasticity' in the scene's 'enable' list");
-    if (!fluid && !solids) src_.fail(root, "scene: missing 'fluid' (or 'solids' with enable: [elasticity])");
+    if (!fluid && !solids && !root["sources"])
+      src_.fail(root, "scene: missing 'fluid' (or 'solids' with enable: [elasticity], or 'sources')");
     if (fluid) {
       if (!fluid.IsSequence() || fluid.size() == 0) src_.fail(fluid, "fluid: expected a list of boxes");
       for (size_t i = 0; i < fluid.size(); ++i) readFluid(fluid[i], "fluid[" + std::to_string(i) + "]");
@@ -97,6 +110,7 @@ class SceneReader {
     readThermal(root["temperature"]);
     readPhaseTransition(root["phase_transition"]);
     readCollisions(root["collisions"]);
+    if (root["sources"]) readSources(root["sources"]);
     readFrames(src_.require(root, "frames", "scene"));
     if (root["output"]) readOutput(root["output"]);
     if (enabled("surface")) finishSurface();
@@ -186,12 +200,21 @@ class SceneReader {
       }
     }
     if (const YAML::Node held = node["held"]) {
-      if (!held.IsSequence()) src_.fail(held, "temperature.held: expected a list of boxes");
+      if (!held.IsSequence()) src_.fail(held, "temperature.held: expected a list of boxes or cylinders");
       for (size_t i = 0; i < held.size(); ++i) {
         const std::string where = "temperature.held[" + std::to_string(i) + "]";
         const YAML::Node h = held[i];
-        src_.allowKeys(h, {"lo", "hi", "temperature", "phase"}, where);
-        const Box box = readBox(src_, h, where, dimension_);
+        const bool cylinder = h.IsMap() && h["from"];
+        if (cylinder)
+          src_.allowKeys(h, {"from", "to", "radius", "temperature", "phase"}, where);
+        else
+          src_.allowKeys(h, {"lo", "hi", "temperature", "phase"}, where);
+        Box box;
+        Cylinder cyl;
+        if (cylinder)
+          cyl = readCylinder(h, where);
+        else
+          box = readBox(src_, h, where, dimension_);
         SphSceneHeld entry;
         entry.temperature = src_.number(src_.require(h, "temperature", where), where + ".temperature");
         if (h["phase"]) {
@@ -203,10 +226,15 @@ class SceneReader {
         for (size_t j = 0; j < particles.size(); ++j) {
           const Vec3& x = particles.positions[j];
           bool inside = true;
-          for (int k = 0; k < dimension_; ++k) inside = inside && x[k] >= box.lo[k] && x[k] <= box.hi[k];
+          if (cylinder) {
+            inside = cyl.contains(x);
+          } else {
+            for (int k = 0; k < dimension_; ++k) inside = inside && x[k] >= box.lo[k] && x[k] <= box.hi[k];
+          }
           if (inside) entry.indices.push_back(j);
         }
-        if (entry.indices.empty()) src_.fail(h, where + ": no particles inside the box");
+        if (entry.indices.empty())
+          src_.fail(h, where + ": no particles inside the " + (cylinder ? "cylinder" : "box"));
         held_nodes_.push_back(h);
         t.held.push_back(std::move(entry));
       }
@@ -272,12 +300,17 @@ class SceneReader {
         if (!material)
           src_.fail(f, where + ": phase " + std::to_string(c.freezing_phase) +
                            " is no solid of the scene; give its 'material' (solid material keys)");
-        src_.allowKeys(material,
-                       {"spacing", "model", "youngs_modulus", "poisson_ratio", "hourglass_control",
-                        "goal_stiffness", "deformation_allowance", "implicit_goal", "implicit_step_factor"},
-                       where + ".material");
+        src_.allowKeys(
+            material,
+            {"spacing", "model", "youngs_modulus", "poisson_ratio", "hourglass_control", "goal_stiffness",
+             "deformation_allowance", "implicit_goal", "implicit_step_factor", "anchor_boundary"},
+            where + ".material");
         SphSceneSolid solid;
         readElasticMaterial(material, where + ".material", &solid.elastic);
+        // Boundary particles of the phase (a held rod seed) join the shape matching: ice holds on to them.
+        if (material["anchor_boundary"])
+          solid.elastic.anchor_boundary_particles =
+              src_.boolean(material["anchor_boundary"], where + ".material.anchor_boundary");
         solid.phase = c.freezing_phase;
         solid.first = scene_.particles.size();
         solid.count = 0;
@@ -339,6 +372,66 @@ class SceneReader {
       SphObjectPenalty(p, SphKernels(dimension_, h));
     } catch (const std::invalid_argument& e) {
       src_.fail(at, std::string("collisions: ") + e.what());
+    }
+  }
+
+  /// {from, to, radius} of a cylinder (3D only).
+  Cylinder readCylinder(const YAML::Node& node, const std::string& where) const {
+    if (dimension_ != 3) src_.fail(node, where + ": a cylinder needs a 3D scene (in 2D use a box)");
+    Cylinder c;
+    c.from = src_.vec(src_.require(node, "from", where), where + ".from", dimension_, false);
+    c.to = src_.vec(src_.require(node, "to", where), where + ".to", dimension_, false);
+    if (!((c.to - c.from).norm() > 0)) src_.fail(node["to"], where + ": 'from' and 'to' must differ");
+    c.radius = src_.positive(src_.require(node, "radius", where), where + ".radius");
+    return c;
+  }
+
+  /// sources: [{center, direction, radius, speed, spacing, start, stop, temperature, max_particles}].
+  void readSources(const YAML::Node& node) {
+    if (!node.IsSequence() || node.size() == 0) src_.fail(node, "sources: expected a list of sources");
+    for (size_t i = 0; i < node.size(); ++i) {
+      const std::string where = "sources[" + std::to_string(i) + "]";
+      const YAML::Node s = node[i];
+      if (!s.IsMap()) src_.fail(s, where + ": expected a map (center, direction, radius, speed, ...)");
+      src_.allowKeys(s,
+                     {"center", "direction", "radius", "speed", "spacing", "start", "stop", "temperature",
+                      "max_particles"},
+                     where);
+      SphFluidSourceConfig c;
+      c.dimension = dimension_;
+      c.center = src_.vec(src_.require(s, "center", where), where + ".center", dimension_, false);
+      const YAML::Node dir = src_.require(s, "direction", where);
+      c.direction = src_.vec(dir, where + ".direction", dimension_, true);
+      if (!(c.direction.norm() > 0)) src_.fail(dir, where + ".direction must be non-zero");
+      c.direction.normalize();
+      c.spacing = blockSpacing(s, where);
+      const YAML::Node radius = src_.require(s, "radius", where);
+      c.radius = src_.positive(radius, where + ".radius");
+      if (!(c.radius >= 0.5 * c.spacing))
+        src_.fail(radius, where + ".radius: " + std::to_string(c.radius) + " is below half the spacing " +
+                              std::to_string(c.spacing) + " (no lattice point would fit)");
+      c.speed = src_.positive(src_.require(s, "speed", where), where + ".speed");
+      optionalNumber(s, "start", where, &c.start_time, &Source::nonNegative);
+      optionalNumber(s, "stop", where, &c.stop_time, &Source::positive);
+      if (s["stop"] && !(c.stop_time > c.start_time))
+        src_.fail(s["stop"], where + ".stop: " + std::to_string(c.stop_time) + " must exceed start " +
+                                 std::to_string(c.start_time));
+      if (s["max_particles"])
+        c.max_particles =
+            size_t(src_.integer(s["max_particles"], where + ".max_particles", 1, long(kMaxParticles)));
+      c.temperature = scene_.thermal.config.initial_temperature;
+      if (const YAML::Node t = s["temperature"]) {
+        if (!enabled("temperature"))
+          src_.fail(t, where + ".temperature: needs 'temperature' in the scene's 'enable' list");
+        c.temperature = src_.number(t, where + ".temperature");
+      }
+      try {
+        c.validate();
+        SphFluidSource(c, SphKernels(dimension_, scene_.config.smoothing_length), scene_.config.rest_density);
+      } catch (const std::invalid_argument& e) {
+        src_.fail(s, where + ": " + e.what());
+      }
+      scene_.sources.push_back(c);
     }
   }
 
@@ -868,7 +961,7 @@ class SceneReader {
   }
 
   void readBoundary(const YAML::Node& node) {
-    src_.allowKeys(node, {"walls", "boxes", "planes", "box_planes"}, "boundary");
+    src_.allowKeys(node, {"walls", "boxes", "cylinders", "planes", "box_planes"}, "boundary");
     auto list = [&](const char* key) {
       const YAML::Node l = node[key];
       if (l && !l.IsSequence()) src_.fail(l, std::string("boundary.") + key + ": expected a list");
@@ -896,6 +989,26 @@ class SceneReader {
       src_.allowKeys(boxes[i], {"lo", "hi", "spacing"}, where);
       addBox(boxes[i], where, readBox(src_, boxes[i], where, dimension_), blockSpacing(boxes[i], where),
              SphParticleKind::kStaticBoundary, Vec3::Zero());
+    }
+    const YAML::Node cylinders = list("cylinders");
+    for (size_t i = 0; i < cylinders.size(); ++i) {
+      const std::string where = "boundary.cylinders[" + std::to_string(i) + "]";
+      const YAML::Node c = cylinders[i];
+      src_.allowKeys(c, {"from", "to", "radius", "spacing"}, where);
+      const Cylinder cyl = readCylinder(c, where);
+      const double dx = blockSpacing(c, where);
+      const double length = (cyl.to - cyl.from).norm();
+      const double r = std::floor(cyl.radius / dx + 1e-9);
+      planned_ += (std::floor(length / dx) + 1.0) * (2.0 * r + 1.0) * (2.0 * r + 1.0);
+      if (planned_ > kMaxParticles)
+        src_.fail(c, where + ": the scene would exceed " + std::to_string(long(kMaxParticles)) +
+                         " particles (spacing too small?)");
+      try {
+        addLatticeCylinder(scene_.particles, cyl.from, cyl.to, cyl.radius, dx, massFor(dx),
+                           SphParticleKind::kStaticBoundary);
+      } catch (const std::invalid_argument& e) {
+        src_.fail(c, where + ": " + e.what());
+      }
     }
     const YAML::Node planes = list("planes");
     for (size_t i = 0; i < planes.size(); ++i) {

@@ -1,6 +1,7 @@
 // SPH scene files (YAML, config/sph/*.yaml): solver parameters (thesis 8.1.4, appendix F.2), fluid blocks,
-// boundary walls / boxes / planes, moving boundary boxes, frames, particle outputs and the optional physics a
-// scene switches on. The schema is documented at the top of config/sph/dam_break_2d.yaml.
+// fluid sources, boundary walls / boxes / cylinders / planes, moving boundary boxes, frames, particle outputs
+// and the optional physics a scene switches on. The schema is documented at the top of
+// config/sph/dam_break_2d.yaml.
 #pragma once
 
 #include <stdexcept>
@@ -10,6 +11,7 @@
 #include "core/triangle_mesh.h"
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
+#include "sph/sph_fluid_source.h"
 #include "sph/sph_object_penalty.h"
 #include "sph/sph_particles.h"
 #include "sph/sph_skinning.h"
@@ -68,8 +70,9 @@ struct SphSceneTemperature {
   double temperature = 0.0;
 };
 
-/// Particles held at a temperature (key temperature.held: those inside [lo, hi] at load time, any kind; a
-/// cooled rod or a heater). `phase` (if > 0) is written to their phases: a seed fluid can freeze onto.
+/// Particles held at a temperature (key temperature.held: those inside the box [lo, hi] or the cylinder
+/// {from, to, radius} at load time, any kind; a cooled rod or a heater). `phase` (if > 0) is written to their
+/// phases: a seed fluid can freeze onto.
 struct SphSceneHeld {
   std::vector<size_t> indices;
   double temperature = 0.0;
@@ -127,6 +130,9 @@ struct SphScene {
   SphSceneCollisions collisions;
   SphSceneThermal thermal;
   std::vector<SphSceneSkin> skins;  ///< in solid order, at most one per solid
+  /// Fluid sources (key sources): runSphScene emits their layers before the first step and after every
+  /// step; with temperature the new particles get the source's temperature (default: temperature.initial).
+  std::vector<SphFluidSourceConfig> sources;
 };
 
 /// Optional physics a scene may list under `enable:`: elasticity (key solids), collisions (key collisions;

@@ -13,6 +13,7 @@
 #include "io/ply_io.h"
 #include "io/pvd_io.h"
 #include "sph/sph_elastic_solid.h"
+#include "sph/sph_fluid_source.h"
 #include "sph/sph_object_penalty.h"
 #include "sph/sph_output.h"
 #include "sph/sph_skinning.h"
@@ -297,16 +298,47 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
   if (!thermal) thermal = makeSphThermal(scene, solver);
   stats.thermal = thermal != nullptr;
   if (thermal) stats.heat_start = thermal->totalHeat(solver.particles());
-  // Called after every solver step (8.2.4): conduction with that step's dt, melting and freezing.
-  const std::function<void(const SphStepStats&)> after_step =
-      thermal ? std::function<void(const SphStepStats&)>([&](const SphStepStats& st) {
+  // Fluid sources: their due layers are appended before the first step and after every step.
+  std::vector<SphFluidSource> sources;
+  for (const SphFluidSourceConfig& config : scene.sources)
+    sources.emplace_back(config, solver.kernels(), solver.config().rest_density);
+  double emitted_mass_time = 0.0;  // sum of m t over the emitted particles (t: their emission)
+  Vec3 emitted_momentum = Vec3::Zero();
+  double particle_steps = 0.0;  // sum over steps of the particle count (with sources)
+  auto emit = [&](double time) {
+    bool added = false;
+    SphParticles& p = solver.particles();
+    for (SphFluidSource& source : sources) {
+      const size_t first = p.size();
+      const size_t count = source.emit(p, time);
+      if (count == 0) continue;
+      added = true;
+      if (thermal) thermal->setTemperature(first, count, source.config().temperature);
+      for (size_t i = first; i < p.size(); ++i) {
+        emitted_mass_time += p.masses[i] * time;
+        emitted_momentum += p.masses[i] * p.velocities[i];
+      }
+    }
+    if (added) solver.particlesChanged();
+  };
+  // Called after every solver step (8.2.4): conduction with that step's dt, melting and freezing; then the
+  // sources.
+  std::function<void(const SphStepStats&)> after_step;
+  if (thermal || !sources.empty())
+    after_step = [&](const SphStepStats& st) {
+      if (thermal) {
         const SphThermalStats& ts = thermal->step(solver, st.dt);
         stats.melted += ts.melted;
         stats.frozen += ts.frozen;
-      })
-              : std::function<void(const SphStepStats&)>();
+      }
+      if (!sources.empty()) {
+        particle_steps += double(solver.particles().size());
+        emit(st.time);
+      }
+    };
   stats.scene = scene.name;
   stats.particles = solver.particles().size();
+  stats.sources = sources.size();
   std::vector<const SphElasticSolid*> solids;
   for (const auto& term : solver.forceTerms())
     if (const auto* solid = dynamic_cast<const SphElasticSolid*>(term.get())) solids.push_back(solid);
@@ -323,6 +355,7 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
   stats.momentum_start = start.momentum;
   const uint64_t first_step = solver.stepCount();
   const double start_time = solver.time();
+  if (!sources.empty()) emit(start_time);
   FrameWriter writer(scene, options.out_dir, &stats, thermal.get());
   writer.maybeWrite(0, solver);
 
@@ -413,13 +446,30 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
   if (stats.steps > 0) {
     stats.mean_dt = stats.simulated_time / double(stats.steps);
     stats.mean_step_us = 1e6 * stats.wall_seconds / double(stats.steps);
-    stats.us_per_particle_step = stats.mean_step_us / double(std::max<size_t>(stats.particles, 1));
+    const double mean_particles =
+        sources.empty() ? double(stats.particles) : particle_steps / double(stats.steps);
+    stats.us_per_particle_step = stats.mean_step_us / std::max(mean_particles, 1.0);
   }
   if (!std::isfinite(stats.min_dt)) stats.min_dt = stats.mean_dt;
   const FluidMeasures end = measureFluid(solver.particles(), gravity);
-  stats.mass_drift = start.mass > 0.0 ? (end.mass - start.mass) / start.mass : 0.0;
+  stats.particles_end = solver.particles().size();
+  for (const SphFluidSource& source : sources) {
+    stats.emitted += source.stats().emitted;
+    stats.emitted_mass += source.stats().emitted_mass;
+    stats.source_skipped += source.stats().skipped;
+  }
+  if (sources.empty()) {
+    stats.mass_drift = start.mass > 0.0 ? (end.mass - start.mass) / start.mass : 0.0;
+    stats.boundary_impulse = end.momentum - start.momentum - start.mass * gravity * stats.simulated_time;
+  } else {
+    const double base = start.mass > 0.0 ? start.mass : stats.emitted_mass;
+    stats.mass_drift = base > 0.0 ? (end.mass - start.mass - stats.emitted_mass) / base : 0.0;
+    // Gravity acted on each emitted particle from its emission on: g sum m (t_end - t).
+    const double emitted_gravity_time = stats.emitted_mass * solver.time() - emitted_mass_time;
+    stats.boundary_impulse = end.momentum - start.momentum - emitted_momentum -
+                             gravity * (start.mass * stats.simulated_time + emitted_gravity_time);
+  }
   stats.momentum_end = end.momentum;
-  stats.boundary_impulse = end.momentum - start.momentum - start.mass * gravity * stats.simulated_time;
   stats.energy_first = stats.energy_end = stats.energy_change = std::numeric_limits<double>::quiet_NaN();
   stats.elastic_energy = std::numeric_limits<double>::quiet_NaN();
   if (have_energy) {
@@ -449,6 +499,13 @@ std::string sphRunStatsJson(const SphRunStats& s) {
   appendString(out, "scene", s.scene);
   appendNumber(out, "particles", double(s.particles));
   appendNumber(out, "fluid_particles", double(s.fluid_particles));
+  appendNumber(out, "particles_end", double(s.particles_end));
+  if (s.sources > 0) {
+    appendNumber(out, "sources", double(s.sources));
+    appendNumber(out, "emitted", double(s.emitted));
+    appendNumber(out, "emitted_mass", s.emitted_mass);
+    appendNumber(out, "source_skipped", double(s.source_skipped));
+  }
   appendNumber(out, "frames", s.frames);
   appendNumber(out, "frame_count", s.frame_count);
   appendNumber(out, "steps", double(s.steps));

@@ -36,9 +36,14 @@ struct SphRunOptions {
 
 struct SphRunStats {
   std::string scene;
-  size_t particles = 0, fluid_particles = 0;  ///< fluid: integrated particles of phase 0
-  size_t solids = 0, solid_particles = 0;     ///< elastic objects (enable: [elasticity]) and their particles
-  int frames = 0;                             ///< completed frames
+  size_t particles = 0, fluid_particles = 0;  ///< at the start; fluid: integrated particles of phase 0
+  size_t particles_end = 0;                   ///< at the end (particles + emitted)
+  /// Fluid sources (scene key sources): their number, the particles and mass they emitted (also those of
+  /// the layer due at the start) and the lattice points they skipped as occupied (SphFluidSource).
+  size_t sources = 0, emitted = 0, source_skipped = 0;
+  double emitted_mass = 0.0;
+  size_t solids = 0, solid_particles = 0;  ///< elastic objects (enable: [elasticity]) and their particles
+  int frames = 0;                          ///< completed frames
   int frame_count = 0;
   uint64_t steps = 0;
   int threads = 0;
@@ -47,18 +52,20 @@ struct SphRunStats {
   double min_dt = 0.0;        ///< smallest step not shortened to end a frame
   double mean_step_us = 0.0;  ///< wall time per step
   double max_step_us = 0.0;   ///< slowest step (steps ending a frame are timed as a group: their mean)
-  double us_per_particle_step = 0.0;
-  double wall_seconds = 0.0;  ///< stepping only (no output)
+  double us_per_particle_step = 0.0;  ///< mean_step_us / the mean particle count of the steps
+  double wall_seconds = 0.0;          ///< stepping only (no output)
   double output_seconds = 0.0;
-  /// Conservation: fluid mass (relative change), fluid momentum, and the impulse the boundaries (walls,
-  /// planes, moving boxes) exerted: P_end - P_start - M g t (zero for a free fluid: then it is the momentum
-  /// error).
+  /// Conservation: fluid mass (relative change, emitted mass excluded: (M_end - M_start - emitted) /
+  /// M_start), fluid momentum, and the impulse the boundaries (walls, planes, moving boxes) exerted:
+  /// P_end - P_start - M g t (zero for a free fluid: then it is the momentum error); with sources also less
+  /// the emitted momentum and the gravity impulse on the emitted mass since its emission.
   double mass_drift = 0.0;
   Vec3 momentum_start = Vec3::Zero(), momentum_end = Vec3::Zero(), boundary_impulse = Vec3::Zero();
   /// Measures over the integrated particles (fluid and solids).
   /// Energy E = kinetic + compression (equation of state) + elastic - sum m g . x, after step 1 and at the
   /// end; energy_change = (end - first) / |first| (viscosity, XSPH and plane hits dissipate, moving
-  /// boundaries add work). NaN (null in JSON) when no step completed.
+  /// boundaries add work; sources add the energy of the particles they emit). NaN (null in JSON) when no step
+  /// completed.
   double energy_first = 0.0, energy_end = 0.0, energy_change = 0.0;
   double max_density_error = 0.0;  ///< max over all steps of max |rho - rho_0| / rho_0 (fluid)
   /// Solids only: elastic energy of the force terms at the end (NaN when no step completed) and the max
@@ -99,10 +106,14 @@ std::shared_ptr<SphThermalModel> makeSphThermal(const SphScene& scene, SphFluidS
 /// end exactly on multiples of frame_time, like SphFluidSolver::advance(frame_time) per frame, and give the
 /// same state bitwise. An unstable step stops the run (it is reported in SphRunStats::instability, nothing is
 /// thrown); I/O errors throw. With temperature, the thermal model steps after every solver step with that
-/// step's dt, and particle files get temperature and phase.
+/// step's dt, and particle files get temperature and phase. Scenes with sources emit their due layers before
+/// the first step and after every step (after the thermal model; new particles get the source's
+/// temperature) and call SphFluidSolver::particlesChanged() when particles were added: every per-particle
+/// array of the solver, its force terms and the thermal model grows with the particles.
 SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options = {});
 
-/// The statistics as one line of JSON (no newline); non-finite numbers become null. Scenes with solids
+/// The statistics as one line of JSON (no newline); non-finite numbers become null. particles_end is always
+/// there; scenes with sources add sources, emitted, emitted_mass and source_skipped. Scenes with solids
 /// add solids, solid_particles, elastic_energy and max_strain; scenes with temperature add heat_start,
 /// heat_end, min_temperature, max_temperature, melted and frozen.
 std::string sphRunStatsJson(const SphRunStats& stats);

@@ -69,6 +69,9 @@ TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
       {"colliding_blocks_2d", {0, 0, 0, 0, 2, 2 * 115}},
       // The Stanford bunny scan scaled by 8.4 on the fcc lattice of 0.04 m (Table 8.1: 9871).
       {"fig8_4_melting_bunny", {0, 0, 0, 5, 1, 9892}},
+      // Thesis Fig. 8.5 in 3D: a 10 x 12 x 10 slime block over a static rod of 20 x 21 particles; the source
+      // adds the rest during the run (test_sph_fluid_source.cpp).
+      {"fig8_5_freezing_rod", {1200, 420, 0, 5, 1, 0}},
   };
   const bool have_bunny = fs::exists(std::string(RC_SHARED_DATA_DIR) + "/bunny.ply");
   size_t loaded = 0;
