@@ -13,6 +13,7 @@
 #include "ros/simulation_commands.h"
 #include "sph/sph_output.h"
 #include "sph/sph_scene_run.h"
+#include "sph/sph_scene_stepper.h"
 #include "sph/sph_surface.h"
 
 namespace rc {
@@ -63,9 +64,13 @@ bool SphSimulator::load(const std::string& path, bool start, std::string* messag
     if (params_.threads > 0) scene->config.num_threads = params_.threads;
     scene->config.throw_on_instability = false;  // reported in the stats, the simulation pauses
     auto solver = std::make_unique<SphFluidSolver>(makeSphSolver(*scene));
+    auto stepper = std::make_unique<SphSceneStepper>(*scene, *solver);
+    stepper->emit(solver->time());  // the sources' first layers
     std::lock_guard<std::mutex> lock(mutex_);
+    stepper_.reset();  // refers to the old solver
     scene_ = std::move(scene);
     solver_ = std::move(solver);
+    stepper_ = std::move(stepper);
     running_ = start;
     instability_.clear();
     step_ms_ = 0.0;
@@ -85,7 +90,7 @@ void SphSimulator::advance(double duration, uint64_t steps) {
   uint64_t done = 0;
   const auto start = std::chrono::steady_clock::now();
   while (done < steps && solver_->time() < end) {
-    const SphStepStats& stats = solver_->step();
+    const SphStepStats& stats = stepper_->step();  // with temperature, phase changes and sources
     ++done;
     if (stats.unstable) {
       instability_ = stats.instability;
@@ -114,7 +119,8 @@ void SphSimulator::publish() {
   const ros::Time stamp = ros::Time::now();
   const SphParticles& particles = solver_->particles();
   if (particles_pub_.getNumSubscribers() > 0) {
-    SurfelCloud cloud = sphParticlesToCloud(particles);
+    const SphThermalModel* thermal = stepper_->thermal().get();
+    SurfelCloud cloud = sphParticlesToCloud(particles, thermal ? &thermal->temperatures() : nullptr);
     cloud.frame_id = params_.frame_id;
     cloud.stamp_ns = stamp.toNSec();
     particles_pub_.publish(PointCloud2Converter::toMessage(cloud, PointCloud2Layout::kCompact));
@@ -165,6 +171,8 @@ void SphSimulator::publish() {
   stats.max_density_error = last.max_density_error;
   stats.kinetic_energy = last.kinetic_energy;
   stats.step_ms = step_ms_;
+  stats.melted = stepper_->melted();
+  stats.frozen = stepper_->frozen();
   stats.instability = instability_;
   stats_pub_.publish(stats);
 }
@@ -198,7 +206,10 @@ bool SphSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& re
                         (instability_.empty() ? "" : " (" + instability_ + ")")};
     };
     handlers.reset = [&]() -> CommandResult {
+      stepper_.reset();
       solver_ = std::make_unique<SphFluidSolver>(makeSphSolver(*scene_));
+      stepper_ = std::make_unique<SphSceneStepper>(*scene_, *solver_);
+      stepper_->emit(solver_->time());
       running_ = false;
       instability_.clear();
       return {true, "reset to t = 0"};

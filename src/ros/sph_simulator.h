@@ -1,10 +1,12 @@
 // The sph_sim node (thesis 8): runs an SPH scene file (sph/sph_scene_file.h, config/sph/*.yaml) in real time
-// and publishes the particles for rviz; start, pause, single steps, reset and scene loading by service.
+// and publishes the particles for rviz; start, pause, single steps, reset and scene loading by service. Each
+// step runs the scene's temperature, melting / freezing and fluid sources as rc_sph does (SphSceneStepper).
 //
 // Publishes   ~particles (sensor_msgs/PointCloud2: x y z, velocity[3], density, pressure (float32), kind
-//             (uint8: 0 fluid, 1 static boundary, 2 moving boundary)), ~surface (visualization_msgs/Marker,
-//             TRIANGLE_LIST of the fluid surface, 8.2.7; only with ~surface true), ~stats
-//             (relaxed_connectivity/SphStats), all in frame_id
+//             (uint8: 0 fluid, 1 static boundary, 2 moving boundary); scenes with temperature add
+//             temperature (float32) and phase (uint8: 0 fluid, else the solid's id)), ~surface
+//             (visualization_msgs/Marker, TRIANGLE_LIST of the fluid surface, 8.2.7; only with ~surface
+//             true), ~stats (relaxed_connectivity/SphStats), all in frame_id
 // Services    ~command (relaxed_connectivity/SphCommand: start | pause | step N | reset),
 //             ~load_scene (relaxed_connectivity/LoadSphScene; a bad file is reported and changes nothing)
 // Parameters  (private) scene (file; empty: wait for ~load_scene), frame_id, rate (frames per second),
@@ -22,6 +24,7 @@
 
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_scene_file.h"
+#include "sph/sph_scene_stepper.h"
 
 namespace rc {
 
@@ -66,6 +69,7 @@ class SphSimulator {
   std::mutex mutex_;  // scene/solver against service calls
   std::unique_ptr<SphScene> scene_;
   std::unique_ptr<SphFluidSolver> solver_;
+  std::unique_ptr<SphSceneStepper> stepper_;  // temperature, phase changes, sources (after each step)
   bool running_ = false;
   std::string instability_;
   double step_ms_ = 0.0;

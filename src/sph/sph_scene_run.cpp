@@ -16,6 +16,7 @@
 #include "sph/sph_fluid_source.h"
 #include "sph/sph_object_penalty.h"
 #include "sph/sph_output.h"
+#include "sph/sph_scene_stepper.h"
 #include "sph/sph_skinning.h"
 #include "sph/sph_surface.h"
 
@@ -294,48 +295,14 @@ std::shared_ptr<SphThermalModel> makeSphThermal(const SphScene& scene, SphFluidS
 
 SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options) {
   SphRunStats stats;
-  std::shared_ptr<SphThermalModel> thermal = options.thermal;
-  if (!thermal) thermal = makeSphThermal(scene, solver);
+  // Temperature (8.2.4) and fluid sources after every solver step; sources also emit before the first.
+  SphSceneStepper stepper(scene, solver, options.thermal);
+  const std::shared_ptr<SphThermalModel>& thermal = stepper.thermal();
+  const std::vector<SphFluidSource>& sources = stepper.sources();
   stats.thermal = thermal != nullptr;
   if (thermal) stats.heat_start = thermal->totalHeat(solver.particles());
-  // Fluid sources: their due layers are appended before the first step and after every step.
-  std::vector<SphFluidSource> sources;
-  for (const SphFluidSourceConfig& config : scene.sources)
-    sources.emplace_back(config, solver.kernels(), solver.config().rest_density);
-  double emitted_mass_time = 0.0;  // sum of m t over the emitted particles (t: their emission)
-  Vec3 emitted_momentum = Vec3::Zero();
-  double particle_steps = 0.0;  // sum over steps of the particle count (with sources)
-  auto emit = [&](double time) {
-    bool added = false;
-    SphParticles& p = solver.particles();
-    for (SphFluidSource& source : sources) {
-      const size_t first = p.size();
-      const size_t count = source.emit(p, time);
-      if (count == 0) continue;
-      added = true;
-      if (thermal) thermal->setTemperature(first, count, source.config().temperature);
-      for (size_t i = first; i < p.size(); ++i) {
-        emitted_mass_time += p.masses[i] * time;
-        emitted_momentum += p.masses[i] * p.velocities[i];
-      }
-    }
-    if (added) solver.particlesChanged();
-  };
-  // Called after every solver step (8.2.4): conduction with that step's dt, melting and freezing; then the
-  // sources.
   std::function<void(const SphStepStats&)> after_step;
-  if (thermal || !sources.empty())
-    after_step = [&](const SphStepStats& st) {
-      if (thermal) {
-        const SphThermalStats& ts = thermal->step(solver, st.dt);
-        stats.melted += ts.melted;
-        stats.frozen += ts.frozen;
-      }
-      if (!sources.empty()) {
-        particle_steps += double(solver.particles().size());
-        emit(st.time);
-      }
-    };
+  if (stepper.active()) after_step = [&](const SphStepStats& st) { stepper.afterStep(st); };
   stats.scene = scene.name;
   stats.particles = solver.particles().size();
   stats.sources = sources.size();
@@ -355,7 +322,7 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
   stats.momentum_start = start.momentum;
   const uint64_t first_step = solver.stepCount();
   const double start_time = solver.time();
-  if (!sources.empty()) emit(start_time);
+  if (!sources.empty()) stepper.emit(start_time);
   FrameWriter writer(scene, options.out_dir, &stats, thermal.get());
   writer.maybeWrite(0, solver);
 
@@ -447,7 +414,7 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
     stats.mean_dt = stats.simulated_time / double(stats.steps);
     stats.mean_step_us = 1e6 * stats.wall_seconds / double(stats.steps);
     const double mean_particles =
-        sources.empty() ? double(stats.particles) : particle_steps / double(stats.steps);
+        sources.empty() ? double(stats.particles) : stepper.particleSteps() / double(stats.steps);
     stats.us_per_particle_step = stats.mean_step_us / std::max(mean_particles, 1.0);
   }
   if (!std::isfinite(stats.min_dt)) stats.min_dt = stats.mean_dt;
@@ -465,8 +432,8 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
     const double base = start.mass > 0.0 ? start.mass : stats.emitted_mass;
     stats.mass_drift = base > 0.0 ? (end.mass - start.mass - stats.emitted_mass) / base : 0.0;
     // Gravity acted on each emitted particle from its emission on: g sum m (t_end - t).
-    const double emitted_gravity_time = stats.emitted_mass * solver.time() - emitted_mass_time;
-    stats.boundary_impulse = end.momentum - start.momentum - emitted_momentum -
+    const double emitted_gravity_time = stats.emitted_mass * solver.time() - stepper.emittedMassTime();
+    stats.boundary_impulse = end.momentum - start.momentum - stepper.emittedMomentum() -
                              gravity * (start.mass * stats.simulated_time + emitted_gravity_time);
   }
   stats.momentum_end = end.momentum;
@@ -480,6 +447,8 @@ SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const Sph
     stats.energy_change =
         (stats.energy_end - stats.energy_first) / std::max(std::abs(stats.energy_first), 1e-300);
   }
+  stats.melted = stepper.melted();
+  stats.frozen = stepper.frozen();
   if (thermal) {
     stats.heat_end = thermal->totalHeat(solver.particles());
     stats.min_temperature = std::numeric_limits<double>::infinity();

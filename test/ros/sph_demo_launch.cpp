@@ -11,6 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cstring>
 #include <fstream>
 #include <mutex>
 #include <set>
@@ -171,6 +172,86 @@ TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
   const SphStats loaded = waitForStats(inbox, [](const SphStats& m) { return m.scene != "dam_break_2d"; });
   EXPECT_EQ(loaded.particles, tank.particles.size());
   EXPECT_FALSE(loaded.running);
+}
+
+// A scene with temperature (Fig. 8.5 in 2D): each step runs heat conduction and freezing as rc_sph does;
+// the particles carry temperature and phase, and the stats count the frozen particles (16 of 64 after 480
+// steps in rc_sph).
+TEST(SphDemoLaunch, TemperatureScenesFreezeAndPublishTemperatureAndPhase) {
+  ros::NodeHandle nh;
+  Inbox inbox;
+  ros::Subscriber particles_sub = nh.subscribe<sensor_msgs::PointCloud2>(
+      "sph_sim/particles", 1, [&](const sensor_msgs::PointCloud2ConstPtr& m) {
+        std::lock_guard<std::mutex> lock(inbox.mutex);
+        inbox.particles = m;
+      });
+  ros::Subscriber stats_sub =
+      nh.subscribe<SphStats>("sph_sim/stats", 100, [&](const relaxed_connectivity::SphStatsConstPtr& m) {
+        std::lock_guard<std::mutex> lock(inbox.mutex);
+        inbox.stats.push_back(*m);
+      });
+  const std::string dir = std::string(RC_SOURCE_DIR) + "/config/sph/";
+  ros::ServiceClient load = nh.serviceClient<LoadSphScene>("sph_sim/load_scene");
+  ros::ServiceClient command = nh.serviceClient<SphCommand>("sph_sim/command");
+  ASSERT_TRUE(load.waitForExistence(ros::Duration(30.0)));
+  // A paused node publishes only after a command: connect first.
+  ASSERT_TRUE(waitFor(
+      [&] { return particles_sub.getNumPublishers() > 0 && stats_sub.getNumPublishers() > 0; }, 30.0));
+  LoadSphScene load_rod;
+  load_rod.request.path = dir + "freezing_rod_2d.yaml";
+  load_rod.request.start = false;
+  ASSERT_TRUE(load.call(load_rod));
+  ASSERT_TRUE(load_rod.response.success) << load_rod.response.message;
+  SphCommand step;
+  step.request.command = "step";
+  step.request.steps = 480;
+  ASSERT_TRUE(command.call(step));
+  ASSERT_TRUE(step.response.success) << step.response.message;
+  const SphStats stepped =
+      waitForStats(inbox, [](const SphStats& m) { return m.scene == "freezing_rod_2d" && m.step == 480; });
+  EXPECT_EQ(stepped.step, 480u);
+  EXPECT_GT(stepped.frozen, 5u);
+  EXPECT_LE(stepped.frozen, 64u);
+  EXPECT_EQ(stepped.melted, 0u);
+  EXPECT_TRUE(stepped.instability.empty()) << stepped.instability;
+  sensor_msgs::PointCloud2ConstPtr cloud;
+  waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(inbox.mutex);
+        if (inbox.particles && inbox.particles->width * inbox.particles->height == 100u)
+          for (const auto& field : inbox.particles->fields)
+            if (field.name == "phase") cloud = inbox.particles;
+        return cloud != nullptr;
+      },
+      10.0);
+  ASSERT_TRUE(cloud) << "no particles with a phase field";
+  // Count the particles of phase 1 (the rod's 36 seeds plus the frozen ones) and the temperature range.
+  int phase_offset = -1, temperature_offset = -1;
+  for (const auto& field : cloud->fields) {
+    if (field.name == "phase") {
+      phase_offset = int(field.offset);
+      EXPECT_EQ(field.datatype, sensor_msgs::PointField::UINT8);
+    }
+    if (field.name == "temperature") {
+      temperature_offset = int(field.offset);
+      EXPECT_EQ(field.datatype, sensor_msgs::PointField::FLOAT32);
+    }
+  }
+  ASSERT_GE(temperature_offset, 0);
+  size_t solid = 0;
+  float coldest = 1e9f, warmest = -1e9f;
+  for (size_t i = 0; i < cloud->width * cloud->height; ++i) {
+    const uint8_t* point = &cloud->data[i * cloud->point_step];
+    solid += point[phase_offset] == 1;
+    float t;
+    std::memcpy(&t, point + temperature_offset, sizeof t);
+    coldest = std::min(coldest, t);
+    warmest = std::max(warmest, t);
+  }
+  EXPECT_EQ(solid, 36u + stepped.frozen);
+  EXPECT_FLOAT_EQ(coldest, -20.0f);  // the held rod
+  EXPECT_LE(warmest, 20.0f);
+  EXPECT_GT(warmest, 0.0f);
 }
 
 // config/rviz/sph_demo.rviz shows topics that sph_sim publishes.

@@ -1,0 +1,49 @@
+#include "sph/sph_scene_stepper.h"
+
+#include "sph/sph_scene_run.h"
+
+namespace rc {
+
+SphSceneStepper::SphSceneStepper(const SphScene& scene, SphFluidSolver& solver,
+                                 std::shared_ptr<SphThermalModel> thermal)
+    : solver_(solver), thermal_(thermal ? std::move(thermal) : makeSphThermal(scene, solver)) {
+  for (const SphFluidSourceConfig& config : scene.sources)
+    sources_.emplace_back(config, solver.kernels(), solver.config().rest_density);
+}
+
+void SphSceneStepper::emit(double time) {
+  bool added = false;
+  SphParticles& p = solver_.particles();
+  for (SphFluidSource& source : sources_) {
+    const size_t first = p.size();
+    const size_t count = source.emit(p, time);
+    if (count == 0) continue;
+    added = true;
+    if (thermal_) thermal_->setTemperature(first, count, source.config().temperature);
+    for (size_t i = first; i < p.size(); ++i) {
+      emitted_mass_time_ += p.masses[i] * time;
+      emitted_momentum_ += p.masses[i] * p.velocities[i];
+    }
+  }
+  if (added) solver_.particlesChanged();
+}
+
+void SphSceneStepper::afterStep(const SphStepStats& st) {
+  if (thermal_) {
+    const SphThermalStats& ts = thermal_->step(solver_, st.dt);
+    melted_ += ts.melted;
+    frozen_ += ts.frozen;
+  }
+  if (!sources_.empty()) {
+    particle_steps_ += double(solver_.particles().size());
+    emit(st.time);
+  }
+}
+
+const SphStepStats& SphSceneStepper::step() {
+  const SphStepStats& st = solver_.step();
+  if (!st.unstable) afterStep(st);
+  return st;
+}
+
+}  // namespace rc
