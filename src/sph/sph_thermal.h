@@ -121,8 +121,8 @@ class SphThermalModel {
   /// particles adopt the lattice transform A_j of their nearest solid neighbour, and c_F uses its lattice.
   void setFreezingSolid(std::shared_ptr<SphElasticSolid> solid);
 
-  /// Advances temperatures by dt and applies melting and freezing; calls solver.particlesChanged() if a
-  /// phase changed. Call after each solver step with that step's dt: the neighbour rows of the step are
+  /// Advances temperatures by dt and applies melting and freezing. The solver's forces stay valid: the
+  /// next step's first half-kick uses those of the last evaluation, its force evaluation the new phases. Call after each solver step with that step's dt: the neighbour rows of the step are
   /// then reused (SphFluidSolver::neighborsCurrent), else searched anew.
   const SphThermalStats& step(SphFluidSolver& solver, double dt);
   /// The same on bare particles (densities as set there); returns whether a phase changed.
