@@ -122,8 +122,9 @@ class SphThermalModel {
   void setFreezingSolid(std::shared_ptr<SphElasticSolid> solid);
 
   /// Advances temperatures by dt and applies melting and freezing. The solver's forces stay valid: the
-  /// next step's first half-kick uses those of the last evaluation, its force evaluation the new phases. Call after each solver step with that step's dt: the neighbour rows of the step are
-  /// then reused (SphFluidSolver::neighborsCurrent), else searched anew.
+  /// next step's first half-kick uses those of the last evaluation, its force evaluation the new phases. Call
+  /// after each solver step with that step's dt: the neighbour rows of the step are then reused
+  /// (SphFluidSolver::neighborsCurrent), else searched anew.
   const SphThermalStats& step(SphFluidSolver& solver, double dt);
   /// The same on bare particles (densities as set there); returns whether a phase changed.
   bool step(SphParticles& particles, const SphKernels& kernels, double dt);
