@@ -300,11 +300,11 @@ class SceneReader {
         if (!material)
           src_.fail(f, where + ": phase " + std::to_string(c.freezing_phase) +
                            " is no solid of the scene; give its 'material' (solid material keys)");
-        src_.allowKeys(
-            material,
-            {"spacing", "model", "youngs_modulus", "poisson_ratio", "hourglass_control", "goal_stiffness",
-             "deformation_allowance", "implicit_goal", "implicit_step_factor", "anchor_boundary"},
-            where + ".material");
+        src_.allowKeys(material,
+                       {"spacing", "model", "youngs_modulus", "poisson_ratio", "hourglass_control",
+                        "goal_stiffness", "deformation_allowance", "implicit_goal", "implicit_step_factor",
+                        "implicit_tolerance", "anchor_boundary"},
+                       where + ".material");
         SphSceneSolid solid;
         readElasticMaterial(material, where + ".material", &solid.elastic);
         // Boundary particles of the phase (a held rod seed) join the shape matching: ice holds on to them.
@@ -467,7 +467,7 @@ class SceneReader {
     const std::string model = node["model"] ? src_.string(node["model"], where + ".model") : "goal_position";
     const char* strain_keys[] = {"youngs_modulus", "poisson_ratio", "hourglass_control"};
     const char* goal_keys[] = {"goal_stiffness", "deformation_allowance", "implicit_goal",
-                               "implicit_step_factor"};
+                               "implicit_step_factor", "implicit_tolerance"};
     if (model == "strain") {
       e.model = SphElasticModel::kStrain;
       for (const char* k : goal_keys)
@@ -487,6 +487,7 @@ class SceneReader {
         e.implicit_goal = e.global_implicit_goal || src_.boolean(g, where + ".implicit_goal");
       }
       optionalNumber(node, "implicit_step_factor", where, &e.implicit_step_factor, &Source::nonNegative);
+      optionalNumber(node, "implicit_tolerance", where, &e.implicit_tolerance, &Source::positive);
     } else {
       src_.fail(node["model"], where + ".model: unknown model '" + model + "' (strain, goal_position)");
     }
@@ -608,15 +609,25 @@ class SceneReader {
   /// (8.20) around its centre, rotated by `rotation`, with its own phase id.
   void readSolid(const YAML::Node& node, const std::string& where) {
     const std::string shape = node["shape"] ? src_.string(node["shape"], where + ".shape") : "box";
-    std::set<std::string> keys = {"shape",          "spacing",
-                                  "model",          "youngs_modulus",
-                                  "poisson_ratio",  "hourglass_control",
-                                  "goal_stiffness", "deformation_allowance",
-                                  "implicit_goal",  "implicit_step_factor",
-                                  "velocity",       "phase",
-                                  "rotation",       "temperature",
-                                  "fracture",       "plasticity",
-                                  "anchor",         "skin"};
+    std::set<std::string> keys = {"shape",
+                                  "spacing",
+                                  "model",
+                                  "youngs_modulus",
+                                  "poisson_ratio",
+                                  "hourglass_control",
+                                  "goal_stiffness",
+                                  "deformation_allowance",
+                                  "implicit_goal",
+                                  "implicit_step_factor",
+                                  "implicit_tolerance",
+                                  "velocity",
+                                  "phase",
+                                  "rotation",
+                                  "temperature",
+                                  "fracture",
+                                  "plasticity",
+                                  "anchor",
+                                  "skin"};
     if (shape == "box") {
       keys.insert({"lo", "hi"});
     } else if (shape == "sphere") {

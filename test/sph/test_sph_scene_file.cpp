@@ -624,10 +624,12 @@ TEST(SphSceneFile, ImplicitGoalAndContactSpringsAreSceneKeys) {
   const SphScene scene = parseSphScene(head +
                                            "solids:\n"
                                            "  - {lo: [0, 0], hi: [0.1, 0.1], implicit_goal: true, "
-                                           "implicit_step_factor: 4}\n"
+                                           "implicit_step_factor: 4, implicit_tolerance: 0.01}\n"
                                            "  - {lo: [0.2, 0], hi: [0.3, 0.1]}\n" +
                                            tail + "collisions: {implicit: true}\n",
                                        "implicit.yaml");
+  EXPECT_EQ(scene.solids[0].elastic.implicit_tolerance, 0.01);
+  EXPECT_EQ(scene.solids[1].elastic.implicit_tolerance, 1e-4);  // the default
   EXPECT_TRUE(scene.solids[0].elastic.implicit_goal);
   EXPECT_EQ(scene.solids[0].elastic.implicit_step_factor, 4.0);
   EXPECT_FALSE(scene.solids[1].elastic.implicit_goal);  // off unless asked for
@@ -654,6 +656,15 @@ TEST(SphSceneFile, ImplicitGoalAndContactSpringsAreSceneKeys) {
                     "  - {lo: [0.2, 0], hi: [0.3, 0.1]}\n" +
                     tail,
                 6, "implicit_step_factor");
+  for (const char* bad : {"0", "1", "-0.1"})
+    expectErrorAt(head +
+                      "solids:\n"
+                      "  - {lo: [0, 0], hi: [0.1, 0.1], implicit_tolerance: " +
+                      bad +
+                      "}\n"
+                      "  - {lo: [0.2, 0], hi: [0.3, 0.1]}\n" +
+                      tail,
+                  6, "implicit_tolerance");
 }
 
 TEST(SphSceneFile, DiceAreNineSeparateStiffSolidsAndWriteSurfaces) {
