@@ -332,7 +332,8 @@ void SphElasticSolid::prepare(const SphParticles& particles, const std::vector<V
     plastic_strain_.resize(n, 0.0);
   }
   const bool global_implicit = config_.global_implicit_goal;
-  if (global_implicit && history_.size() != n) history_.assign(n, ImplicitHistory{});
+  // Appended particles (fluid sources) start without history; the others keep their warm start.
+  if (global_implicit && history_.size() != n) history_.resize(n, ImplicitHistory{});
   std::vector<Vec3>& points = member_points_;
   std::vector<uint32_t>& members = members_;
   points.clear();
