@@ -4,18 +4,24 @@ export PYTHON_EXECUTABLE=/usr/bin/python3
 RC_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 RC_JOBS=${RC_JOBS:-$(nproc)}
 export RC_ROOT RC_JOBS
+# ccache (installed by scripts/setup): the catkin build then takes the core objects the plain CMake build
+# compiled (same sources and flags), and rebuilds after a pull recompile only what changed.
+rc_launcher=()
+if command -v ccache >/dev/null; then rc_launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 
-# Configures and builds the core alone with plain CMake (no ROS): build/core.
+# Configures and builds the core alone with plain CMake (no ROS): build/core (RC_TARGETS: only these targets).
 rc_build_core() {
-  cmake -S "$RC_ROOT" -B "$RC_ROOT/build/core" -DRC_WITH_ROS=OFF -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
-  cmake --build "$RC_ROOT/build/core" -j "$RC_JOBS"
+  cmake -S "$RC_ROOT" -B "$RC_ROOT/build/core" -DRC_WITH_ROS=OFF -DCMAKE_BUILD_TYPE=Release "${rc_launcher[@]}" \
+    "$@" >/dev/null
+  cmake --build "$RC_ROOT/build/core" -j "$RC_JOBS" ${RC_TARGETS:+--target $RC_TARGETS}
 }
 
-# Configures and builds the catkin package (core + ROS layer): build/ros, devel space in build/ros/devel.
+# Configures and builds the catkin package (core + ROS layer): build/ros, devel space in build/ros/devel
+# (RC_TARGETS: only these targets).
 rc_build_ros() {
   cmake -S "$RC_ROOT" -B "$RC_ROOT/build/ros" -DRC_WITH_ROS=ON -DCMAKE_BUILD_TYPE=Release \
-    -DPYTHON_EXECUTABLE=/usr/bin/python3 "$@" >/dev/null
-  cmake --build "$RC_ROOT/build/ros" -j "$RC_JOBS"
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 "${rc_launcher[@]}" "$@" >/dev/null
+  cmake --build "$RC_ROOT/build/ros" -j "$RC_JOBS" ${RC_TARGETS:+--target $RC_TARGETS}
 }
 
 # Makes the package's nodes, messages and launch files visible to rosrun/roslaunch/rostest.

@@ -51,9 +51,10 @@ inline std::string sharedData(const std::string& name) {
   return std::string(RC_SHARED_DATA_DIR) + "/" + name;
 }
 
+/// Skips visibly when the shared test data folder is missing (the message test/shared_data.h uses).
 #define RC_REQUIRE_SHARED_DATA()                    \
   if (!std::filesystem::exists(RC_SHARED_DATA_DIR)) \
-  GTEST_SKIP() << "shared test data folder " << RC_SHARED_DATA_DIR << " does not exist"
+  GTEST_SKIP() << "needs ../shared/data: the folder " << RC_SHARED_DATA_DIR << " does not exist"
 
 /// Values that float32 represents exactly, so float32 files round-trip them bit-exactly.
 inline double floatValue(std::mt19937& rng, double lo, double hi) {

@@ -67,7 +67,7 @@ const char* kMinimal =
 }  // namespace
 
 TEST(ShellSceneFile, EveryShippedSceneLoadsWithTheExpectedCounts) {
-  if (!dataPresent()) GTEST_SKIP() << "shared data missing";
+  if (!dataPresent()) GTEST_SKIP() << "needs ../shared/data: face_mask.off and maxplanck_bust.off";
   struct Expected {
     size_t surfels, nodes;
     bool plasticity, fracture, balloon, weak;
@@ -148,7 +148,7 @@ TEST(ShellSceneFile, BadFilesNameFileLineAndProblem) {
 // Mesh sources are sampled at random: the radii cover the gaps between neighbouring surfels (3.3), so the
 // rendered surface has no holes. Probes: the midpoints between each surfel and its 6 nearest neighbours.
 TEST(ShellSceneFile, MeshSurfelsCoverTheGapsBetweenNeighbours) {
-  if (!dataPresent()) GTEST_SKIP() << "shared data missing";
+  if (!dataPresent()) GTEST_SKIP() << "needs ../shared/data: face_mask.off and maxplanck_bust.off";
   const ShellScene scene = loadShellScene(scenePath("fig7_5_bust"));
   const SurfelCloud& c = scene.surfels;
   ASSERT_EQ(c.radii.size(), c.size());
@@ -179,7 +179,7 @@ TEST(ShellSceneFile, MeshSurfelsCoverTheGapsBetweenNeighbours) {
 }
 
 TEST(ShellSceneFile, ShortRunsOfEverySceneStayFinite) {
-  if (!dataPresent()) GTEST_SKIP() << "shared data missing";
+  if (!dataPresent()) GTEST_SKIP() << "needs ../shared/data: face_mask.off and maxplanck_bust.off";
   const std::map<std::string, std::function<void(YAML::Node&)>> cheap = {
       {"fig7_4_mask",
        [](YAML::Node& n) {
@@ -219,7 +219,7 @@ TEST(ShellSceneFile, ShortRunsOfEverySceneStayFinite) {
 }
 
 TEST(ShellSceneFile, SimulationKeepsSurfelsFiniteAndOnTheNodes) {
-  if (!dataPresent()) GTEST_SKIP() << "shared data missing";
+  if (!dataPresent()) GTEST_SKIP() << "needs ../shared/data: face_mask.off and maxplanck_bust.off";
   ShellScene scene = cheapScene("fig7_4_mask", [](YAML::Node& n) {
     n["source"]["sample_count"] = 3000;
     n["nodes"]["count"] = 250;
