@@ -1,9 +1,16 @@
-// Throughput of the SPH GPU path in particle-steps per second: 3D dam break in a tank (fluid only) and with
-// elastic cubes (fluid + elastic), at about 1e5, 1e6 and 1e7 fluid particles. On a CUDA device: SphGpuSolver
-// (median over repetitions, CUDA events) and the time split of its passes. With --cpu (or without a device):
-// the host driver (SphGpuHostSolver, float) and the CPU solver (SphFluidSolver + SphElasticSolid) on the
-// smaller sizes.
-//   bench_sph_cuda [--cpu] [--sizes 1e5,1e6,1e7] [--reps 5]
+// Throughput of the SPH GPU path: 3D dam break in a tank (fluid only) and with elastic cubes (fluid +
+// elastic), at about 1e5, 1e6 and 1e7 fluid particles. Rates count the particles that move (fluid and solid);
+// the static wall (boundary) particles are counted in the table but not in "moving part-steps/s" (the column
+// "all part-steps/s" divides by every particle, walls included, as the first version of this bench did).
+// On a CUDA device: SphGpuSolver (median over repetitions, CUDA events, steps taken one after the other) and
+// the time split of its passes, then the "same window" rows: every solver starts from the initial state,
+// takes
+// --warmup untimed steps and times the next --window steps, repeated from scratch --reps times, so that GPU
+// rows and CPU rows (this bench with --cpu, on any machine) time the same states at the same particle count.
+// With --cpu (or without a device): the same-window rows of the host driver of the GPU code
+// (SphGpuHostSolver<float>, the GPU's precision) and of the CPU solver (SphFluidSolver + SphElasticSolid,
+// double), on the smaller sizes.
+//   bench_sph_cuda [--cpu] [--sizes 1e5,1e6,1e7] [--reps 5] [--warmup 10] [--window 20]
 #include <omp.h>
 
 #include <algorithm>
@@ -41,16 +48,29 @@ SphGpuScene benchScene(double fluid, bool elastic) {
 }
 
 void printHeader() {
-  std::printf("%-24s %-14s %10s %10s %10s %10s %6s %11s %14s\n", "solver", "scene", "particles", "fluid",
-              "solid", "boundary", "nbrs", "ms/step", "part-steps/s");
+  std::printf("%-24s %-14s %10s %10s %10s %10s %6s %11s %15s %13s\n", "solver", "scene", "particles", "fluid",
+              "solid", "boundary", "nbrs", "ms/step", "moving p-st/s", "all p-st/s");
 }
 
 void printRow(const char* solver, const char* scene, const SphGpuScene& s, double neighbors,
               double seconds_per_step) {
-  const double n = double(s.particles.size());
-  std::printf("%-24s %-14s %10zu %10zu %10zu %10zu %6.1f %11.3f %14.3e\n", solver, scene, s.particles.size(),
-              s.fluid_particles, s.solid_particles, s.boundary_particles, neighbors, 1e3 * seconds_per_step,
-              n / seconds_per_step);
+  const double all = double(s.particles.size()), moving = double(s.fluid_particles + s.solid_particles);
+  std::printf("%-24s %-14s %10zu %10zu %10zu %10zu %6.1f %11.3f %15.3e %13.3e\n", solver, scene,
+              s.particles.size(), s.fluid_particles, s.solid_particles, s.boundary_particles, neighbors,
+              1e3 * seconds_per_step, moving / seconds_per_step, all / seconds_per_step);
+}
+
+/// Same-window protocol: from the initial state, `warmup` untimed steps, then `window` timed ones.
+struct Window {
+  int warmup = 10, steps = 20;
+};
+
+void printWindowHeader(const Window& w, int reps) {
+  std::printf(
+      "\nSame window: each repetition starts from the initial state, takes %d untimed steps and times steps "
+      "%d-%d; median of %d repetitions.\n",
+      w.warmup, w.warmup + 1, w.warmup + w.steps, reps);
+  printHeader();
 }
 
 void benchGpu(const std::vector<double>& sizes, int reps) {
@@ -102,41 +122,70 @@ void benchGpu(const std::vector<double>& sizes, int reps) {
   for (const std::string& s : splits) std::printf("%s\n", s.c_str());
 }
 
-template <class Step>
-double secondsPerStep(int steps, int reps, Step step) {
+void benchGpuWindow(const std::vector<double>& sizes, int reps, const Window& w) {
+  printWindowHeader(w, reps);
+  for (double size : sizes)
+    for (bool elastic : {false, true}) {
+      const SphGpuScene scene = benchScene(size, elastic);
+      std::vector<double> per_step;
+      double neighbors = 0.0;
+      for (int r = 0; r < reps; ++r) {
+        SphGpuSolver gpu(makeSphGpuSystem<float>(scene.config, scene.planes, scene.solids, scene.particles));
+        gpu.step(w.warmup);
+        per_step.push_back(1e-3 * gpu.timedStep(w.steps) / w.steps);
+        neighbors = gpu.neighborsPerParticle();
+      }
+      printRow("GPU, neighbour masks", elastic ? "fluid+elastic" : "fluid", scene, neighbors,
+               median(per_step));
+      std::fflush(stdout);
+    }
+}
+
+template <class Solver, class Make, class Neighbors>
+double windowSecondsPerStep(const Window& w, int reps, Make make, Neighbors neighbors, double* nbrs) {
   std::vector<double> per_step;
   for (int r = 0; r < reps; ++r) {
+    std::unique_ptr<Solver> solver = make();
+    for (int k = 0; k < w.warmup; ++k) solver->step();
     const auto t0 = std::chrono::steady_clock::now();
-    for (int k = 0; k < steps; ++k) step();
-    per_step.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / steps);
+    for (int k = 0; k < w.steps; ++k) solver->step();
+    per_step.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() /
+                       w.steps);
+    *nbrs = neighbors(*solver);
   }
   return median(per_step);
 }
 
-void benchCpu(const std::vector<double>& sizes, int reps) {
+void benchCpu(const std::vector<double>& sizes, int reps, const Window& w) {
   std::printf("CPU: %d OpenMP threads\n", omp_get_max_threads());
-  printHeader();
+  printWindowHeader(w, reps);
   for (double size : sizes)
     for (bool elastic : {false, true}) {
       const SphGpuScene scene = benchScene(size, elastic);
       const char* name = elastic ? "fluid+elastic" : "fluid";
-      const int steps = std::max(2, int(2e5 / double(scene.particles.size())));
-      {
-        SphGpuHostSolver<float> host(
-            makeSphGpuSystem<float>(scene.config, scene.planes, scene.solids, scene.particles));
-        host.step(1);
-        const double t = secondsPerStep(steps, reps, [&] { host.step(1); });
-        printRow("SphGpuHostSolver<float>", name, scene, host.neighborsPerParticle(), t);
-        std::fflush(stdout);
-      }
-      SphFluidSolver cpu(scene.config, scene.particles);
-      for (const SphPlane& plane : scene.planes) cpu.addPlane(plane);
+      double nbrs = 0.0;
+      const double host = windowSecondsPerStep<SphGpuHostSolver<float>>(
+          w, reps,
+          [&] {
+            return std::make_unique<SphGpuHostSolver<float>>(
+                makeSphGpuSystem<float>(scene.config, scene.planes, scene.solids, scene.particles));
+          },
+          [](const SphGpuHostSolver<float>& s) { return s.neighborsPerParticle(); }, &nbrs);
+      printRow("SphGpuHostSolver<float>", name, scene, nbrs, host);
+      std::fflush(stdout);
       const SphKernels kernels(3, scene.config.smoothing_length);
-      for (const SphGpuSolidSpec& s : scene.solids)
-        cpu.addForceTerm(std::make_shared<SphElasticSolid>(s.config, kernels, s.phase, s.orientation));
-      cpu.step();
-      const double t = secondsPerStep(steps, reps, [&] { cpu.step(); });
-      printRow("SphFluidSolver (double)", name, scene, cpu.lastStats().neighbors_per_particle, t);
+      const double cpu = windowSecondsPerStep<SphFluidSolver>(
+          w, reps,
+          [&] {
+            auto solver = std::make_unique<SphFluidSolver>(scene.config, scene.particles);
+            for (const SphPlane& plane : scene.planes) solver->addPlane(plane);
+            for (const SphGpuSolidSpec& s : scene.solids)
+              solver->addForceTerm(
+                  std::make_shared<SphElasticSolid>(s.config, kernels, s.phase, s.orientation));
+            return solver;
+          },
+          [](const SphFluidSolver& s) { return s.lastStats().neighbors_per_particle; }, &nbrs);
+      printRow("SphFluidSolver (double)", name, scene, nbrs, cpu);
       std::fflush(stdout);
     }
 }
@@ -147,6 +196,7 @@ int main(int argc, char** argv) {
   bool cpu = false;
   std::vector<double> sizes;
   int reps = 5;
+  Window window;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--cpu")) {
       cpu = true;
@@ -155,8 +205,13 @@ int main(int argc, char** argv) {
         sizes.push_back(std::atof(t));
     } else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) {
       reps = std::max(1, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--warmup") && i + 1 < argc) {
+      window.warmup = std::max(0, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--window") && i + 1 < argc) {
+      window.steps = std::max(1, std::atoi(argv[++i]));
     } else {
-      std::fprintf(stderr, "usage: %s [--cpu] [--sizes 1e5,1e6,1e7] [--reps 5]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--cpu] [--sizes 1e5,1e6,1e7] [--reps 5] [--warmup 10] [--window 20]\n",
+                   argv[0]);
       return 2;
     }
   }
@@ -166,9 +221,10 @@ int main(int argc, char** argv) {
   if (gpu) {
     std::printf("device: %s\n", device.c_str());
     benchGpu(sizes, reps);
+    benchGpuWindow(sizes, reps, window);
   } else {
     if (!cpu) std::printf("no CUDA device (%s): CPU solvers only\n", device.c_str());
-    benchCpu(sizes, std::min(reps, 3));
+    benchCpu(sizes, std::min(reps, 3), window);
   }
   return 0;
 }
