@@ -187,9 +187,9 @@ TEST(ContactEnergy, FrictionStopsASlidingBlockLikeCoulomb) {
       "sliding block: distance %.4f (Coulomb %.4f), stopped after %.3f s (Coulomb %.3f), max step rise "
       "%.2e E0, final speed %.2e\n",
       distance, coulomb, stop_time, 1.0 / (0.5 * kGravity), max_rise, sim.linearMomentum().norm());
-  EXPECT_NEAR(distance, coulomb, 0.3 * coulomb);
-  EXPECT_GT(stop_time, 0.0);
-  EXPECT_LT(stop_time, 0.4);
+  // Measured: 0.1092 m (7.2 % beyond Coulomb) and 0.230 s (13 % later, dt = 0.005 s).
+  EXPECT_NEAR(distance, coulomb, 0.09 * coulomb);
+  EXPECT_NEAR(stop_time, 1.0 / (0.5 * kGravity), 0.15 / (0.5 * kGravity));
   EXPECT_LT(max_rise, 1e-6);
   EXPECT_GT(lowestHeight(sim.positions()), -1e-9);
 }

@@ -317,8 +317,8 @@ TEST(SphHealing3d, BrokenBarPushedBackTogetherRegainsItsStiffness) {
   EXPECT_GT(r.gap, 2.0 * kSpacing);            // ... and the piece flew out of reach (h = 2 d)
   EXPECT_LT(r.flight_momentum_change, 1e-12);  // a free piece keeps its momentum
   EXPECT_GT(whole.elongation, 2e-4);           // the load is measurable
-  EXPECT_NEAR(r.elongation, whole.elongation, 0.1 * whole.elongation);  // ratio 1.03
-  EXPECT_EQ(r.detached_under_load, 0u);                                 // the healed bar holds the load
+  EXPECT_NEAR(r.elongation, whole.elongation, 0.05 * whole.elongation);  // measured ratio 1.033
+  EXPECT_EQ(r.detached_under_load, 0u);                                  // the healed bar holds the load
   // The crack's points docked again (the unbroken bar also keeps the few points at the kernel rim that
   // were docked at its first evaluation; free ones there never dock).
   EXPECT_GT(r.docked_held, r.docked_broken + 200);

@@ -294,7 +294,7 @@ void centreOfMass(const SphParticles& p, uint8_t phase, Vec3* x, Vec3* v) {
 
 TEST(SphSceneMesh, MeltingBunnySceneLoadsAndConservesMass) {
   const std::string bunny = std::string(RC_SHARED_DATA_DIR) + "/bunny.ply";
-  if (!fs::exists(bunny)) GTEST_SKIP() << bunny << " is absent";
+  if (!fs::exists(bunny)) GTEST_SKIP() << "needs ../shared/data: " << bunny << " is missing";
   const SphScene scene = loadSphScene(kSceneDir + "fig8_4_melting_bunny.yaml");
   ASSERT_EQ(scene.solids.size(), 1u);
   const size_t n = scene.solids[0].count;
