@@ -4,10 +4,13 @@ export PYTHON_EXECUTABLE=/usr/bin/python3
 RC_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 RC_JOBS=${RC_JOBS:-$(nproc)}
 export RC_ROOT RC_JOBS
-# ccache (installed by scripts/setup): the catkin build then takes the core objects the plain CMake build
-# compiled (same sources and flags), and rebuilds after a pull recompile only what changed.
+# ccache (installed by scripts/setup) keeps objects across branch switches and reconfigurations; the sloppiness
+# lets it cache sources compiled with the precompiled headers.
 rc_launcher=()
-if command -v ccache >/dev/null; then rc_launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+if command -v ccache >/dev/null; then
+  rc_launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  export CCACHE_SLOPPINESS=pch_defines,time_macros,include_file_mtime,include_file_ctime
+fi
 
 # Configures and builds the core alone with plain CMake (no ROS): build/core (RC_TARGETS: only these targets).
 rc_build_core() {
@@ -16,11 +19,12 @@ rc_build_core() {
   cmake --build "$RC_ROOT/build/core" -j "$RC_JOBS" ${RC_TARGETS:+--target $RC_TARGETS}
 }
 
-# Configures and builds the catkin package (core + ROS layer): build/ros, devel space in build/ros/devel
-# (RC_TARGETS: only these targets).
+# Configures and builds the catkin package (the ROS layer, linked to the core libraries of build/core, which
+# rc_build_core must have built first): build/ros, devel space in build/ros/devel (RC_TARGETS: only these targets).
 rc_build_ros() {
   cmake -S "$RC_ROOT" -B "$RC_ROOT/build/ros" -DRC_WITH_ROS=ON -DCMAKE_BUILD_TYPE=Release \
-    -DPYTHON_EXECUTABLE=/usr/bin/python3 "${rc_launcher[@]}" "$@" >/dev/null
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DRC_CORE_BUILD_DIR="$RC_ROOT/build/core" "${rc_launcher[@]}" "$@" \
+    >/dev/null
   cmake --build "$RC_ROOT/build/ros" -j "$RC_JOBS" ${RC_TARGETS:+--target $RC_TARGETS}
 }
 
