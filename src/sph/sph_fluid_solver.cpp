@@ -280,26 +280,66 @@ void SphFluidSolver::densityPass(int t) {
     const uint32_t c = grid_.cellOfSorted(s);
     if (c != current_cell) {
       // The candidates of the cell's block, shared by its particles, as structure of arrays (in run order),
-      // padded to an even count by a point that is no neighbour of any particle.
+      // padded to an even count by a point that is no neighbour of any particle. Only points closer than h
+      // to the bounding box of the cell's particles (those of this thread) are kept: a point dropped is no
+      // neighbour of any of them, and the kept ones stay in run order, so the rows are the same (the far
+      // parts of the block's edge and corner cells drop out).
       current_cell = c;
-      const int num_runs = grid_.neighborRuns(c, runs);
-      candidates = 0;
-      for (int r = 0; r < num_runs; ++r) candidates += runs[r].end - runs[r].begin;
-      padded = candidates + (candidates & 1);
-      if (cand.x.size() < padded) {
-        cand.x.resize(padded + 64);
-        cand.y.resize(padded + 64);
-        cand.z.resize(padded + 64);
-        cand.index.resize(padded + 64);
-      }
-      size_t e = 0;
-      for (int r = 0; r < num_runs; ++r)
-        for (uint32_t j = runs[r].begin; j < runs[r].end; ++j, ++e) {
-          cand.x[e] = pos[j].x();
-          cand.y[e] = pos[j].y();
-          cand.z[e] = pos[j].z();
-          cand.index[e] = j;
+      double box_lo[3] = {pos[s].x(), pos[s].y(), pos[s].z()};
+      double box_hi[3] = {box_lo[0], box_lo[1], box_lo[2]};
+      for (size_t s2 = s + 1; s2 < last && grid_.cellOfSorted(s2) == c; ++s2)
+        for (int k = 0; k < 3; ++k) {
+          box_lo[k] = std::min(box_lo[k], pos[s2][k]);
+          box_hi[k] = std::max(box_hi[k], pos[s2][k]);
         }
+      const int num_runs = grid_.neighborRuns(c, runs);
+      size_t block = 0;
+      for (int r = 0; r < num_runs; ++r) block += runs[r].end - runs[r].begin;
+      if (cand.x.size() < block + 1) {
+        cand.x.resize(block + 65);
+        cand.y.resize(block + 65);
+        cand.z.resize(block + 65);
+        cand.index.resize(block + 65);
+      }
+      // The squared distance to the box is at most the squared distance to any particle in it, also as
+      // rounded below (rounding is monotonic and the sums are taken in the same order); the slack covers
+      // compilers that contract the sums into fused multiply-adds.
+      const double box_h2 = h2 * (1.0 + 1e-9);
+      size_t e = 0;
+#ifdef __SSE2__
+      // x and y in one register; max instructions, not branches (which the compiler makes of std::max).
+      const __m128d zero = _mm_setzero_pd(), lo_xy = _mm_loadu_pd(box_lo), hi_xy = _mm_loadu_pd(box_hi);
+      const __m128d lo_z = _mm_set_sd(box_lo[2]), hi_z = _mm_set_sd(box_hi[2]);
+      for (int r = 0; r < num_runs; ++r)
+        for (uint32_t j = runs[r].begin; j < runs[r].end; ++j) {
+          const __m128d xy = _mm_loadu_pd(pos[j].data()), z = _mm_load_sd(pos[j].data() + 2);
+          const __m128d b_xy = _mm_max_pd(zero, _mm_max_pd(_mm_sub_pd(lo_xy, xy), _mm_sub_pd(xy, hi_xy)));
+          const __m128d b_z = _mm_max_sd(zero, _mm_max_sd(_mm_sub_sd(lo_z, z), _mm_sub_sd(z, hi_z)));
+          const __m128d sq = _mm_mul_pd(b_xy, b_xy);
+          const double d2 = _mm_cvtsd_f64(_mm_add_sd(_mm_add_sd(sq, _mm_unpackhi_pd(sq, sq)),
+                                                     _mm_mul_sd(b_z, b_z)));  // (x^2 + y^2) + z^2
+          _mm_store_sd(&cand.x[e], xy);  // branch-free: written, kept if within h of the box
+          _mm_storeh_pd(&cand.y[e], xy);
+          _mm_store_sd(&cand.z[e], z);
+          cand.index[e] = j;
+          e += size_t(d2 < box_h2);
+        }
+#else
+      for (int r = 0; r < num_runs; ++r)
+        for (uint32_t j = runs[r].begin; j < runs[r].end; ++j) {
+          const double x = pos[j].x(), y = pos[j].y(), z = pos[j].z();
+          const double bx = std::max(0.0, std::max(box_lo[0] - x, x - box_hi[0]));
+          const double by = std::max(0.0, std::max(box_lo[1] - y, y - box_hi[1]));
+          const double bz = std::max(0.0, std::max(box_lo[2] - z, z - box_hi[2]));
+          cand.x[e] = x;  // branch-free: written, kept if within h of the box
+          cand.y[e] = y;
+          cand.z[e] = z;
+          cand.index[e] = j;
+          e += size_t((bx * bx + by * by) + bz * bz < box_h2);
+        }
+#endif
+      candidates = e;
+      padded = candidates + (candidates & 1);
       if (padded != candidates) {
         cand.x[e] = cand.y[e] = cand.z[e] = std::numeric_limits<double>::infinity();
         cand.index[e] = std::numeric_limits<uint32_t>::max();
