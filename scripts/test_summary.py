@@ -19,6 +19,7 @@ last and exits 1 when anything failed or nothing ran.
 import argparse
 import glob
 import os
+import re
 import sys
 import xml.etree.ElementTree as ET
 
@@ -37,6 +38,14 @@ class Tally:
         return len(self.passed) + len(self.failed) + len(self.skipped)
 
 
+def message_text(text):
+    """A gtest failure or skip message without its leading "file:line" line, on one line."""
+    lines = [l.strip() for l in (text or "").strip().splitlines() if l.strip()]
+    if lines and re.match(r"^\S+:\d+$", lines[0]):
+        lines = lines[1:]
+    return " ".join(lines)
+
+
 def gtest_cases(path):
     """(suite.case, state, message) for every case of one gtest XML file."""
     cases = []
@@ -48,11 +57,9 @@ def gtest_cases(path):
             failure = tc.find("error")
         skipped = tc.find("skipped")
         if failure is not None:
-            msg = (failure.get("message") or failure.text or "").strip().splitlines()
-            cases.append((name, "failed", msg[0] if msg else ""))
+            cases.append((name, "failed", message_text(failure.get("message") or failure.text)))
         elif skipped is not None or tc.get("result") == "skipped" or tc.get("status") == "notrun":
-            msg = (skipped.get("message") if skipped is not None else "") or ""
-            cases.append((name, "skipped", msg.strip().splitlines()[0] if msg.strip() else ""))
+            cases.append((name, "skipped", message_text(skipped.get("message") if skipped is not None else "")))
         else:
             cases.append((name, "passed", ""))
     return cases
