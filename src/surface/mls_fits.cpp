@@ -55,7 +55,8 @@ void evalPolynomial(const double* c, int terms, double u, double v, double* d) {
 }  // namespace
 
 size_t MlsLocalSamples::gather(const Vec3* positions, const Vec3* normals, const uint32_t* ids, size_t n,
-                               uint32_t extra, const Vec3& p, double support, const WeightFunction& weight) {
+                               uint32_t extra, const Vec3& p, double support, const WeightFunction& weight,
+                               bool orient_normals) {
   const size_t capacity = n + 1 + kLanes;
   if (x.size() < capacity) {
     const size_t grown = std::max(capacity, 2 * x.size());
@@ -81,7 +82,12 @@ size_t MlsLocalSamples::gather(const Vec3* positions, const Vec3* normals, const
   if (extra != kNoExtra) take(extra);
 
   double* W = w.data();
-  if (weight.kind != WeightKind::kWendlandC2) {
+  // Gaussians (3.10)-(3.11) in units of the support: w = exp(-f |y|^2), f = (support / sigma)^2, positive
+  // for every gathered sample when the support does not exceed the clip radius (always so in MlsSurface).
+  const bool gaussian =
+      weight.kind == WeightKind::kGaussian ||
+      (weight.kind == WeightKind::kClippedGaussian && support <= weight.clip * weight.scale);
+  if (weight.kind != WeightKind::kWendlandC2 && !gaussian) {
     const double r2 = support * support;
     size_t kept = 0;
     for (size_t k = 0; k < c; ++k) {
@@ -105,6 +111,26 @@ size_t MlsLocalSamples::gather(const Vec3* positions, const Vec3* normals, const
       Pack::Map(W + k) = a2 * a2 * (1.0 + 4.0 * q);
     }
     for (size_t k = c; k < padded; ++k) W[k] = 0;
+  } else if (gaussian) {
+    const double f = (support / weight.scale) * (support / weight.scale);
+    for (size_t k = 0; k < padded; k += 2) Pack::Map(W + k) = (-f * Pack::Map(D + k)).exp();
+    for (size_t k = c; k < padded; ++k) W[k] = 0;
+  }
+  if (normals && orient_normals && c > 0) {
+    // Reference: the nonzero normal of the nearest sample (estimated normals are zero where the fit failed).
+    size_t ref = c;
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t k = 0; k < c; ++k) {
+      const bool usable = nx[k] != 0 || ny[k] != 0 || nz[k] != 0;
+      if (usable && D[k] < best) best = D[k], ref = k;
+    }
+    if (ref < c) {
+      const double rx = nx[ref], ry = ny[ref], rz = nz[ref];
+      for (size_t k = 0; k < c; ++k) {
+        const double s = nx[k] * rx + ny[k] * ry + nz[k] * rz < 0 ? -1.0 : 1.0;
+        nx[k] *= s, ny[k] *= s, nz[k] *= s;
+      }
+    }
   }
   return count;
 }

@@ -22,10 +22,11 @@ struct MlsLocalSamples {
   bool has_normals = false;
 
   /// Keeps the candidates ids[0..n) (and `extra` unless it is kNoExtra) with |x_i - p| < support. `normals`
-  /// may be null. Allocates only while the buffers grow. Returns count.
+  /// may be null. `orient_normals`: the normals are unoriented and are flipped to agree with the (nonzero)
+  /// normal of the sample nearest p. Allocates only while the buffers grow. Returns count.
   static constexpr uint32_t kNoExtra = UINT32_MAX;
   size_t gather(const Vec3* positions, const Vec3* normals, const uint32_t* ids, size_t n, uint32_t extra,
-                const Vec3& p, double support, const WeightFunction& weight);
+                const Vec3& p, double support, const WeightFunction& weight, bool orient_normals = false);
 };
 
 /// Plane of (3.5)-(3.6) in local coordinates: centroid q (3.6) and unit normal n (smallest eigenvector of the

@@ -9,6 +9,7 @@
 
 #include "core/neighbor_lists.h"
 #include "surface/mls_fits.h"
+#include "surface/normal_estimation.h"
 
 namespace rc {
 
@@ -45,7 +46,7 @@ constexpr size_t kMaxRetainedListEntries = size_t(1) << 22;
 /// Per-thread kd-tree candidates around `center`, keyed by the surface id.
 struct TreeCandidates {
   std::vector<Neighbor> hits;
-  std::vector<uint32_t> ids;
+  std::vector<uint32_t> ids, local;
   Vec3 center = Vec3::Zero();
   bool valid = false;
   uint64_t owner = 0;
@@ -62,22 +63,29 @@ struct MlsEvaluator {
   const MlsSurface& surface;
   const MlsConfig& config;
   const Vec3* pos;
-  const Vec3* nrm;  // null when the cloud has no normals
+  const Vec3* nrm;           // null without sample normals
+  const uint32_t* to_local;  // cloud index -> index into pos / nrm (null: the same)
   double support;
   Scratch& scratch;
 
   explicit MlsEvaluator(const MlsSurface& s)
+      : MlsEvaluator(s, s.cloud().positions.data(),
+                     s.sampleNormals().empty() ? nullptr : s.sampleNormals().data(), nullptr) {}
+  /// Over reordered copies of the samples (`local` maps the kd-tree's cloud indices into them).
+  MlsEvaluator(const MlsSurface& s, const Vec3* positions, const Vec3* normals, const uint32_t* local)
       : surface(s),
         config(s.config()),
-        pos(s.cloud().positions.data()),
-        nrm(s.cloud().hasNormals() ? s.cloud().normals.data() : nullptr),
+        pos(positions),
+        nrm(normals),
+        to_local(local),
         support(s.supportRadius()),
         scratch(tl_scratch) {}
 
   MlsLocalSamples& samples() { return scratch.samples; }
 
   size_t gatherIds(const Vec3& p, const uint32_t* ids, size_t n, uint32_t extra) {
-    return scratch.samples.gather(pos, nrm, ids, n, extra, p, support, config.weight);
+    return scratch.samples.gather(pos, nrm, ids, n, extra, p, support, config.weight,
+                                  config.estimate_normals);
   }
 
   size_t gatherTree(const Vec3& p) {
@@ -89,7 +97,10 @@ struct MlsEvaluator {
       for (size_t k = 0; k < t.hits.size(); ++k) t.ids[k] = t.hits[k].index;
       t.center = p, t.valid = true, t.owner = surface.id();
     }
-    return gatherIds(p, t.ids.data(), t.ids.size(), MlsLocalSamples::kNoExtra);
+    if (!to_local) return gatherIds(p, t.ids.data(), t.ids.size(), MlsLocalSamples::kNoExtra);
+    t.local.resize(t.ids.size());
+    for (size_t k = 0; k < t.ids.size(); ++k) t.local[k] = to_local[t.ids[k]];
+    return gatherIds(p, t.local.data(), t.local.size(), MlsLocalSamples::kNoExtra);
   }
 
   /// One step from the samples gathered at p: the foot of x on the local fit, and its normal.
@@ -156,12 +167,42 @@ struct MlsEvaluator {
   }
 };
 
+/// Order of the points along a grid of cells of size `cell` (x fastest; ties keep the input order), so that
+/// the samples of a neighbourhood lie close in memory: a counting sort, or a comparison sort when the grid
+/// has many more cells than points. Identity when the grid would not fit 64-bit keys.
+void spatialOrder(const std::vector<Vec3>& pos, double cell, std::vector<uint32_t>& order) {
+  const size_t n = pos.size();
+  order.resize(n);
+  for (size_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(i);
+  Vec3 lo = pos[0], hi = pos[0];
+  for (const Vec3& p : pos) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const Vec3 dims = ((hi - lo) / cell).array().floor() + 1.0;
+  if (!(dims.prod() < 1e18)) return;
+  const uint64_t nx = static_cast<uint64_t>(dims.x()), ny = static_cast<uint64_t>(dims.y());
+  const uint64_t cells = static_cast<uint64_t>(dims.prod());
+  std::vector<uint64_t> key(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 c = ((pos[i] - lo) / cell).array().floor().cwiseMin(dims.array() - 1.0);
+    key[i] = static_cast<uint64_t>(c.x()) +
+             nx * (static_cast<uint64_t>(c.y()) + ny * static_cast<uint64_t>(c.z()));
+  }
+  if (cells <= 4 * static_cast<uint64_t>(n) + 1024) {
+    std::vector<uint32_t> start(cells + 1, 0);
+    for (uint64_t k : key) ++start[k + 1];
+    for (uint64_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+    for (size_t i = 0; i < n; ++i) order[start[key[i]]++] = static_cast<uint32_t>(i);
+    return;
+  }
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key[a] < key[b]; });
+}
+
 }  // namespace
 
 // ----------------------------------------------------------------------------------------------------------------
 MlsSurface::MlsSurface(const SurfelCloud& cloud, const MlsConfig& config) : cloud_(cloud), config_(config) {
   cloud.validate();
-  if (config.normal_source == MlsNormalSource::kHermite && !cloud.hasNormals() && !cloud.empty())
+  if (config.normal_source == MlsNormalSource::kHermite && !cloud.hasNormals() && !cloud.empty() &&
+      !config.estimate_normals)
     throw std::invalid_argument("MlsSurface: normal_source=kHermite needs a cloud with normals");
   if (config.fit == MlsFit::kPolynomial && (config.polynomial_degree < 1 || config.polynomial_degree > 3))
     throw std::invalid_argument("MlsSurface: polynomial_degree must be 1, 2 or 3");
@@ -181,6 +222,28 @@ MlsSurface::~MlsSurface() = default;
 const KdTree& MlsSurface::tree() const {
   std::call_once(tree_once_, [this] { tree_ = std::make_unique<KdTree>(cloud_.positions); });
   return *tree_;
+}
+
+const std::vector<Vec3>& MlsSurface::sampleNormals() const {
+  if (!config_.estimate_normals) return cloud_.normals;
+  estimateNormalsOnce(nullptr, nullptr, nullptr);
+  return normals_;
+}
+
+void MlsSurface::estimateNormalsOnce(const NeighborLists* lists, const std::vector<Vec3>* positions,
+                                     const std::vector<uint32_t>* order) const {
+  std::call_once(normals_once_, [&] {
+    if (cloud_.empty()) return;
+    if (!lists) {
+      estimatePlaneNormals(cloud_.positions, tree(), config_.weight, support_, config_.min_neighbors,
+                           normals_);
+      return;
+    }
+    std::vector<Vec3> local;
+    estimatePlaneNormals(*positions, *lists, config_.weight, support_, config_.min_neighbors, local);
+    normals_.resize(local.size());
+    for (size_t k = 0; k < local.size(); ++k) normals_[(*order)[k]] = local[k];
+  });
 }
 
 bool MlsSurface::fitPlane(const Vec3& x, Vec3* q, Vec3* n) const {
@@ -210,12 +273,11 @@ void MlsSurface::projectBatch(const std::vector<Vec3>& xs, std::vector<MlsProjec
 }
 
 void MlsSurface::projectInputs(std::vector<MlsProjection>& out, InputStats* stats) const {
-  const std::vector<Vec3>& pos = cloud_.positions;
-  const size_t n = pos.size();
+  const size_t n = cloud_.positions.size();
   if (stats) *stats = InputStats();
-  for (const Vec3& p : pos) {
+  for (const Vec3& p : cloud_.positions) {
     if (!p.allFinite()) {
-      projectBatch(pos, out);
+      projectBatch(cloud_.positions, out);
       return;
     }
   }
@@ -223,6 +285,14 @@ void MlsSurface::projectInputs(std::vector<MlsProjection>& out, InputStats* stat
   if (n == 0) return;
   const bool revisits = config_.max_iterations > 1 || config_.normal_source == MlsNormalSource::kHermite;
   const double margin = revisits ? kListMargin * support_ : 0.0;
+  // The samples are processed in a spatial order, as copies: neighbourhood sums then read nearby memory.
+  std::vector<uint32_t> order, to_local(n);
+  spatialOrder(cloud_.positions, support_ + margin, order);
+  std::vector<Vec3> pos(n), nrm;
+  for (size_t k = 0; k < n; ++k) {
+    pos[k] = cloud_.positions[order[k]];
+    to_local[order[k]] = static_cast<uint32_t>(k);
+  }
   // Buffers of moderate size are kept per calling thread: page-faulting fresh ones costs as much as the
   // build.
   thread_local std::unique_ptr<NeighborLists> tl_lists;
@@ -232,12 +302,18 @@ void MlsSurface::projectInputs(std::vector<MlsProjection>& out, InputStats* stat
   NeighborLists::Options options;
   options.num_threads = 0;  // all OpenMP threads
   lists.build(pos, support_ + margin, options);
+  if (config_.estimate_normals) estimateNormalsOnce(&lists, &pos, &order);
+  const std::vector<Vec3>& normals = sampleNormals();
+  if (!normals.empty()) {
+    nrm.resize(n);
+    for (size_t k = 0; k < n; ++k) nrm[k] = normals[order[k]];
+  }
   const double reach2 = margin * margin;
   size_t own = 0, neighbor = 0, tree = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : own, neighbor, tree)
   for (long k = 0; k < static_cast<long>(n); ++k) {
     const uint32_t i = static_cast<uint32_t>(k);
-    MlsEvaluator ev(*this);
+    MlsEvaluator ev(*this, pos.data(), nrm.empty() ? nullptr : nrm.data(), to_local.data());
     // The list of input j holds every sample within r of p when |p - x_j| <= margin.
     auto gather = [&](const Vec3& p) -> size_t {
       if ((p - pos[i]).squaredNorm() <= reach2) {
@@ -257,7 +333,7 @@ void MlsSurface::projectInputs(std::vector<MlsProjection>& out, InputStats* stat
       ++tree;
       return ev.gatherTree(p);
     };
-    out[i] = ev.project(pos[i], gather);
+    out[order[i]] = ev.project(pos[i], gather);
   }
   if (stats) stats->own_list = own, stats->neighbor_list = neighbor, stats->tree = tree;
   if (lists.numEntries() <= kMaxRetainedListEntries) tl_lists = std::move(lists_owner);

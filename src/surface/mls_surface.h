@@ -15,6 +15,8 @@
 
 namespace rc {
 
+class NeighborLists;
+
 enum class MlsFit {
   kPlane,       ///< simplified MLS, Psi_S(x) = q(x) iterated to a fixed point (3.5-3.7)
   kPolynomial,  ///< Levin: plane, then a bivariate polynomial of `polynomial_degree` (3.1-3.4)
@@ -39,6 +41,13 @@ struct MlsConfig {
   /// false: a projection that stops at max_iterations without converging is still reported valid (used to
   /// study iteration caps); true: it is reported invalid.
   bool require_convergence = true;
+  /// Sample normals for the fits that use them (kSphere with normals, kHermite (3.8)). false: the cloud's
+  /// normals (without them kSphere is the point-only fit). true: estimated from the positions, ignoring the
+  /// cloud's normals: the weighted covariance normal (3.5) at every sample under this weight
+  /// (estimatePlaneNormals, once per surface on first use; projectInputs takes them from its neighbour
+  /// lists), each neighbourhood orienting them like the normal of the sample nearest the evaluation point.
+  /// Output normals are then unoriented.
+  bool estimate_normals = false;
 };
 
 struct MlsProjection {
@@ -75,14 +84,19 @@ class MlsSurface {
   /// multi-threaded (OpenMP): all-pairs neighbour lists are built once (rc::NeighborLists, at the support
   /// radius, or 20% beyond it when points are revisited) and the first iteration of every point runs from its
   /// list; later iterations reuse the list of the start point (or of a listed input) while the moved point
-  /// stays within that margin, else they query the kd-tree. A cloud with non-finite positions falls back to
-  /// projectBatch(). List buffers up to ~32 MB are kept per calling thread for the next call.
+  /// stays within that margin, else they query the kd-tree. The samples are processed as copies sorted by
+  /// grid cell, so that neighbourhood sums read nearby memory. A cloud with non-finite positions falls back
+  /// to projectBatch(). List buffers up to ~32 MB are kept per calling thread for the next call.
   void projectInputs(std::vector<MlsProjection>& out, InputStats* stats = nullptr) const;
 
   /// The simplified MLS plane at x (weights w_i(x)): q(x) of (3.6) and the unit normal of (3.5) (oriented
   /// like the input normals when present). False when fewer than min_neighbors samples have weight or the fit
   /// is degenerate. This is the plane used by the ray intersection (Algorithm 3.1).
   bool fitPlane(const Vec3& x, Vec3* q, Vec3* n) const;
+
+  /// The sample normals the fits use: the cloud's, or with estimate_normals the estimated ones (computed on
+  /// first use, thread-safe). Empty when there are none.
+  const std::vector<Vec3>& sampleNormals() const;
 
   /// Radius of the neighbourhood query: the weight's support (4 sigma for the untruncated Gaussian, where the
   /// weight has dropped to 1e-7).
@@ -95,6 +109,12 @@ class MlsSurface {
   MlsConfig config_;
   mutable std::once_flag tree_once_;
   mutable std::unique_ptr<KdTree> tree_;
+  mutable std::once_flag normals_once_;
+  mutable std::vector<Vec3> normals_;  ///< estimate_normals only
+  /// Fills normals_ once: from `lists` over `positions` (the cloud's points in `order`, lists covering the
+  /// support radius) when given, else from the kd-tree.
+  void estimateNormalsOnce(const NeighborLists* lists, const std::vector<Vec3>* positions,
+                           const std::vector<uint32_t>* order) const;
   double support_ = 0;
   uint64_t id_ = 0;  ///< unique per instance: keys the per-thread neighbour cache
 };

@@ -4,8 +4,12 @@
 #pragma once
 
 #include <optional>
+#include <vector>
 
+#include "core/kd_tree.h"
+#include "core/neighbor_lists.h"
 #include "core/surfel_cloud.h"
+#include "core/weight_function.h"
 
 namespace rc {
 
@@ -21,6 +25,18 @@ struct NormalEstimationConfig {
 
 /// Fills cloud.normals (and curvature). Throws std::invalid_argument for fewer than 3 points or k < 3.
 void estimateNormals(SurfelCloud& cloud, const NormalEstimationConfig& config);
+
+/// MLS normals: for every sample i the normal of the weighted covariance plane (3.5) of the samples within
+/// `support` of x_i (weights w(|x_j - x_i|)), taken from `lists` (built over `positions` at a radius >=
+/// support). Unoriented (the eigen solver's sign); zero where fewer than max(3, min_neighbors) samples have
+/// weight or the fit is degenerate. Multi-threaded (OpenMP). The normals MlsConfig::estimate_normals uses.
+void estimatePlaneNormals(const std::vector<Vec3>& positions, const NeighborLists& lists,
+                          const WeightFunction& weight, double support, size_t min_neighbors,
+                          std::vector<Vec3>& normals);
+/// The same from kd-tree radius queries (`tree` over `positions`); non-finite samples get zero normals.
+void estimatePlaneNormals(const std::vector<Vec3>& positions, const KdTree& tree,
+                          const WeightFunction& weight, double support, size_t min_neighbors,
+                          std::vector<Vec3>& normals);
 
 /// Flips normals so that neighbouring normals agree (MST propagation); returns the number flipped.
 size_t orientNormalsConsistently(SurfelCloud& cloud, int k = 16);

@@ -392,13 +392,21 @@ TEST(SurfelRenderer, OnlyTheRequestedOutputsAreFilledAndTheyAreUnchanged) {
     EXPECT_EQ(some.normal.size(), (outputs & kOutputNormal) ? pixels : 0u);
     EXPECT_EQ(some.weight.size(), (outputs & kOutputWeight) ? pixels : 0u);
     EXPECT_EQ(some.patch_id.size(), (outputs & kOutputPatchId) ? pixels : 0u);
-    if (outputs & kOutputColor)
+    if (outputs & kOutputColor) {
       EXPECT_EQ(std::memcmp(some.color.data(), all.color.data(), pixels * sizeof(Rgba)), 0);
-    if (outputs & kOutputDepth)
+    }
+    if (outputs & kOutputDepth) {
       EXPECT_EQ(std::memcmp(some.depth.data(), all.depth.data(), pixels * sizeof(float)), 0);
-    if (outputs & kOutputNormal) EXPECT_TRUE(some.normal == all.normal);
-    if (outputs & kOutputWeight) EXPECT_TRUE(some.weight == all.weight);
-    if (outputs & kOutputPatchId) EXPECT_TRUE(some.patch_id == all.patch_id);
+    }
+    if (outputs & kOutputNormal) {
+      EXPECT_TRUE(some.normal == all.normal);
+    }
+    if (outputs & kOutputWeight) {
+      EXPECT_TRUE(some.weight == all.weight);
+    }
+    if (outputs & kOutputPatchId) {
+      EXPECT_TRUE(some.patch_id == all.patch_id);
+    }
   }
   SplatConfig bad;
   bad.outputs = 64;

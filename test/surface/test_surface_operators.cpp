@@ -5,8 +5,10 @@
 #include <random>
 
 #include "core/kd_tree.h"
+#include "core/neighbor_lists.h"
 #include "surface/analytic_shapes.h"
 #include "surface/inside_outside.h"
+#include "surface/mls_fits.h"
 #include "surface/mls_surface.h"
 #include "surface/normal_estimation.h"
 #include "surface/radius_estimation.h"
@@ -230,6 +232,85 @@ TEST(NormalEstimation, PcaWithConsistentOrientation) {
   NormalEstimationConfig bad_k;
   bad_k.k = 2;
   EXPECT_THROW(estimateNormals(sphere_cloud, bad_k), std::invalid_argument);
+}
+
+TEST(NormalEstimation, PlaneNormalsFromListsAndTree) {
+  const AnalyticTorus torus(Vec3::Zero(), 1.0, 0.4);
+  SurfelCloud cloud = torus.sample(10000, {SamplingPattern::kUniformRandom, 0.0, 12});
+  const double h = torus.spacing(cloud.size()), support = 3 * h;
+  cloud.positions.push_back(Vec3(5, 5, 5));  // isolated: no normal
+  for (const WeightFunction& weight :
+       {WeightFunction::wendland(support), WeightFunction::clippedGaussian(support, 1.0)}) {
+    NeighborLists lists;
+    lists.build(cloud.positions, 1.2 * support);
+    std::vector<Vec3> from_lists, from_tree;
+    estimatePlaneNormals(cloud.positions, lists, weight, support, 4, from_lists);
+    KdTree tree(cloud.positions);
+    estimatePlaneNormals(cloud.positions, tree, weight, support, 4, from_tree);
+    ASSERT_EQ(from_lists.size(), cloud.size());
+    ASSERT_EQ(from_tree.size(), cloud.size());
+    EXPECT_TRUE(from_lists.back().isZero());
+    EXPECT_TRUE(from_tree.back().isZero());
+    double max_angle = 0, max_diff = 0;
+    for (size_t i = 0; i + 1 < cloud.size(); ++i) {
+      max_diff = std::max(max_diff, std::min((from_lists[i] - from_tree[i]).norm(),
+                                             (from_lists[i] + from_tree[i]).norm()));  // unoriented
+      max_angle =
+          std::max(max_angle, std::acos(std::min(1.0, std::abs(from_lists[i].dot(cloud.normals[i])))));
+    }
+    EXPECT_LT(max_diff, 1e-12);
+    // Clean random samples: the covariance normal tilts by O(h / feature size) and more where a neighbourhood
+    // is lopsided; measured 0.106 (W), 0.115 (G).
+    EXPECT_LT(max_angle, 0.125) << weightKindName(weight.kind);
+    EXPECT_THROW(estimatePlaneNormals(cloud.positions, lists, weight, 1.3 * support, 4, from_lists),
+                 std::invalid_argument);
+  }
+  cloud.positions[3] = Vec3(NAN, 0, 0);
+  KdTree tree(cloud.positions);
+  std::vector<Vec3> normals;
+  estimatePlaneNormals(cloud.positions, tree, WeightFunction::wendland(support), support, 4, normals);
+  EXPECT_TRUE(normals[3].isZero());  // a non-finite sample gets no normal (and no crash)
+}
+
+TEST(MlsLocalSamples, GaussianWeightsAndLocalOrientation) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  std::vector<Vec3> pos, nrm;
+  std::vector<uint32_t> ids;
+  for (uint32_t i = 0; i < 200; ++i) {
+    pos.emplace_back(uni(rng), uni(rng), 0.1 * uni(rng));
+    nrm.push_back(Vec3(0.1 * uni(rng), 0.1 * uni(rng), 1).normalized() * (rng() % 2 ? 1.0 : -1.0));
+    ids.push_back(i);
+  }
+  const Vec3 p(0.1, -0.2, 0);
+  size_t nearest = 0;
+  for (size_t i = 0; i < pos.size(); ++i)
+    if ((pos[i] - p).norm() < (pos[nearest] - p).norm()) nearest = i;
+  nrm[nearest].setZero();  // a failed estimate is no reference: the next nearest orients the rest
+  size_t second = nearest == 0 ? 1 : 0;
+  for (size_t i = 0; i < pos.size(); ++i)
+    if (i != nearest && (pos[i] - p).norm() < (pos[second] - p).norm()) second = i;
+  const double support = 0.7;
+  for (const WeightFunction& weight : {WeightFunction::clippedGaussian(0.35, 2.0),
+                                       WeightFunction::gaussian(0.175), WeightFunction::wendland(support)}) {
+    const double r = std::isfinite(weight.support()) ? weight.support() : 4 * weight.scale;
+    MlsLocalSamples s;
+    const size_t count = s.gather(pos.data(), nrm.data(), ids.data(), ids.size(), MlsLocalSamples::kNoExtra,
+                                  p, r, weight, true);
+    size_t inside = 0;
+    for (const Vec3& q : pos) inside += (q - p).norm() < r;
+    ASSERT_EQ(count, inside) << weightKindName(weight.kind);
+    const double sign = nrm[second].z() > 0 ? 1.0 : -1.0;
+    for (size_t k = 0; k < count; ++k) {
+      const double d2 = s.sq_norm[k] * r * r;
+      EXPECT_NEAR(s.w[k], weight.fromSquared(d2), 1e-15) << weightKindName(weight.kind);
+      const Vec3 n(s.nx[k], s.ny[k], s.nz[k]);
+      if (!n.isZero()) {
+        EXPECT_GT(sign * n.z(), 0.9);
+      }
+    }
+    for (size_t k = count; k < s.padded; ++k) EXPECT_EQ(s.w[k], 0.0);
+  }
 }
 
 TEST(RadiusEstimation, DiscsCoverTheSurface) {
