@@ -90,6 +90,14 @@ void SurfelCloud::append(const SurfelCloud& other) {
   if (first && frame_id.empty()) frame_id = other.frame_id;
 }
 
+void SurfelCloud::transform(const Eigen::Isometry3d& transform) {
+  const Eigen::Matrix3d rotation = transform.linear();
+  for (Vec3& p : positions) p = transform * p;
+  for (Vec3& v : normals) v = rotation * v;
+  for (Vec3& v : axes1) v = rotation * v;
+  for (Vec3& v : axes2) v = rotation * v;
+}
+
 size_t SurfelCloud::removeNonFinite() {
   std::vector<size_t> keep;
   keep.reserve(size());

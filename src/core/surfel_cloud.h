@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -56,6 +57,9 @@ struct SurfelCloud {
   /// Removes surfels whose position (or normal/radius if present) is not finite (the cloud becomes
   /// unorganised). Returns how many were removed.
   size_t removeNonFinite();
+  /// Applies a rigid transform to positions, normals and tangent axes (e.g. fixed_T_cloud: into the fixed
+  /// frame; frame_id is left to the caller).
+  void transform(const Eigen::Isometry3d& transform);
   /// Throws std::invalid_argument naming the channel if a present channel has the wrong size.
   void validate() const;
   /// Axis-aligned bounding box; returns false for an empty cloud.

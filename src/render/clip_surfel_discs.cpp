@@ -56,12 +56,12 @@ SurfelDiscs SurfelDiscs::fromCloud(const SurfelCloud& cloud) {
   const size_t n = cloud.size();
   if (!cloud.hasRadii() && !cloud.hasAxes()) bad("the cloud has neither radii nor axes");
   if (!cloud.hasNormals() && !cloud.hasAxes()) bad("the cloud has no normals");
-  const Attribute* patch = cloud.attributes.find("patch_id");
+  const Attribute* patch = cloud.attributes.find(kPatchIdAttribute);
   if (!patch) bad("the cloud has no attribute \"patch_id\"");
   if (patch->size() != n)
     bad("attribute \"patch_id\" has " + std::to_string(patch->size()) + " values for " + std::to_string(n) +
         " surfels");
-  const Attribute* role = cloud.attributes.find("surfel_role");
+  const Attribute* role = cloud.attributes.find(kSurfelRoleAttribute);
   if (role && role->size() != n) bad("attribute \"surfel_role\" has the wrong size");
   SurfelDiscs d;
   d.patches.resize(n);

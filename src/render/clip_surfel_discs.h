@@ -7,16 +7,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/surfel_attributes.h"
 #include "core/surfel_cloud.h"
 
 namespace rc {
-
-/// Values of the int attribute "surfel_role" (4.3).
-enum class SurfelRole : uint8_t {
-  kSurface = 0,               ///< normal surfel
-  kDiscontinuity = 1,         ///< invisible, clips geometry
-  kTextureDiscontinuity = 2,  ///< invisible, clips colour only
-};
 
 struct SurfelDiscs {
   std::vector<Vec3> centers;

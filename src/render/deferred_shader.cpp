@@ -10,7 +10,6 @@
 #include <cstring>
 #include <limits>
 
-#include "render/surfel_renderer.h"
 #include "render/tile_passes_avx2.h"
 
 namespace rc {

@@ -10,11 +10,9 @@
 
 #include "core/surfel_cloud.h"
 #include "render/ewa_splat.h"
+#include "render/splat_config.h"
 
 namespace rc {
-
-struct SplatConfig;
-struct RenderImages;
 
 /// Accumulated sums of one pixel span (structure of arrays, index 0 = first pixel of the span).
 struct AccumulatedSpan {

@@ -5,7 +5,6 @@
 #include <stdexcept>
 
 #include "render/deferred_shader.h"
-#include "render/surfel_renderer.h"
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define RC_AVX2_SHADING 1

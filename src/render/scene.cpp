@@ -71,7 +71,7 @@ bool validName(const std::string& name) {
 /// Surfels of one patch before assembly.
 struct PatchSurfels {
   SurfelCloud cloud;
-  int32_t role = kRoleSurface;
+  SurfelRole role = SurfelRole::kSurface;
   Rgba color = {200, 200, 200, 255};
   double spacing = 0;  ///< mean spacing (for texture borders)
 };
@@ -207,7 +207,7 @@ void buildTextureSquare(const TextureSquare& square, double border_spacing, cons
   const double t = std::tan(square.half_angle);
   const Vec3 plane_normals[4] = {(u - t * w).normalized(), (-u - t * w).normalized(),
                                  (v - t * w).normalized(), (-v - t * w).normalized()};
-  outside->role = inside->role = kRoleSurface;
+  outside->role = inside->role = SurfelRole::kSurface;
   outside->color = sphere.color;
   inside->color = square.color;
   outside->spacing = inside->spacing = sphere.spacing;
@@ -234,7 +234,7 @@ void buildTextureSquare(const TextureSquare& square, double border_spacing, cons
     const double step = border_spacing / sphere_radius;
     const int m = std::max(1, int(std::ceil(angle / step)));
     const Vec3 ortho = (b - a.dot(b) * a).normalized();
-    border[k].role = kRoleTextureDiscontinuity;
+    border[k].role = SurfelRole::kTextureDiscontinuity;
     border[k].color = square.color;
     border[k].spacing = border_spacing;
     for (int j = -1; j <= m + 1; ++j) {
@@ -256,12 +256,12 @@ SurfelCloud assemble(const std::vector<PatchSurfels>& parts, std::vector<ScenePa
   }
   SurfelCloud cloud;
   cloud.positions.reserve(total);
-  Attribute& patch_id = cloud.attributes.add("patch_id", ScalarType::kInt32, 1, 0);
+  Attribute& patch_id = cloud.attributes.add(kPatchIdAttribute, ScalarType::kInt32, 1, 0);
   patch_id.resize(total);
-  Attribute& role = cloud.attributes.add("surfel_role", ScalarType::kInt32, 1, 0);
+  Attribute& role = cloud.attributes.add(kSurfelRoleAttribute, ScalarType::kInt32, 1, 0);
   role.resize(total);
-  Attribute* patch_column = cloud.attributes.find("patch_id");
-  Attribute* role_column = cloud.attributes.find("surfel_role");
+  Attribute* patch_column = cloud.attributes.find(kPatchIdAttribute);
+  Attribute* role_column = cloud.attributes.find(kSurfelRoleAttribute);
   for (size_t k = 0; k < parts.size(); ++k) {
     const SurfelCloud& c = parts[k].cloud;
     (*patches)[k].first_surfel = cloud.positions.size();
@@ -283,7 +283,7 @@ SurfelCloud assemble(const std::vector<PatchSurfels>& parts, std::vector<ScenePa
         }
       }
       patch_column->set(j, double(k));
-      role_column->set(j, double(parts[k].role));
+      role_column->set(j, double(surfelRoleValue(parts[k].role)));
     }
   }
   cloud.validate();
@@ -456,7 +456,7 @@ Scene parseScene(const std::string& yaml_text, const std::string& source_name) {
         if (k > 0) {
           patch = ScenePatch();
           patch.name = new_names[k];
-          patch.role = kRoleTextureDiscontinuity;
+          patch.role = SurfelRole::kTextureDiscontinuity;
           patch.has_solid = false;
           patch.color = square.color;
         }

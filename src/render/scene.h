@@ -62,15 +62,13 @@
 #include <string>
 #include <vector>
 
+#include "core/surfel_attributes.h"
 #include "core/surfel_cloud.h"
 #include "render/analytic_csg.h"
 #include "render/camera.h"
 #include "render/csg_tree.h"
 
 namespace rc {
-
-/// Values of the int32 attribute "surfel_role" (thesis 4.3).
-constexpr int32_t kRoleSurface = 0, kRoleDiscontinuity = 1, kRoleTextureDiscontinuity = 2;
 
 /// Rigid motion x(t) = pivot + R(axis, angular_velocity t)(x - pivot) + velocity t.
 struct PatchMotion {
@@ -99,7 +97,7 @@ struct TextureSquare {
 
 struct ScenePatch {
   std::string name;
-  int32_t role = kRoleSurface;
+  SurfelRole role = SurfelRole::kSurface;
   bool has_solid = false;  ///< false for texture-discontinuity patches (no analytic solid)
   AnalyticSolid solid;     ///< at t = 0
   PatchMotion motion;

@@ -21,9 +21,9 @@ SceneRenderer::SceneRenderer(const Scene& scene, const SceneRenderOptions& optio
     clipper_ = std::make_unique<CsgClipper>(moved_, scene_.csgTree(), options_.clipper);
   } else {
     std::vector<size_t> keep;
-    const Attribute* role = scene.surfels.attributes.find("surfel_role");
+    const Attribute* role = scene.surfels.attributes.find(kSurfelRoleAttribute);
     for (size_t i = 0; i < scene.surfels.size(); ++i)
-      if (!role || role->get(i) == kRoleSurface) keep.push_back(i);
+      if (!role || role->get(i) == surfelRoleValue(SurfelRole::kSurface)) keep.push_back(i);
     visible_ = scene.surfels;
     visible_.select(keep);
   }
@@ -43,9 +43,9 @@ void SceneRenderer::render(const Camera& camera, double t, RenderImages* out, Sc
     if (moved) {
       visible_ = moved_;
       std::vector<size_t> keep;
-      const Attribute* role = moved_.attributes.find("surfel_role");
+      const Attribute* role = moved_.attributes.find(kSurfelRoleAttribute);
       for (size_t i = 0; i < moved_.size(); ++i)
-        if (!role || role->get(i) == kRoleSurface) keep.push_back(i);
+        if (!role || role->get(i) == surfelRoleValue(SurfelRole::kSurface)) keep.push_back(i);
       visible_.select(keep);
     }
     renderer_.render(visible_, camera, out, nullptr, &s.render);

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/surfel_attributes.h"
 #include "render/circular_setup_avx2.h"
 #include "render/deferred_shader.h"
 #include "render/ewa_splat.h"
@@ -185,7 +186,7 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
     throw std::invalid_argument("SurfelRenderer::render: cloud has neither normals nor tangent axes");
   if (!cloud.hasAxes() && !cloud.hasRadii())
     throw std::invalid_argument("SurfelRenderer::render: cloud has neither radii nor tangent axes");
-  const Attribute* patch_attribute = cloud.attributes.find("patch_id");
+  const Attribute* patch_attribute = cloud.attributes.find(kPatchIdAttribute);
   if (camera.width > SplatRaster::kMaxImageSize || camera.height > SplatRaster::kMaxImageSize)
     throw std::invalid_argument("SurfelRenderer::render: image " + std::to_string(camera.width) + "x" +
                                 std::to_string(camera.height) + " is larger than " +

@@ -224,7 +224,7 @@ void CsgRenderer::acceptCloud(size_t source, int patch, const sensor_msgs::Point
         throw std::runtime_error("no transform from '" + msg->header.frame_id + "' to '" +
                                  params_.fixed_frame + "': " + e.what());
       }
-      transformCloud(*cloud, tf2::transformToEigen(tf));
+      cloud->transform(tf2::transformToEigen(tf));
       cloud->frame_id = params_.fixed_frame;
     }
     std::lock_guard<std::mutex> lock(mutex_);

@@ -60,14 +60,6 @@ void checkRenderableCloud(const SurfelCloud& cloud, bool require_patch_id) {
     throw std::invalid_argument(countOf(bad_id, n) + " have a patch_id that is not an integer >= 0");
 }
 
-void transformCloud(SurfelCloud& cloud, const Eigen::Isometry3d& fixed_T_cloud) {
-  const Eigen::Matrix3d rotation = fixed_T_cloud.linear();
-  for (Vec3& p : cloud.positions) p = fixed_T_cloud * p;
-  for (Vec3& v : cloud.normals) v = rotation * v;
-  for (Vec3& v : cloud.axes1) v = rotation * v;
-  for (Vec3& v : cloud.axes2) v = rotation * v;
-}
-
 SurfelCloud mergePatchClouds(const std::vector<PatchCloudInput>& inputs, const std::string& frame_id,
                              const Rgba& default_color) {
   size_t total = 0;

@@ -6,13 +6,12 @@
 #include <string>
 #include <vector>
 
+#include "core/surfel_attributes.h"
 #include "core/surfel_cloud.h"
 
 namespace rc {
 
 /// Attribute names shared with the CSG clipper (src/render/csg_clipper.h).
-constexpr const char* kPatchIdAttribute = "patch_id";
-constexpr const char* kSurfelRoleAttribute = "surfel_role";
 
 /// Checks that `cloud` can be splatted: not empty, normals and radii (or tangent axes) present, every
 /// position/normal/radius finite, normals non-zero, radii positive; with `require_patch_id` also a "patch_id"
@@ -20,9 +19,6 @@ constexpr const char* kSurfelRoleAttribute = "surfel_role";
 /// std::invalid_argument naming the channel and the problem (e.g. "no normals (fields normal_x, normal_y,
 /// normal_z)", "3 of 100 surfels have non-finite positions").
 void checkRenderableCloud(const SurfelCloud& cloud, bool require_patch_id);
-
-/// Moves positions, normals and tangent axes by `fixed_T_cloud` (a rigid transform).
-void transformCloud(SurfelCloud& cloud, const Eigen::Isometry3d& fixed_T_cloud);
 
 /// One checked input cloud. patch_id >= 0 overrides the cloud's own "patch_id" attribute (patch topics);
 /// -1 keeps the attribute (the `surfels` topic).

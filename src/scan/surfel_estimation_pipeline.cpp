@@ -21,14 +21,6 @@ void SurfelEstimationConfig::validate() const {
   if (min_points < 3) fail("min_points must be >= 3 (got " + std::to_string(min_points) + ")");
 }
 
-void transformCloud(SurfelCloud& cloud, const Eigen::Isometry3d& transform) {
-  const Eigen::Matrix3d rotation = transform.linear();
-  for (auto& p : cloud.positions) p = transform * p;
-  for (auto& n : cloud.normals) n = rotation * n;
-  for (auto& t : cloud.axes1) t = rotation * t;
-  for (auto& t : cloud.axes2) t = rotation * t;
-}
-
 SurfelCloud estimateSurfels(SurfelCloud view, const Eigen::Isometry3d& sensor_to_fixed,
                             const std::string& fixed_frame, const SurfelEstimationConfig& config,
                             SurfelEstimationStats* stats) {
@@ -60,7 +52,7 @@ SurfelCloud estimateSurfels(SurfelCloud view, const Eigen::Isometry3d& sensor_to
   if (config.mls_smoothing) s.mls_failures = smoothCloud(view, config.mls);
   estimateRadii(view, config.radii);
 
-  transformCloud(view, sensor_to_fixed);
+  view.transform(sensor_to_fixed);
   view.frame_id = fixed_frame;
   view.width = view.height = 0;
   s.output_surfels = view.size();

@@ -38,7 +38,4 @@ SurfelCloud estimateSurfels(SurfelCloud view, const Eigen::Isometry3d& sensor_to
                             const std::string& fixed_frame, const SurfelEstimationConfig& config,
                             SurfelEstimationStats* stats = nullptr);
 
-/// Applies a rigid transform to positions, normals and tangent axes.
-void transformCloud(SurfelCloud& cloud, const Eigen::Isometry3d& transform);
-
 }  // namespace rc

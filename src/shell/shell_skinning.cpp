@@ -8,11 +8,11 @@
 #include <string>
 
 #include "core/kd_tree.h"
+#include "core/surfel_attributes.h"
 
 namespace rc {
 namespace {
 
-constexpr int32_t kDiscontinuityRole = 1;  // kRoleDiscontinuity in src/render/scene.h
 constexpr size_t kParallelSurfels = 1024;
 
 struct Frame {
@@ -74,13 +74,14 @@ struct ShellSkinning::Binder {
         nodes(nodes_),
         cracks(cracks_),
         tree(tree_),
-        roles(rest_.attributes.find("surfel_role")),
+        roles(rest_.attributes.find(kSurfelRoleAttribute)),
         candidates(std::min(nodes_.size(), 4 * node_count)),
         offset(1e-6 * std::max(nodes_.spacing, 1e-12)) {}
   /// Point a surfel is bound from: discontinuity surfels on their material side, behind the normal.
   Vec3 bindPoint(size_t s) const {
     const Vec3& p = rest.positions[s];
-    const bool discontinuity = roles && std::lround(roles->get(s)) == kDiscontinuityRole;
+    const bool discontinuity =
+        roles && std::lround(roles->get(s)) == surfelRoleValue(SurfelRole::kDiscontinuity);
     return discontinuity ? Vec3(p - offset * rest.normals[s].normalized()) : p;
   }
 };
@@ -347,11 +348,12 @@ void ShellSkinning::deform(const ShellNodes& nodes, const std::vector<Vec3>& x, 
 SurfelCloud crackDiscontinuitySurfels(const std::vector<ShellCrack>& cracks) {
   SurfelCloud cloud;
   const size_t n = 2 * cracks.size();
-  cloud.attributes.add("surfel_role", ScalarType::kInt32, 1, n);  // add all first: add() may reallocate
-  cloud.attributes.add("patch_id", ScalarType::kInt32, 1, n);
+  cloud.attributes.add(kSurfelRoleAttribute, ScalarType::kInt32, 1,
+                       n);  // add all first: add() may reallocate
+  cloud.attributes.add(kPatchIdAttribute, ScalarType::kInt32, 1, n);
   cloud.attributes.add("crack_side", ScalarType::kInt32, 1, n);
-  Attribute& role = *cloud.attributes.find("surfel_role");
-  Attribute& patch = *cloud.attributes.find("patch_id");
+  Attribute& role = *cloud.attributes.find(kSurfelRoleAttribute);
+  Attribute& patch = *cloud.attributes.find(kPatchIdAttribute);
   Attribute& side = *cloud.attributes.find("crack_side");
   for (size_t c = 0; c < cracks.size(); ++c) {
     const ShellCrack& k = cracks[c];
@@ -365,7 +367,7 @@ SurfelCloud crackDiscontinuitySurfels(const std::vector<ShellCrack>& cracks) {
       cloud.radii.push_back(k.radius);
       cloud.axes1.push_back(k.radius * u);
       cloud.axes2.push_back(sign * k.radius * v);  // t1 x t2 = normal
-      role.set(s, kDiscontinuityRole);
+      role.set(s, surfelRoleValue(SurfelRole::kDiscontinuity));
       patch.set(s, 1.0 + c);
       side.set(s, sign);
     }

@@ -83,7 +83,8 @@ class ShellSkinning {
 
 /// One pair of discontinuity surfels per crack (7.3.2, 4.3), in rest coordinates: centred on the crack disc,
 /// normals +n and -n, circular radius and axes spanning the disc. Int32 attributes "surfel_role" = 1
-/// (kRoleDiscontinuity of src/render), "patch_id" = 1 + crack index (the surface is patch 0) and "crack_side"
+/// (SurfelRole::kDiscontinuity, core/surfel_attributes.h), "patch_id" = 1 + crack index (the surface is patch
+/// 0) and "crack_side"
 /// (+1 / -1, the sign of the normal).
 SurfelCloud crackDiscontinuitySurfels(const std::vector<ShellCrack>& cracks);
 

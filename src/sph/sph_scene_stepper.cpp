@@ -1,6 +1,6 @@
 #include "sph/sph_scene_stepper.h"
 
-#include "sph/sph_scene_run.h"
+#include "sph/sph_scene_setup.h"
 
 namespace rc {
 

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "core/surfel_attributes.h"
 #include "io/cloud_io.h"
 #include "render/framing_camera.h"
 #include "render/image_io.h"
@@ -27,9 +28,9 @@ rc::Scene sceneFromSurfelFiles(const std::vector<std::string>& files, const std:
     if (!cloud.hasNormals() || !(cloud.hasRadii() || cloud.hasAxes()))
       throw std::runtime_error(files[k] + ": needs normals and radii (run rc_surface estimate first)");
     cloud.attributes = rc::AttributeSet();
-    cloud.attributes.add("patch_id", rc::ScalarType::kInt32, 1, cloud.size());
-    cloud.attributes.add("surfel_role", rc::ScalarType::kInt32, 1, cloud.size());
-    for (size_t i = 0; i < cloud.size(); ++i) cloud.attributes.find("patch_id")->set(i, double(k));
+    cloud.attributes.add(rc::kPatchIdAttribute, rc::ScalarType::kInt32, 1, cloud.size());
+    cloud.attributes.add(rc::kSurfelRoleAttribute, rc::ScalarType::kInt32, 1, cloud.size());
+    for (size_t i = 0; i < cloud.size(); ++i) cloud.attributes.find(rc::kPatchIdAttribute)->set(i, double(k));
     if (!cloud.hasColors()) cloud.colors.assign(cloud.size(), rc::Rgba{200, 200, 200, 255});
     if (!cloud.hasRadii()) {
       cloud.radii.resize(cloud.size());

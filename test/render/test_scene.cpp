@@ -120,7 +120,7 @@ TEST(SceneFiles, CubeDensities) {
     const AnalyticSolid& plane = scene.patches[p].solid;
     EXPECT_NEAR(plane.implicit(scene.surfels.positions[i]), 0, 1e-12);
     EXPECT_NEAR((scene.surfels.normals[i] - plane.normal).norm(), 0, 1e-12);
-    EXPECT_EQ(attr(scene.surfels, "surfel_role", i), kRoleSurface);
+    EXPECT_EQ(attr(scene.surfels, kSurfelRoleAttribute, i), surfelRoleValue(SurfelRole::kSurface));
   }
   EXPECT_EQ(scene.csgTree().patches().size(), 6u);
   EXPECT_EQ(scene.cameras.size(), 2u);
@@ -151,7 +151,7 @@ TEST(SceneFiles, TextureSquareSplitsTheSphere) {
   const Scene scene = loadScene(kSceneDir + "texture_square.yaml");
   ASSERT_EQ(scene.patches.size(), 10u);
   EXPECT_EQ(scene.patches[1].name, "ball_square");
-  EXPECT_EQ(scene.patches[2].role, kRoleTextureDiscontinuity);
+  EXPECT_EQ(scene.patches[2].role, SurfelRole::kTextureDiscontinuity);
   EXPECT_EQ(scene.patches[2].name, "square_a0");
   EXPECT_EQ(scene.patches[9].name, "square_b3");
   EXPECT_EQ(scene.csg_expression,
@@ -163,7 +163,8 @@ TEST(SceneFiles, TextureSquareSplitsTheSphere) {
   for (size_t i = 0; i < scene.surfels.size(); ++i) {
     const int p = attr(scene.surfels, "patch_id", i);
     const Vec3& x = scene.surfels.positions[i];
-    EXPECT_EQ(attr(scene.surfels, "surfel_role", i), p >= 2 ? kRoleTextureDiscontinuity : kRoleSurface);
+    EXPECT_EQ(attr(scene.surfels, kSurfelRoleAttribute, i),
+              surfelRoleValue(p >= 2 ? SurfelRole::kTextureDiscontinuity : SurfelRole::kSurface));
     if (p >= 2) {
       ++border;
       EXPECT_NEAR(x.norm(), 1.0, 1e-12);
