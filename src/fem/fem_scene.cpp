@@ -15,14 +15,14 @@
 #include <Eigen/Geometry>
 
 #include "fem/polygon_cut.h"
-#include "fem/surface_closing.h"
-#include "fem/surface_decimation.h"
 #include "fem/tetgen_mesh.h"
 #include "io/obj_io.h"
 #include "io/off_io.h"
 #include "io/ply_io.h"
 #include "io/pvd_io.h"
 #include "io/yaml_reader.h"
+#include "mesh/surface_closing.h"
+#include "mesh/surface_decimation.h"
 
 namespace rc {
 

@@ -20,8 +20,8 @@
 
 #include "core/surfel_cloud.h"
 #include "core/triangle_mesh.h"
+#include "mesh/mesh_ray_caster.h"
 #include "scan/depth_sensor.h"
-#include "scan/mesh_ray_caster.h"
 #include "scan/sensor_trajectory.h"
 
 namespace rc {

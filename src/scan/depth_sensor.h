@@ -8,7 +8,7 @@
 #include <string>
 
 #include "core/surfel_cloud.h"
-#include "scan/mesh_ray_caster.h"
+#include "mesh/mesh_ray_caster.h"
 
 namespace rc {
 

@@ -1,6 +1,6 @@
 #include "sph/sph_lattice.h"
 
-#include "sph/fast_winding_number.h"
+#include "mesh/fast_winding_number.h"
 
 #include <algorithm>
 #include <cmath>

@@ -16,7 +16,7 @@
 
 #include <Eigen/Geometry>
 
-#include "sph/fast_winding_number.h"
+#include "mesh/fast_winding_number.h"
 #include "sph/sph_kernels.h"
 #include "sph/sph_lattice.h"
 #include "sph/sph_scene.h"

@@ -1,5 +1,6 @@
-// Fluid surface mesh per frame (thesis 8.2.7): marching cubes [133] on an iso-surface of the SPH colour field
-// c(x) = sum_j m_j / rho_j W(x - x_j) (poly6, (C.1)), the fluid density normalised to 1 inside the fluid.
+// Fluid surface mesh per frame (thesis 8.2.7): marching cubes [133] (mesh/marching_cubes.h) on an iso-surface
+// of the SPH colour field c(x) = sum_j m_j / rho_j W(x - x_j) (poly6, (C.1)), the fluid density normalised to
+// 1 inside the fluid.
 #pragma once
 
 #include <array>
@@ -7,6 +8,7 @@
 #include <vector>
 
 #include "core/triangle_mesh.h"
+#include "mesh/marching_cubes.h"
 #include "sph/sph_particles.h"
 
 namespace rc {
@@ -41,43 +43,13 @@ struct SphSurfaceConfig {
   double effectiveCellSize() const;
 };
 
-/// Scalar values on the nodes of a uniform grid, x fastest: node (i, j, k) is at origin + cell_size (i, j,
-/// k).
-struct SphScalarGrid {
-  Vec3 origin = Vec3::Zero();
-  double cell_size = 1.0;
-  std::array<size_t, 3> dims{{0, 0, 0}};
-  std::vector<double> values;
-
-  size_t size() const { return dims[0] * dims[1] * dims[2]; }
-  size_t index(size_t i, size_t j, size_t k) const { return i + dims[0] * (j + dims[1] * k); }
-  double at(size_t i, size_t j, size_t k) const { return values[index(i, j, k)]; }
-  Vec3 node(size_t i, size_t j, size_t k) const {
-    return origin + cell_size * Vec3(double(i), double(j), double(k));
-  }
-};
-
 /// The colour field on a grid covering the bounding box of the chosen particles plus a margin of h + 2 cells
 /// (so every boundary node is 0 and the surface is closed). Each particle is splatted only into the nodes
 /// within its support, z-planes in parallel; the sum at a node runs in a fixed particle order, so the field
 /// is bitwise independent of the thread count. No chosen particle gives an empty grid (dims 0). Throws
 /// std::invalid_argument for a bad config, a non-finite position, a missing or non-positive density or
 /// mass (naming the particle), or a grid of more than max_grid_nodes nodes.
-void computeSphColorField(const SphParticles& particles, const SphSurfaceConfig& config, SphScalarGrid* grid);
-
-/// Marching cubes (Lorensen & Cline 1987, thesis [133]) on the iso-surface grid = iso_value; a node is
-/// inside where value >= iso_value. The 256-case table is generated here (not copied): on each cube face
-/// the crossings are joined so that the inside corners are cut off (on an ambiguous face they stay
-/// separated), a rule both cubes sharing the face agree on; the resulting loops are triangulated with
-/// diagonals only between vertices on no common face. The mesh is therefore watertight and manifold (every
-/// edge in exactly two triangles, oppositely oriented) wherever the iso-surface does not reach the grid
-/// boundary. Vertices are shared: one per crossed grid edge, placed by linear interpolation. Triangles
-/// are counter-clockwise seen from outside (normals point towards smaller values); vertex normals are
-/// -grad(value) (central differences) interpolated along the edge, normalised. Deterministic for any
-/// thread count. Throws std::invalid_argument for a non-finite iso_value or a grid whose values do not
-/// match its dims.
-void marchingCubes(const SphScalarGrid& grid, double iso_value, bool compute_normals, int num_threads,
-                   TriangleMesh* mesh);
+void computeSphColorField(const SphParticles& particles, const SphSurfaceConfig& config, ScalarGrid* grid);
 
 /// computeSphColorField followed by marchingCubes: the fluid surface of one frame, outward oriented.
 TriangleMesh extractSphSurface(const SphParticles& particles, const SphSurfaceConfig& config);

@@ -14,10 +14,10 @@
 
 #include "fem/cholmod_solver.h"
 #include "fem/fem_scene.h"
-#include "fem/surface_closing.h"
-#include "fem/surface_decimation.h"
 #include "fem/tetgen_mesh.h"
 #include "io/ply_io.h"
+#include "mesh/surface_closing.h"
+#include "mesh/surface_decimation.h"
 
 namespace rc {
 namespace {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <random>
 
-#include "scan/mesh_ray_caster.h"
+#include "mesh/mesh_ray_caster.h"
 #include "scan/procedural_models.h"
 
 namespace rc {

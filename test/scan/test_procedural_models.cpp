@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "scan/mesh_metrics.h"
+#include "mesh/mesh_metrics.h"
 #include "scan/procedural_models.h"
 
 namespace rc {

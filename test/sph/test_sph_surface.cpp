@@ -232,7 +232,7 @@ TEST(SphSurfaceTest, EmptyAndSingleParticleInputs) {
   const double spacing = 0.01, h = 3 * spacing;
   SphParticles particles;
   const SphSurfaceConfig config = configFor(h);
-  SphScalarGrid grid;
+  ScalarGrid grid;
   computeSphColorField(particles, config, &grid);
   EXPECT_EQ(grid.size(), 0u);
   EXPECT_TRUE(extractSphSurface(particles, config).triangles.empty());
@@ -258,7 +258,7 @@ TEST(SphSurfaceTest, MarchingCubesIsWatertightOnRandomFields) {
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   std::vector<bool> seen(256, false);
   for (int trial = 0; trial < 40; ++trial) {
-    SphScalarGrid grid;
+    ScalarGrid grid;
     grid.cell_size = 0.5;
     grid.dims = {{9, 10, 11}};
     grid.values.assign(grid.size(), 0.0);
@@ -289,7 +289,7 @@ TEST(SphSurfaceTest, MarchingCubesIsWatertightOnRandomFields) {
 
 TEST(SphSurfaceTest, MarchingCubesVolumeOfAnInsideBlockIsExact) {
   // A 3 x 4 x 5 node block of value 1 in a field of 0, iso 0.5: faces half a cell outside the block.
-  SphScalarGrid grid;
+  ScalarGrid grid;
   grid.cell_size = 0.25;
   grid.dims = {{7, 8, 9}};
   grid.values.assign(grid.size(), 0.0);
@@ -371,7 +371,7 @@ TEST(SphSurfaceTest, TimingFor100kParticles) {
     const SphSurfaceConfig config = configFor(h, h / divisor);
     double best_field = 1e30, best_total = 1e30;
     TriangleMesh mesh;
-    SphScalarGrid grid;
+    ScalarGrid grid;
     for (int repeat = 0; repeat < 3; ++repeat) {
       const auto t0 = std::chrono::steady_clock::now();
       computeSphColorField(particles, config, &grid);

@@ -1,4 +1,4 @@
-#include "scan/mesh_ray_caster.h"
+#include "mesh/mesh_ray_caster.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "sph/fast_winding_number.h"
+#include "mesh/fast_winding_number.h"
 
 #include <algorithm>
 #include <cmath>

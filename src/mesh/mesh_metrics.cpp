@@ -1,4 +1,4 @@
-#include "scan/mesh_metrics.h"
+#include "mesh/mesh_metrics.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

@@ -1,4 +1,4 @@
-#include "fem/surface_closing.h"
+#include "mesh/surface_closing.h"
 
 #include <Eigen/Geometry>
 

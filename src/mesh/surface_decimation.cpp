@@ -1,4 +1,4 @@
-#include "fem/surface_decimation.h"
+#include "mesh/surface_decimation.h"
 
 #include <Eigen/Dense>
 
