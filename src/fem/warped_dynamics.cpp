@@ -72,7 +72,7 @@ WarpedDynamics::WarpedDynamics(LinearElasticModel model, const WarpedDynamicsOpt
   gravity_forces_.resize(dofs);
   for (int i = 0; i < mesh.numNodes(); ++i) {
     rest_.segment<3>(3 * i) = mesh.node(i);
-    masses3_.segment<3>(3 * i).setConstant(model_.lumpedMasses()[i]);
+    masses3_.segment<3>(3 * i).setConstant(model_.lumpedMasses()[i]);  // (9.21)
     gravity_forces_.segment<3>(3 * i) = model_.lumpedMasses()[i] * options_.gravity;
   }
   positions_ = rest_;
@@ -155,6 +155,7 @@ void WarpedDynamics::gatherElement(int e, const Eigen::VectorXd& global, Eigen::
   for (size_t a = 0; a < ids.size(); ++a) local.segment<3>(3 * a) = global.segment<3>(3 * ids[a]);
 }
 
+// Stiffness warping (9.1.4): R_e by Horn's registration [103] of the rest onto the current nodes.
 WarpedDynamics::ElementFrame WarpedDynamics::elementFrame(int e, const Eigen::VectorXd& positions,
                                                           const Eigen::Matrix3d& previous) const {
   Eigen::VectorXd rest_local, current_local;
@@ -173,7 +174,7 @@ WarpedDynamics::ElementFrame WarpedDynamics::elementFrame(int e, const Eigen::Ve
 }
 
 Eigen::VectorXd WarpedDynamics::elementDisplacement(int e, const ElementFrame& frame) const {
-  // u_e = R^T (x_e - c) - (X_e - C)
+  // u_e = R^T (x_e - c) - (X_e - C): the rotated-back displacement the linear strain (9.14) is evaluated on
   const auto& ids = model_.mesh().element(e).globalNodeIds();
   Eigen::VectorXd u(3 * ids.size());
   for (size_t a = 0; a < ids.size(); ++a)
@@ -236,10 +237,10 @@ void WarpedDynamics::updateWarping() {
   degenerate_rotations_ = degenerate;
   last_warping_ms_ = millisecondsSince(warping_start);
 
-  // K_w = sum_e R_e K_e R_e^T and f_int: a serial pass adding each element's rotated 3 x 3 blocks in place
-  // (block value indices of the model's pattern). Serial on purpose: node-range-parallel variants (no
-  // atomics, same sums) measured slower on 2 shared, loaded cores (bunny scene: assembly 35 -> 65-96
-  // ms/frame).
+  // K_w = sum_e R_e K_e R_e^T (the thesis' K'_e, 9.1.4) and f_int: a serial pass adding each element's
+  // rotated 3 x 3 blocks in place (block value indices of the model's pattern). Serial on purpose:
+  // node-range-parallel variants (no atomics, same sums) measured slower on 2 shared, loaded cores (bunny
+  // scene: assembly 35 -> 65-96 ms/frame).
   const Clock::time_point scatter_start = Clock::now();
   double* values = warped_stiffness_.valuePtr();
   std::fill(values, values + warped_stiffness_.nonZeros(), 0.0);
@@ -520,6 +521,7 @@ StepStatistics WarpedDynamics::step() {
   stats.degenerate_rotations = degenerate_rotations_;
   const double dt = options_.time_step, alpha = options_.mass_damping, beta = options_.stiffness_damping;
 
+  // Implicit Euler on (9.20) with D = alpha M + beta K_w: A dv = b,
   // A = (1 + dt alpha) M + (dt^2 + dt beta) K_w
   const int nnz = static_cast<int>(warped_stiffness_.nonZeros());
   const double stiffness_scale = dt * dt + dt * beta;
