@@ -10,7 +10,7 @@
 
 #include "render/csg_clipper.h"
 #include "ros/csg_renderer_images.h"
-#include "ros/csg_renderer_inputs.h"
+#include "render/patch_clouds.h"
 #include "ros/point_cloud2_converter.h"
 
 namespace rc {

@@ -1,8 +1,8 @@
-// The inputs of csg_renderer: surfel patch clouds checked for rendering, moved into the fixed frame and
-// merged into one cloud with the int32 attributes "patch_id" and "surfel_role" that rc::CsgClipper reads.
+// Surfel patch clouds for CSG rendering (thesis 4.1): clouds checked for splatting and merged into one cloud
+// with the int32 attributes "patch_id" and "surfel_role" that rc::CsgClipper reads (the csg_renderer node's
+// inputs).
 #pragma once
 
-#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 
@@ -10,8 +10,6 @@
 #include "core/surfel_cloud.h"
 
 namespace rc {
-
-/// Attribute names shared with the CSG clipper (src/render/csg_clipper.h).
 
 /// Checks that `cloud` can be splatted: not empty, normals and radii (or tangent axes) present, every
 /// position/normal/radius finite, normals non-zero, radii positive; with `require_patch_id` also a "patch_id"
@@ -27,11 +25,11 @@ struct PatchCloudInput {
   int patch_id = -1;
 };
 
-/// Concatenates the inputs into one cloud: positions, unit normals, radii (for elliptical surfels the radius
-/// of the enclosing disc, max(|t1|, |t2|), unless every input has axes, which are then kept as well), colours
-/// when any input has them (`default_color` for the others), and int32 columns "patch_id" and "surfel_role"
-/// (0 where an input has no role). Other attributes are dropped. Throws std::invalid_argument for an input
-/// that fails checkRenderableCloud.
+/// Concatenates the inputs into one cloud: positions, unit normals, radii (an input's own radii when every
+/// input has radii or it has no tangent axes; else the radius of the enclosing disc, max(|t1|, |t2|)), the
+/// tangent axes when every input has them, colours when any input has them (`default_color` for the others),
+/// and int32 columns "patch_id" and "surfel_role" (0 where an input has no role). Other attributes are
+/// dropped. Throws std::invalid_argument for an input that fails checkRenderableCloud.
 SurfelCloud mergePatchClouds(const std::vector<PatchCloudInput>& inputs, const std::string& frame_id,
                              const Rgba& default_color = {200, 200, 200, 255});
 

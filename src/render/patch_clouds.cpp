@@ -1,4 +1,4 @@
-#include "ros/csg_renderer_inputs.h"
+#include "render/patch_clouds.h"
 
 #include <algorithm>
 #include <cmath>
@@ -93,7 +93,7 @@ SurfelCloud mergePatchClouds(const std::vector<PatchCloudInput>& inputs, const s
     for (size_t i = 0; i < c.size(); ++i) {
       merged.positions.push_back(c.positions[i]);
       merged.normals.push_back(c.normals[i].normalized());
-      if (all_radii)
+      if (all_radii || !c.hasAxes())
         merged.radii.push_back(c.radii[i]);
       else
         merged.radii.push_back(std::max(c.axes1[i].norm(), c.axes2[i].norm()));
