@@ -259,8 +259,8 @@ void FemSimulator::publish() {
   stats_pub_.publish(stats);
 }
 
-bool FemSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& request,
-                                   relaxed_connectivity::SphCommand::Response& response) {
+bool FemSimulator::commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
+                                   relaxed_connectivity::SimulationCommand::Response& response) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     SimulationCommandHandlers handlers;

@@ -5,7 +5,8 @@
 //             their current positions, coloured by body), ~nodes (sensor_msgs/PointCloud2: x y z,
 //             velocity[3], displacement[3] (float32), body (uint32)), ~stats (relaxed_connectivity/FemStats),
 //             all in frame_id (the scene's frame)
-// Services    ~command (relaxed_connectivity/SphCommand: start | pause | step N | reset; reset restores the
+// Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N | reset; reset
+// restores the
 //             scene file's mesh at t = 0, paused), ~cut (relaxed_connectivity/FemCut: a convex planar polygon
 //             in any tf2 frame, applied to the rest configuration: the crossed elements it overlaps are
 //             split by its plane (FemSimulation::applyCut with a region) or, progressive, the polygon itself
@@ -19,7 +20,7 @@
 #pragma once
 
 #include <relaxed_connectivity/FemCut.h>
-#include <relaxed_connectivity/SphCommand.h>
+#include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
@@ -79,8 +80,8 @@ class FemSimulator {
   void advance(double duration, uint64_t steps);
   void publish();
   void resetSimulation();
-  bool commandCallback(relaxed_connectivity::SphCommand::Request& request,
-                       relaxed_connectivity::SphCommand::Response& response);
+  bool commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
+                       relaxed_connectivity::SimulationCommand::Response& response);
   bool cutCallback(relaxed_connectivity::FemCut::Request& request,
                    relaxed_connectivity::FemCut::Response& response);
   /// The polygon of a request in the scene frame (throws std::invalid_argument / std::runtime_error).

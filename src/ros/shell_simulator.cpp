@@ -247,8 +247,8 @@ void ShellSimulator::publish() {
   stats_pub_.publish(stats);
 }
 
-bool ShellSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& request,
-                                     relaxed_connectivity::SphCommand::Response& response) {
+bool ShellSimulator::commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
+                                     relaxed_connectivity::SimulationCommand::Response& response) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     auto where = [&] {

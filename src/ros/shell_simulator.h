@@ -8,8 +8,8 @@
 //             (visualization_msgs/Marker SPHERE_LIST, one point per node), ~fibers (visualization_msgs/Marker
 //             LINE_LIST, end1-center and center-end2 per fiber), ~stats (relaxed_connectivity/ShellStats),
 //             all in frame_id
-// Services    ~command (relaxed_connectivity/SphCommand: start | pause | step N (N frames, 0 means 1) |
-// reset;
+// Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N (N frames, 0 means 1)
+// | reset;
 //             reset restores the scene at t = 0, paused, and drops the applied forces), ~apply_force
 //             (relaxed_connectivity/ShellForce: a force on one node or on the nodes near a point for a
 //             simulated duration; bad input is refused with a message and changes nothing)
@@ -21,7 +21,7 @@
 #pragma once
 
 #include <relaxed_connectivity/ShellForce.h>
-#include <relaxed_connectivity/SphCommand.h>
+#include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 #include <visualization_msgs/Marker.h>
 
@@ -83,8 +83,8 @@ class ShellSimulator {
   void applyForces();
   void publish();
   void resetSimulation();
-  bool commandCallback(relaxed_connectivity::SphCommand::Request& request,
-                       relaxed_connectivity::SphCommand::Response& response);
+  bool commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
+                       relaxed_connectivity::SimulationCommand::Response& response);
   bool forceCallback(relaxed_connectivity::ShellForce::Request& request,
                      relaxed_connectivity::ShellForce::Response& response);
 

@@ -1,12 +1,12 @@
-// The start / pause / step / reset protocol (SphCommand.srv) shared by the simulator nodes: the node says
-// what each command does, the dispatcher parses the request and refuses unknown commands.
+// The start / pause / step / reset protocol (SimulationCommand.srv) shared by the simulator nodes: the node
+// says what each command does, the dispatcher parses the request and refuses unknown commands.
 #pragma once
 
 #include <cstdint>
 #include <functional>
 #include <string>
 
-#include "relaxed_connectivity/SphCommand.h"
+#include "relaxed_connectivity/SimulationCommand.h"
 
 namespace rc {
 
@@ -21,8 +21,8 @@ struct SimulationCommandHandlers {
 };
 
 /// Runs the handler of request.command; an unknown command fails naming the known ones.
-inline void dispatchSimulationCommand(const relaxed_connectivity::SphCommand::Request& request,
-                                      relaxed_connectivity::SphCommand::Response& response,
+inline void dispatchSimulationCommand(const relaxed_connectivity::SimulationCommand::Request& request,
+                                      relaxed_connectivity::SimulationCommand::Response& response,
                                       const SimulationCommandHandlers& handlers) {
   CommandResult result;
   if (request.command == "start") {

@@ -177,8 +177,8 @@ void SphSimulator::publish() {
   stats_pub_.publish(stats);
 }
 
-bool SphSimulator::commandCallback(relaxed_connectivity::SphCommand::Request& request,
-                                   relaxed_connectivity::SphCommand::Response& response) {
+bool SphSimulator::commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
+                                   relaxed_connectivity::SimulationCommand::Response& response) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!solver_) {

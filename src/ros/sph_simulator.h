@@ -7,7 +7,7 @@
 //             temperature (float32) and phase (uint8: 0 fluid, else the solid's id)), ~surface
 //             (visualization_msgs/Marker, TRIANGLE_LIST of the fluid surface, 8.2.7; only with ~surface
 //             true), ~stats (relaxed_connectivity/SphStats), all in frame_id
-// Services    ~command (relaxed_connectivity/SphCommand: start | pause | step N | reset),
+// Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N | reset),
 //             ~load_scene (relaxed_connectivity/LoadSphScene; a bad file is reported and changes nothing)
 // Parameters  (private) scene (file; empty: wait for ~load_scene), frame_id, rate (frames per second),
 //             autostart, real_time_factor (simulated seconds per wall second), surface, surface_cell_size
@@ -15,7 +15,7 @@
 #pragma once
 
 #include <relaxed_connectivity/LoadSphScene.h>
-#include <relaxed_connectivity/SphCommand.h>
+#include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 
 #include <memory>
@@ -59,8 +59,8 @@ class SphSimulator {
   /// reports an instability.
   void advance(double duration, uint64_t steps);
   void publish();
-  bool commandCallback(relaxed_connectivity::SphCommand::Request& request,
-                       relaxed_connectivity::SphCommand::Response& response);
+  bool commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
+                       relaxed_connectivity::SimulationCommand::Response& response);
   bool loadCallback(relaxed_connectivity::LoadSphScene::Request& request,
                     relaxed_connectivity::LoadSphScene::Response& response);
 

@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/FemCut.h>
 #include <relaxed_connectivity/FemStats.h>
-#include <relaxed_connectivity/SphCommand.h>
+#include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_eigen/tf2_eigen.h>
@@ -34,7 +34,7 @@ using rc::waitFor;
 
 using relaxed_connectivity::FemCut;
 using relaxed_connectivity::FemStats;
-using relaxed_connectivity::SphCommand;
+using relaxed_connectivity::SimulationCommand;
 
 struct Inbox {
   std::mutex mutex;
@@ -144,7 +144,7 @@ TEST(FemDemoLaunch, SurfaceNodesCommandsAndCuts) {
       EXPECT_EQ(fields.count(name), 1u) << name;
   }
 
-  ros::ServiceClient command = nh.serviceClient<SphCommand>("fem_sim/command");
+  ros::ServiceClient command = nh.serviceClient<SimulationCommand>("fem_sim/command");
   ros::ServiceClient cut = nh.serviceClient<FemCut>("fem_sim/cut");
   ASSERT_TRUE(command.waitForExistence(ros::Duration(10)));
   ASSERT_TRUE(cut.waitForExistence(ros::Duration(10)));
@@ -172,7 +172,7 @@ TEST(FemDemoLaunch, SurfaceNodesCommandsAndCuts) {
       },
       10.0));
   EXPECT_NEAR(inbox.stats.time, 3 * scene.dynamics.time_step, 1e-12);
-  SphCommand unknown;
+  SimulationCommand unknown;
   unknown.request.command = "fly";
   ASSERT_TRUE(command.call(unknown));
   EXPECT_FALSE(unknown.response.success);

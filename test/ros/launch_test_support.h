@@ -3,7 +3,7 @@
 #pragma once
 
 #include <gtest/gtest.h>
-#include <relaxed_connectivity/SphCommand.h>
+#include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 #include <yaml-cpp/yaml.h>
 
@@ -25,9 +25,10 @@ bool waitFor(Done&& done, double seconds) {
 }
 
 /// Calls a simulator's ~command service (start, pause, step, reset) and expects it to succeed.
-inline relaxed_connectivity::SphCommand::Response callCommand(ros::ServiceClient& client,
-                                                              const std::string& name, uint32_t steps = 0) {
-  relaxed_connectivity::SphCommand c;
+inline relaxed_connectivity::SimulationCommand::Response callCommand(ros::ServiceClient& client,
+                                                                     const std::string& name,
+                                                                     uint32_t steps = 0) {
+  relaxed_connectivity::SimulationCommand c;
   c.request.command = name;
   c.request.steps = steps;
   EXPECT_TRUE(client.call(c)) << name;

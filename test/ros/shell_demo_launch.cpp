@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/ShellForce.h>
 #include <relaxed_connectivity/ShellStats.h>
-#include <relaxed_connectivity/SphCommand.h>
+#include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <visualization_msgs/Marker.h>
@@ -32,7 +32,7 @@ using rc::waitFor;
 
 using relaxed_connectivity::ShellForce;
 using relaxed_connectivity::ShellStats;
-using relaxed_connectivity::SphCommand;
+using relaxed_connectivity::SimulationCommand;
 
 struct Inbox {
   std::mutex mutex;
@@ -122,7 +122,7 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
       EXPECT_EQ(fields.count(name), 1u) << name;
   }
 
-  ros::ServiceClient command = nh.serviceClient<SphCommand>("shell_sim/command");
+  ros::ServiceClient command = nh.serviceClient<SimulationCommand>("shell_sim/command");
   ros::ServiceClient force = nh.serviceClient<ShellForce>("shell_sim/apply_force");
   ASSERT_TRUE(command.waitForExistence(ros::Duration(10)));
   ASSERT_TRUE(force.waitForExistence(ros::Duration(10)));
@@ -213,7 +213,7 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
   EXPECT_GT(near, 1u);
 
   // Refused: the message says why, no force is added.
-  SphCommand unknown;
+  SimulationCommand unknown;
   unknown.request.command = "fly";
   ASSERT_TRUE(command.call(unknown));
   EXPECT_FALSE(unknown.response.success);

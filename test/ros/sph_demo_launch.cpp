@@ -3,7 +3,7 @@
 // while it keeps its scene, and loads another scene; the rviz config shows topics the node publishes.
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/LoadSphScene.h>
-#include <relaxed_connectivity/SphCommand.h>
+#include <relaxed_connectivity/SimulationCommand.h>
 #include <relaxed_connectivity/SphStats.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -26,7 +26,7 @@ using rc::expectRvizTopicsPublished;
 using rc::waitFor;
 
 using relaxed_connectivity::LoadSphScene;
-using relaxed_connectivity::SphCommand;
+using relaxed_connectivity::SimulationCommand;
 using relaxed_connectivity::SphStats;
 
 struct Inbox {
@@ -106,20 +106,20 @@ TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
   EXPECT_TRUE(inbox.lastStats().running);
   EXPECT_GT(inbox.lastStats().time, 0.0);
 
-  ros::ServiceClient command = nh.serviceClient<SphCommand>("sph_sim/command");
+  ros::ServiceClient command = nh.serviceClient<SimulationCommand>("sph_sim/command");
   ros::ServiceClient load = nh.serviceClient<LoadSphScene>("sph_sim/load_scene");
   ASSERT_TRUE(command.waitForExistence(ros::Duration(10)));
   ASSERT_TRUE(load.waitForExistence(ros::Duration(10)));
 
   // Pause, then exactly 5 steps.
-  SphCommand pause;
+  SimulationCommand pause;
   pause.request.command = "pause";
   ASSERT_TRUE(command.call(pause));
   EXPECT_TRUE(pause.response.success) << pause.response.message;
   const SphStats paused = waitForStats(inbox, [](const SphStats& m) { return !m.running; });
   EXPECT_FALSE(paused.running);
   EXPECT_EQ(paused.scene, "dam_break_2d");
-  SphCommand step;
+  SimulationCommand step;
   step.request.command = "step";
   step.request.steps = 5;
   ASSERT_TRUE(command.call(step));
@@ -133,14 +133,14 @@ TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
   EXPECT_TRUE(stepped.instability.empty()) << stepped.instability;
 
   // Reset to t = 0; unknown commands are refused.
-  SphCommand reset;
+  SimulationCommand reset;
   reset.request.command = "reset";
   ASSERT_TRUE(command.call(reset));
   EXPECT_TRUE(reset.response.success);
   const SphStats after_reset = waitForStats(inbox, [](const SphStats& m) { return m.step == 0; });
   EXPECT_EQ(after_reset.step, 0u);
   EXPECT_EQ(after_reset.time, 0.0);
-  SphCommand unknown;
+  SimulationCommand unknown;
   unknown.request.command = "fly";
   ASSERT_TRUE(command.call(unknown));
   EXPECT_FALSE(unknown.response.success);
@@ -192,7 +192,7 @@ TEST(SphDemoLaunch, TemperatureScenesFreezeAndPublishTemperatureAndPhase) {
       });
   const std::string dir = std::string(RC_SOURCE_DIR) + "/config/sph/";
   ros::ServiceClient load = nh.serviceClient<LoadSphScene>("sph_sim/load_scene");
-  ros::ServiceClient command = nh.serviceClient<SphCommand>("sph_sim/command");
+  ros::ServiceClient command = nh.serviceClient<SimulationCommand>("sph_sim/command");
   ASSERT_TRUE(load.waitForExistence(ros::Duration(30.0)));
   // A paused node publishes only after a command: connect first.
   ASSERT_TRUE(waitFor(
@@ -202,7 +202,7 @@ TEST(SphDemoLaunch, TemperatureScenesFreezeAndPublishTemperatureAndPhase) {
   load_rod.request.start = false;
   ASSERT_TRUE(load.call(load_rod));
   ASSERT_TRUE(load_rod.response.success) << load_rod.response.message;
-  SphCommand step;
+  SimulationCommand step;
   step.request.command = "step";
   step.request.steps = 480;
   ASSERT_TRUE(command.call(step));
