@@ -104,4 +104,33 @@ void writeFemObj(const std::string& path, const std::vector<FemBodyState>& bodie
   if (!out) throw IoError(path, "write failed");
 }
 
+SurfelCloud femNodesToCloud(const std::vector<FemBodyState>& bodies) {
+  size_t n = 0;
+  for (const FemBodyState& body : bodies) n += size_t(body.mesh->numNodes());
+  SurfelCloud cloud;
+  cloud.positions.reserve(n);
+  // Added first, looked up after: add() may move the columns added before.
+  cloud.attributes.add("velocity", ScalarType::kFloat32, 3, n);
+  cloud.attributes.add("displacement", ScalarType::kFloat32, 3, n);
+  cloud.attributes.add("body", ScalarType::kUInt32, 1, n);
+  Attribute& velocity = *cloud.attributes.find("velocity");
+  Attribute& displacement = *cloud.attributes.find("displacement");
+  Attribute& body_id = *cloud.attributes.find("body");
+  size_t i = 0;
+  for (size_t b = 0; b < bodies.size(); ++b) {
+    const FemBodyState& body = bodies[b];
+    for (int v = 0; v < body.mesh->numNodes(); ++v, ++i) {
+      const Vec3 x = body.positions->segment<3>(3 * v);
+      const Vec3 u = x - body.mesh->node(v);
+      cloud.positions.push_back(x);
+      for (uint32_t k = 0; k < 3; ++k) {
+        velocity.set(i, body.velocities ? (*body.velocities)[3 * v + k] : 0.0, k);
+        displacement.set(i, u[k], k);
+      }
+      body_id.set(i, double(b));
+    }
+  }
+  return cloud;
+}
+
 }  // namespace rc

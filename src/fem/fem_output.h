@@ -1,6 +1,6 @@
-// Files of an FEM run (thesis chapter 9): VTK XML UnstructuredGrid (.vtu) with one VTK_POLYHEDRON cell (type
-// 42, faces / faceoffsets arrays) per convex element, readable by ParaView and VTK 9 (io/pvd_io.h
-// lists the frames); the deformed boundary surface as OBJ triangles.
+// Outputs of an FEM run (thesis chapter 9): the nodes as a point cloud, VTK XML UnstructuredGrid (.vtu) with
+// one VTK_POLYHEDRON cell (type 42, faces / faceoffsets arrays) per convex element, readable by ParaView and
+// VTK 9 (io/pvd_io.h lists the frames); the deformed boundary surface as OBJ triangles.
 #pragma once
 
 #include <Eigen/Core>
@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/surfel_cloud.h"
 #include "fem/polyhedral_mesh.h"
 
 namespace rc {
@@ -31,6 +32,10 @@ enum class VtuEncoding { kAscii, kAppendedRaw };
 /// if the file cannot be written.
 void writeFemVtu(const std::string& path, const std::vector<FemBodyState>& bodies,
                  VtuEncoding encoding = VtuEncoding::kAppendedRaw);
+
+/// The nodes of all bodies (in body order) at their current positions with the fields velocity and
+/// displacement (float32 x 3, x - X) and body (uint32, index of the body).
+SurfelCloud femNodesToCloud(const std::vector<FemBodyState>& bodies);
 
 /// The boundary triangles of all bodies at their current positions as one OBJ file ("o body<k>" per body).
 /// Throws like writeFemVtu.

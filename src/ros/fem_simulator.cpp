@@ -11,7 +11,6 @@
 #include <limits>
 #include <stdexcept>
 
-#include "fem/polygon_geometry.h"
 #include "ros/point_cloud2_converter.h"
 #include "ros/simulation_commands.h"
 
@@ -42,83 +41,6 @@ FemSimulatorParams readFemSimulatorParams(const ros::NodeHandle& pnh) {
   pnh.param("planarity_tolerance", p.planarity_tolerance, p.planarity_tolerance);
   p.validate();
   return p;
-}
-
-FemSceneCut femCutFromPolygon(const std::vector<Vec3>& input, double planarity_tolerance) {
-  auto fail = [](const std::string& what) { throw std::invalid_argument("cut polygon: " + what); };
-  for (size_t k = 0; k < input.size(); ++k)
-    if (!input[k].allFinite()) fail("point " + std::to_string(k) + " is not finite");
-  double diameter = 0.0;
-  for (const Vec3& a : input)
-    for (const Vec3& b : input) diameter = std::max(diameter, (a - b).norm());
-  // Repeated consecutive points (also a closing copy of the first) are dropped.
-  std::vector<Vec3> polygon;
-  for (const Vec3& p : input)
-    if (polygon.empty() || (p - polygon.back()).norm() > 1e-12 * diameter) polygon.push_back(p);
-  while (polygon.size() > 1 && (polygon.back() - polygon.front()).norm() <= 1e-12 * diameter)
-    polygon.pop_back();
-  if (polygon.size() < 3)
-    fail("needs at least 3 distinct points (got " + std::to_string(input.size()) + " points, " +
-         std::to_string(polygon.size()) + " distinct)");
-
-  Vec3 centroid = Vec3::Zero();
-  for (const Vec3& p : polygon) centroid += p;
-  centroid /= double(polygon.size());
-  Vec3 normal = Vec3::Zero();  // Newell: twice the vector area
-  for (size_t k = 0; k < polygon.size(); ++k)
-    normal += (polygon[k] - centroid).cross(polygon[(k + 1) % polygon.size()] - centroid);
-  if (!(0.5 * normal.norm() > 1e-9 * diameter * diameter)) fail("zero area (collinear or coincident points)");
-  normal.normalize();
-  for (size_t k = 0; k < polygon.size(); ++k) {
-    const double distance = std::abs(normal.dot(polygon[k] - centroid));
-    if (distance > planarity_tolerance * diameter)
-      fail("not planar: point " + std::to_string(k) + " lies " + std::to_string(distance) +
-           " m from the polygon's plane (tolerance " + std::to_string(planarity_tolerance * diameter) +
-           " m)");
-  }
-
-  FemSceneCut cut;
-  cut.point = centroid;
-  cut.normal = normal;
-  const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
-  std::vector<Eigen::Vector2d> in_plane;
-  for (const Vec3& p : polygon) {
-    const Vec3 projected = p - normal * normal.dot(p - centroid);
-    cut.region.push_back(projected);
-    in_plane.emplace_back(e1.dot(projected - centroid), e2.dot(projected - centroid));
-  }
-  const double area_tolerance = 1e-12 * diameter * diameter;
-  if (!isConvexPolygon(in_plane, area_tolerance, area_tolerance)) fail("not convex");
-  return cut;
-}
-
-SurfelCloud femNodesToCloud(const std::vector<FemBodyState>& bodies) {
-  size_t n = 0;
-  for (const FemBodyState& body : bodies) n += size_t(body.mesh->numNodes());
-  SurfelCloud cloud;
-  cloud.positions.reserve(n);
-  // Added first, looked up after: add() may move the columns added before.
-  cloud.attributes.add("velocity", ScalarType::kFloat32, 3, n);
-  cloud.attributes.add("displacement", ScalarType::kFloat32, 3, n);
-  cloud.attributes.add("body", ScalarType::kUInt32, 1, n);
-  Attribute& velocity = *cloud.attributes.find("velocity");
-  Attribute& displacement = *cloud.attributes.find("displacement");
-  Attribute& body_id = *cloud.attributes.find("body");
-  size_t i = 0;
-  for (size_t b = 0; b < bodies.size(); ++b) {
-    const FemBodyState& body = bodies[b];
-    for (int v = 0; v < body.mesh->numNodes(); ++v, ++i) {
-      const Vec3 x = body.positions->segment<3>(3 * v);
-      const Vec3 u = x - body.mesh->node(v);
-      cloud.positions.push_back(x);
-      for (uint32_t k = 0; k < 3; ++k) {
-        velocity.set(i, body.velocities ? (*body.velocities)[3 * v + k] : 0.0, k);
-        displacement.set(i, u[k], k);
-      }
-      body_id.set(i, double(b));
-    }
-  }
-  return cloud;
 }
 
 visualization_msgs::Marker femSurfaceMarker(const std::vector<FemBodyState>& bodies) {

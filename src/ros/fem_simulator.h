@@ -33,6 +33,8 @@
 #include <vector>
 
 #include "core/surfel_cloud.h"
+#include "fem/fem_cut_polygon.h"
+#include "fem/fem_output.h"
 #include "fem/fem_scene.h"
 
 namespace rc {
@@ -51,16 +53,6 @@ struct FemSimulatorParams {
 };
 
 FemSimulatorParams readFemSimulatorParams(const ros::NodeHandle& private_nh);
-
-/// The cut of a polygon given in the scene frame: plane through its centroid with its (Newell) normal, region
-/// = the points projected onto that plane. Throws std::invalid_argument naming the problem: fewer than 3
-/// points, a non-finite point, zero area (coincident or collinear points), a point farther than
-/// planarity_tolerance * diameter from the plane, or a polygon that is not convex.
-FemSceneCut femCutFromPolygon(const std::vector<Vec3>& polygon, double planarity_tolerance);
-
-/// The nodes of all bodies (in body order) at their current positions with the fields velocity and
-/// displacement (float32 x 3, x - X) and body (uint32, index of the body).
-SurfelCloud femNodesToCloud(const std::vector<FemBodyState>& bodies);
 
 /// The boundary triangles of all bodies at their current positions as one TRIANGLE_LIST marker (3 points
 /// per triangle, one colour per vertex by body). Header and namespace are left to the caller.
