@@ -35,34 +35,9 @@ ShellSimulatorParams readShellSimulatorParams(const ros::NodeHandle& pnh) {
 
 ShellAppliedForce shellForceFromRequest(const relaxed_connectivity::ShellForce::Request& request,
                                         const std::vector<Vec3>& positions) {
-  auto fail = [](const std::string& what) { throw std::invalid_argument("apply_force: " + what); };
-  ShellAppliedForce applied;
-  applied.force = Vec3(request.force.x, request.force.y, request.force.z);
-  if (!applied.force.allFinite()) fail("force is not finite");
-  if (!(applied.force.norm() > 0)) fail("force is zero");
-  if (!(request.duration > 0) || !std::isfinite(request.duration))
-    fail("duration must be finite and > 0 s (got " + std::to_string(request.duration) + ")");
-  applied.remaining = request.duration;
-  if (request.node >= 0) {
-    if (size_t(request.node) >= positions.size())
-      fail("node " + std::to_string(request.node) + " is out of range (" + std::to_string(positions.size()) +
-           " nodes)");
-    applied.nodes.push_back(size_t(request.node));
-    return applied;
-  }
-  if (request.node != -1)
-    fail("node must be a node index >= 0 or -1 (nodes near point), got " + std::to_string(request.node));
-  const Vec3 point(request.point.x, request.point.y, request.point.z);
-  if (!point.allFinite()) fail("point is not finite");
-  if (!(request.radius > 0) || !std::isfinite(request.radius))
-    fail("radius must be finite and > 0 (got " + std::to_string(request.radius) + ")");
-  for (size_t i = 0; i < positions.size(); ++i)
-    if ((positions[i] - point).squaredNorm() <= request.radius * request.radius) applied.nodes.push_back(i);
-  if (applied.nodes.empty())
-    fail("no node within " + std::to_string(request.radius) + " m of the point (" +
-         std::to_string(point.x()) + ", " + std::to_string(point.y()) + ", " + std::to_string(point.z()) +
-         ")");
-  return applied;
+  return shellAppliedForce(Vec3(request.force.x, request.force.y, request.force.z), request.duration,
+                           request.node, Vec3(request.point.x, request.point.y, request.point.z),
+                           request.radius, positions);
 }
 
 namespace {

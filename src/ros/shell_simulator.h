@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "shell/shell_applied_force.h"
 #include "shell/shell_scene.h"
 
 namespace rc {
@@ -47,17 +48,7 @@ struct ShellSimulatorParams {
 
 ShellSimulatorParams readShellSimulatorParams(const ros::NodeHandle& private_nh);
 
-/// A force acting on some nodes for a remaining simulated time.
-struct ShellAppliedForce {
-  std::vector<size_t> nodes;
-  Vec3 force = Vec3::Zero();  ///< on each node
-  double remaining = 0.0;     ///< simulated seconds left
-};
-
-/// Checks a ShellForce request against the current node positions and selects its nodes. Throws
-/// std::invalid_argument naming the problem: a non-finite or zero force, a duration that is not finite and
-/// > 0, a node index out of range, node = -1 with a non-finite point or a radius that is not finite and > 0,
-/// or no node within the radius.
+/// The ShellForce request as a shellAppliedForce (errors as there).
 ShellAppliedForce shellForceFromRequest(const relaxed_connectivity::ShellForce::Request& request,
                                         const std::vector<Vec3>& positions);
 
