@@ -9,8 +9,8 @@
 #include <stdexcept>
 
 #include "render/csg_clipper.h"
-#include "ros/csg_renderer_images.h"
 #include "render/patch_clouds.h"
+#include "ros/csg_renderer_images.h"
 #include "ros/point_cloud2_converter.h"
 
 namespace rc {

@@ -14,7 +14,6 @@
 #include "io/pvd_io.h"
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_source.h"
-#include "sph/sph_object_penalty.h"
 #include "sph/sph_output.h"
 #include "sph/sph_scene_stepper.h"
 #include "sph/sph_skinning.h"
