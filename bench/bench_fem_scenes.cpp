@@ -33,7 +33,8 @@
 #include <vector>
 
 #include "fem/cholmod_solver.h"
-#include "fem/fem_scene.h"
+#include "fem/fem_scene_reader.h"
+#include "fem/fem_simulation.h"
 
 namespace {
 

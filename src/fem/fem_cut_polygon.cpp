@@ -59,4 +59,24 @@ FemSceneCut femCutFromPolygon(const std::vector<Vec3>& input, double planarity_t
   return cut;
 }
 
+std::vector<std::vector<Vec3>> bladeSweepPolygons(const Vec3& blade_start, const Vec3& blade_end,
+                                                  const std::vector<Vec3>& path) {
+  if (path.size() < 2)
+    throw std::invalid_argument("blade sweep: the path needs at least 2 points, got " +
+                                std::to_string(path.size()));
+  const Vec3 blade = blade_end - blade_start;
+  if (!(blade.norm() > 0.0) || !blade.allFinite())
+    throw std::invalid_argument("blade sweep: the blade has zero length");
+  std::vector<std::vector<Vec3>> polygons;
+  for (size_t k = 0; k + 1 < path.size(); ++k) {
+    const Vec3 step = path[k + 1] - path[k];
+    if (!(blade.cross(step).norm() > 1e-9 * blade.norm() * step.norm()) || !(step.norm() > 0.0))
+      throw std::invalid_argument("blade sweep: path step " + std::to_string(k) +
+                                  " is zero or parallel to the blade");
+    polygons.push_back(
+        {blade_start + path[k], blade_end + path[k], blade_end + path[k + 1], blade_start + path[k + 1]});
+  }
+  return polygons;
+}
+
 }  // namespace rc

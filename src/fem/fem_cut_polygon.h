@@ -15,4 +15,10 @@ namespace rc {
 /// planarity_tolerance * diameter from the plane, or a polygon that is not convex.
 FemSceneCut femCutFromPolygon(const std::vector<Vec3>& polygon, double planarity_tolerance);
 
+/// The polygons of a blade sweep: the blade segment (blade[0], blade[1]) translated by path[k] and path[k +
+/// 1] spans quad k (path.size() - 1 quads, planar by construction). Throws std::invalid_argument for fewer
+/// than 2 path points, a zero-length blade or a path step parallel to the blade.
+std::vector<std::vector<Vec3>> bladeSweepPolygons(const Vec3& blade_start, const Vec3& blade_end,
+                                                  const std::vector<Vec3>& path);
+
 }  // namespace rc

@@ -353,4 +353,48 @@ SeparatedMesh separateAlongPlane(const PlaneCutResult& cut) {
   return out;
 }
 
+std::vector<Vec3> interpolateCutValues(const PolyhedralMesh& mesh, const PlaneCutResult& cut,
+                                       const std::vector<Vec3>& values) {
+  if (static_cast<int>(values.size()) != mesh.numNodes())
+    throw std::invalid_argument("interpolateCutValues: " + std::to_string(values.size()) + " values for " +
+                                std::to_string(mesh.numNodes()) + " nodes");
+  const PolyhedralMesh& out_mesh = cut.mesh;
+  if (static_cast<int>(cut.node_stencils.size()) == out_mesh.numNodes()) {
+    std::vector<Vec3> out(out_mesh.numNodes(), Vec3::Zero());
+    for (int v = 0; v < out_mesh.numNodes(); ++v)
+      for (const auto& [u, w] : cut.node_stencils[v]) out[v] += w * values[u];
+    return out;
+  }
+  const int old_nodes = mesh.numNodes();
+  std::vector<Vec3> out(out_mesh.numNodes());
+  std::copy(values.begin(), values.end(), out.begin());
+  if (out_mesh.numNodes() == old_nodes) return out;
+  std::vector<int> element_of(out_mesh.numNodes() - old_nodes, -1);
+  for (int e = 0; e < out_mesh.numElements(); ++e)
+    for (int v : out_mesh.element(e).globalNodeIds())
+      if (v >= old_nodes && element_of[v - old_nodes] < 0) element_of[v - old_nodes] = e;
+  for (int v = old_nodes; v < out_mesh.numNodes(); ++v) {
+    const int e = element_of[v - old_nodes];
+    if (e < 0) throw std::logic_error("interpolateCutValues: new node " + std::to_string(v) + " is unused");
+    const Vec3& x = out_mesh.node(v);
+    double best = INFINITY, best_t = 0.0;
+    int best_a = -1, best_b = -1;
+    for (const PolyhedralMesh::Face& face : mesh.elementFaces(cut.parent_element[e]))
+      for (size_t k = 0; k < face.size(); ++k) {
+        const int a = face[k], b = face[(k + 1) % face.size()];
+        const Vec3 ab = mesh.node(b) - mesh.node(a);
+        const double t = std::clamp(ab.dot(x - mesh.node(a)) / ab.squaredNorm(), 0.0, 1.0);
+        const double d = (mesh.node(a) + t * ab - x).squaredNorm();
+        if (d < best) {
+          best = d;
+          best_t = t;
+          best_a = a;
+          best_b = b;
+        }
+      }
+    out[v] = (1.0 - best_t) * values[best_a] + best_t * values[best_b];
+  }
+  return out;
+}
+
 }  // namespace rc

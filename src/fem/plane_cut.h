@@ -74,4 +74,10 @@ struct SeparatedMesh {
 /// polygon_cut.h).
 SeparatedMesh separateAlongPlane(const PlaneCutResult& cut);
 
+/// Values at the nodes of cut.mesh from values at the nodes of `mesh` (the cut's input) through
+/// PlaneCutResult::node_stencils (old nodes keep theirs, a new node on edge (a, b) gets the linear
+/// interpolation, nodes of merged slivers theirs); without stencils, along the parent element's edges.
+std::vector<Vec3> interpolateCutValues(const PolyhedralMesh& mesh, const PlaneCutResult& cut,
+                                       const std::vector<Vec3>& values);
+
 }  // namespace rc

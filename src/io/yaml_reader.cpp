@@ -1,10 +1,35 @@
 #include "io/yaml_reader.h"
 
 #include <cmath>
+#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
 namespace rc {
+
+YAML::Node YamlReader::parseMap(const std::string& yaml_text, const std::string& not_a_map) const {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    raise_(name_ + ":" + std::to_string(e.mark.line + 1) + ":" + std::to_string(e.mark.column + 1) +
+           ": YAML syntax: " + e.msg);
+    throw;  // raise_ is expected to throw
+  }
+  if (!root.IsMap()) fail(root, not_a_map);
+  return root;
+}
+
+std::string YamlReader::readFile(const std::string& path, Raise raise) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    raise(path + ": cannot open the scene file");
+    throw std::runtime_error(path + ": cannot open the scene file");
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 void YamlReader::fail(const YAML::Node& node, const std::string& problem) const {
   std::ostringstream s;

@@ -4,8 +4,10 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <initializer_list>
 #include <set>
 #include <string>
+#include <utility>
 
 #include "core/surfel_cloud.h"
 
@@ -18,6 +20,12 @@ class YamlReader {
 
   YamlReader(std::string source_name, Raise raise) : name_(std::move(source_name)), raise_(raise) {}
   const std::string& sourceName() const { return name_; }
+
+  /// The root map of YAML text: a syntax error fails with "<source>:<line>:<column>: YAML syntax: <message>",
+  /// a root that is not a map with "<source>:1:1: <not_a_map>".
+  YAML::Node parseMap(const std::string& yaml_text, const std::string& not_a_map) const;
+  /// The bytes of a file (binary); fails with "<path>: cannot open the scene file".
+  static std::string readFile(const std::string& path, Raise raise);
 
   [[noreturn]] void fail(const YAML::Node& node, const std::string& problem) const;
   YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& where) const;
@@ -33,6 +41,23 @@ class YamlReader {
   std::string string(const YAML::Node& node, const std::string& what) const;
   /// [x, y, z].
   Vec3 vec3(const YAML::Node& node, const std::string& what) const;
+  /// The value of one of the named choices (an enum); fails with "<what>: unknown '<name>' (known: a, b)".
+  template <class Value>
+  Value choice(const YAML::Node& node, const std::string& what,
+               std::initializer_list<std::pair<const char*, Value>> choices) const {
+    const std::string name = string(node, what);
+    for (const auto& [known, value] : choices)
+      if (name == known) return value;
+    fail(node, what + ": unknown '" + name + "' (known: " + knownNames(choices) + ")");
+  }
+
+  /// "a, b, c": the names of the choices.
+  template <class Value>
+  static std::string knownNames(std::initializer_list<std::pair<const char*, Value>> choices) {
+    std::string names;
+    for (const auto& choice : choices) names += (names.empty() ? "" : ", ") + std::string(choice.first);
+    return names;
+  }
 
  private:
   std::string name_;

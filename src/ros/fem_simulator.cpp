@@ -11,6 +11,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "fem/fem_scene_reader.h"
 #include "ros/point_cloud2_converter.h"
 #include "ros/simulation_commands.h"
 

@@ -1,4 +1,4 @@
-// The fem_sim node (thesis 9): runs an FEM scene file (fem/fem_scene.h, config/fem/*.yaml) in real time,
+// The fem_sim node (thesis 9): runs an FEM scene file (fem/fem_simulation.h, config/fem/*.yaml) in real time,
 // publishes the bodies for rviz and cuts them with polygons given by service.
 //
 // Publishes   ~surface (visualization_msgs/Marker, TRIANGLE_LIST of the boundary triangles of all bodies at
@@ -35,7 +35,7 @@
 #include "core/surfel_cloud.h"
 #include "fem/fem_cut_polygon.h"
 #include "fem/fem_output.h"
-#include "fem/fem_scene.h"
+#include "fem/fem_simulation.h"
 
 namespace rc {
 

@@ -1,67 +1,150 @@
-// Scene helpers for the SPH solver: lattice-filled fluid boxes, boundary-particle walls, box planes, 2D dam
-// break.
+// SPH scene files (YAML, config/sph/*.yaml): solver parameters (thesis 8.1.4, appendix F.2), fluid blocks,
+// fluid sources, boundary walls / boxes / cylinders / planes, moving boundary boxes, frames, particle outputs
+// and the optional physics a scene switches on. The schema is documented at the top of
+// config/sph/dam_break_2d.yaml.
 #pragma once
 
+#include <stdexcept>
+#include <string>
 #include <vector>
 
+#include "core/triangle_mesh.h"
+#include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
-#include "sph/sph_kernels.h"
+#include "sph/sph_fluid_source.h"
+#include "sph/sph_object_penalty.h"
 #include "sph/sph_particles.h"
+#include "sph/sph_skinning.h"
+#include "sph/sph_surface.h"
+#include "sph/sph_thermal.h"
 
 namespace rc {
 
-/// Mass that gives a particle with full kernel support on a square (2D) / cubic (3D) lattice of spacing dx
-/// exactly the rest density under the poly6 density sum (8.4): m = rho_0 / sum_k W(|k| dx), self included.
-/// Throws std::invalid_argument for dx or rest_density not finite and > 0.
-double latticeParticleMass(const SphKernels& kernels, double rest_density, double dx);
-
-/// Fills the box [lo, hi] with particles of `kind` on a lattice of spacing dx, cell-centred (the first at
-/// lo + dx/2, as many as fit). In 2D (dimension 2) z is 0 and lo.z / hi.z are ignored. Returns the number
-/// added. Throws std::invalid_argument for a bad dx, mass, dimension or an empty box.
-size_t addLatticeBox(SphParticles& particles, const Vec3& lo, const Vec3& hi, double dx, double mass,
-                     int dimension, SphParticleKind kind = SphParticleKind::kFluid);
-
-/// Walls of static boundary particles around the box [lo, hi] (floor at lo.y, side walls, and the ceiling if
-/// `closed_top`): `layers` lattice layers of spacing dx outside the box, aligned with the lattice of
-/// addLatticeBox on the same box. Side walls reach up to hi.y. Returns the number added.
-size_t addBoundaryWalls(SphParticles& particles, const Vec3& lo, const Vec3& hi, double dx, int layers,
-                        double mass, int dimension, bool closed_top = false);
-
-/// Points of the square lattice of spacing dx in the disc of `radius` (centres within radius, relative
-/// tolerance 1e-9) perpendicular to `axis` around the origin, the origin included: i u + j w for integers i,
-/// j with u, w an orthonormal basis of the plane (u = normalised axis x e_k, e_k the coordinate axis least
-/// aligned with `axis`; w = axis x u), in the order j, then i, ascending. In 2D (dimension 2; axis with z =
-/// 0) the "disc" is the segment perpendicular to axis in the x-y plane. Throws std::invalid_argument for a
-/// zero or non-finite axis, a bad radius or dx, or (2D) an axis with z != 0.
-std::vector<Vec3> latticeDisc(const Vec3& axis, double radius, double dx, int dimension);
-
-/// Fills the cylinder from `from` to `to` (3D) with particles of `kind`: cross-sections latticeDisc(to -
-/// from, radius, dx) at the axial positions (k + 1/2) dx + (length - n dx) / 2, k < n = max(1, floor(length /
-/// dx)), i.e. cell-centred along the axis and centred on it. Returns the number added. Throws
-/// std::invalid_argument for from == to, a bad radius, dx or mass.
-size_t addLatticeCylinder(SphParticles& particles, const Vec3& from, const Vec3& to, double radius, double dx,
-                          double mass, SphParticleKind kind = SphParticleKind::kStaticBoundary);
-
-/// Planes bounding [lo, hi] (normals pointing inside): floor, side walls (x, and z in 3D), ceiling if
-/// `closed_top`.
-std::vector<SphPlane> boxPlanes(const Vec3& lo, const Vec3& hi, int dimension, bool closed_top = false,
-                                double restitution = 0.0, double friction = 0.0);
-
-/// 2D dam break (REFERENCES: column height = 2 x width, Martin & Moyce): a fluid column of
-/// column_width x column_height at the left of a tank tank_width wide and tank_height high, walls of
-/// boundary particles. h = smoothing_ratio * dx.
-struct SphDamBreak2D {
-  double column_width = 0.25;
-  double column_height = 0.5;
-  double tank_width = 1.0;
-  double tank_height = 0.6;
-  double dx = 0.0125;
-  double smoothing_ratio = 3.0;
-  int wall_layers = 3;
+/// A bad scene file: the message reads "<file>:<line>:<column>: <problem>".
+class SphSceneError : public std::runtime_error {
+ public:
+  explicit SphSceneError(const std::string& message) : std::runtime_error(message) {}
 };
 
-/// Particles of the dam break; `config` gets dimension 2 and h (its other fields are kept), and is then
-/// validated.
-SphParticles makeDamBreak2D(const SphDamBreak2D& scene, SphFluidConfig& config);
+/// Particle files written while a scene runs: the initial state (frame 0) and every `every`-th frame.
+struct SphParticleOutput {
+  int every = 0;  ///< 0: no particle output
+  bool ply = false;
+  bool vtp = false;
+  bool enabled() const { return every > 0 && (ply || vtp); }
+};
+
+/// Surface meshes written while a scene runs (`enable: [surface]`, key output.surface; thesis 8.2.7):
+/// marching cubes on the colour field of the integrated particles (fluid and solids), frame 0 and every
+/// `every`-th frame, as <name>_surface_NNNN.obj / .ply.
+struct SphSurfaceOutput {
+  bool enabled = false;
+  int every = 1;
+  bool obj = true, ply = false;
+  SphSurfaceConfig config;  ///< smoothing_length, rest_density and threads are the solver's
+};
+
+/// One elastic object of the scene (`enable: [elasticity]`, key solids; thesis 8.2): its particles are
+/// the `count` particles from `first` (kind kFluid, phases == phase), sampled on the closest-packing
+/// lattice of elastic.lattice_spacing in the orientation `orientation`. Shapes: box {lo, hi}, sphere
+/// {center, radius} and (3D) mesh {mesh: OBJ / PLY / OFF file relative to the scene file, scale: s |
+/// [sx, sy, sz], translation}: the mesh placed at translation + R (scale x), sampled where its generalised
+/// winding number exceeds 1/2 (closed meshes, or scans with small holes); `skin: {mesh: same}` skins it.
+/// Optional solid keys: `fracture` {strain, rate, max_docking_rate, docking_rate_increase,
+/// docking_rate_decrease (both 1/s^2: the rate changes by value * dt per step), docking_distance, seed}
+/// (docking, 8.2.5), `plasticity` {yield_strain, flow_rate,
+/// max_strain} (both work with fixed and adaptive steps: the solver announces each step's dt;
+/// elastic.time_step is solver.fixed_dt, else solver.max_dt), and `anchor` {lo, hi}: the solid's particles in
+/// that box become static boundary particles it is fixed to (kind kStaticBoundary, still of this phase;
+/// Fig. 8.7 c).
+struct SphSceneSolid {
+  SphElasticConfig elastic;
+  uint8_t phase = 1;
+  Eigen::Matrix3d orientation = Eigen::Matrix3d::Identity();
+  size_t first = 0, count = 0;
+};
+
+/// Particles [first, first + count) start at `temperature` (key `temperature` of a fluid box or solid).
+struct SphSceneTemperature {
+  size_t first = 0, count = 0;
+  double temperature = 0.0;
+};
+
+/// Particles held at a temperature (key temperature.held: those inside the box [lo, hi] or the cylinder
+/// {from, to, radius} at load time, any kind; a cooled rod or a heater). `phase` (if > 0) is written to their
+/// phases: a seed fluid can freeze onto.
+struct SphSceneHeld {
+  std::vector<size_t> indices;
+  double temperature = 0.0;
+  uint8_t phase = 0;
+};
+
+/// Heat and phase transitions (`enable: [temperature]`, `[phase_transition]`; thesis 8.2.4): the model's
+/// config (melting / freezing set by phase_transition), initial temperatures, heated planes, held particles.
+/// The solid fluid freezes into is scene.solids entry `freezing_solid` (-1: none).
+struct SphSceneThermal {
+  bool enabled = false;
+  SphThermalConfig config;
+  std::vector<SphSceneTemperature> initial;
+  std::vector<SphHeatedPlane> planes;
+  std::vector<SphSceneHeld> held;
+  int freezing_solid = -1;
+};
+
+/// Penalty collisions between the solids (`enable: [collisions]`, key collisions {stiffness,
+/// contact_distance, damping, implicit, couple_global_implicit}; thesis 8.2.6, (8.37)): an SphObjectPenalty
+/// term. contact_distance defaults to the smallest lattice spacing of the solids; couple_global_implicit
+/// (default true) solves implicit contacts inside the global implicit goal solve of the solids they join.
+struct SphSceneCollisions {
+  bool enabled = false;
+  SphObjectPenaltyConfig config;
+};
+
+/// A surface skinned to a solid (`enable: [skin]`, solid key `skin`; thesis 8.2.7, (8.38)): the rest mesh in
+/// world coordinates (a mesh file, or the solid's own box / sphere at `resolution`), bound to the solid's
+/// rest particles with support h (the solver's smoothing length). Written as <name>_skin<k>_NNNN.obj / .ply
+/// (k: the solid's index) at frame 0 and every `every`-th frame, deformed by (8.38) with the transforms
+/// fitted to the particles or the solid's lattice transforms A_i (8.23).
+struct SphSceneSkin {
+  size_t solid = 0;  ///< index into SphScene::solids
+  TriangleMesh rest;
+  SphSkin skin;
+  bool lattice_transforms = false;  ///< transforms: lattice | fitted (default)
+  int every = 1;                    ///< default: the particle output's every (else 1)
+  bool obj = true, ply = false;
+};
+
+/// A loaded scene, ready for the solver: config is validated, particles are filled, planes collected.
+struct SphScene {
+  std::string name;  ///< `name:` or the file name without extension
+  std::string path;  ///< the file it was read from
+  SphFluidConfig config;
+  SphParticles particles;
+  std::vector<SphPlane> planes;
+  std::vector<std::string> enabled_physics;  ///< the `enable:` list (only supported entries get here)
+  int frame_count = 1;
+  double frame_time = 0.0;  ///< simulated seconds per frame
+  SphParticleOutput output;
+  SphSurfaceOutput surface;
+  std::vector<SphSceneSolid> solids;
+  SphSceneCollisions collisions;
+  SphSceneThermal thermal;
+  std::vector<SphSceneSkin> skins;  ///< in solid order, at most one per solid
+  /// Fluid sources (key sources): runSphScene emits their layers before the first step and after every
+  /// step; with temperature the new particles get the source's temperature (default: temperature.initial).
+  std::vector<SphFluidSourceConfig> sources;
+};
+
+/// Optional physics a scene may list under `enable:`: elasticity (key solids), collisions (key collisions;
+/// needs elasticity and two or more solids), surface (key output.surface), temperature (key temperature),
+/// phase_transition (key phase_transition; needs temperature and elasticity) and skin (key skin of a solid;
+/// needs elasticity). An unknown name is rejected. The keys of a physics not enabled are rejected.
+const std::vector<std::string>& sphOptionalPhysics();
+
+/// Reads a scene file. Throws SphSceneError naming the file, line and problem (syntax, unknown key, wrong
+/// type, bad value, unsupported physics).
+SphScene loadSphScene(const std::string& path);
+/// Same for YAML text; `source_name` stands for the file name in error messages.
+SphScene parseSphScene(const std::string& yaml_text, const std::string& source_name);
 
 }  // namespace rc

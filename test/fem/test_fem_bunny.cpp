@@ -13,7 +13,8 @@
 #include <map>
 
 #include "fem/cholmod_solver.h"
-#include "fem/fem_scene.h"
+#include "fem/fem_scene_reader.h"
+#include "fem/fem_simulation.h"
 #include "fem/tetgen_mesh.h"
 #include "io/ply_io.h"
 #include "mesh/surface_closing.h"

@@ -12,7 +12,7 @@
 #include <tuple>
 
 #include "fem/cholmod_solver.h"
-#include "fem/fem_scene.h"
+#include "fem/fem_simulation.h"
 #include "fem/warped_dynamics.h"
 
 namespace rc {

@@ -9,7 +9,7 @@
 #include <set>
 #include <vector>
 
-#include "fem/fem_scene.h"
+#include "fem/fem_simulation.h"
 #include "fem/linear_elasticity.h"
 #include "fem/polyhedral_mesh.h"
 

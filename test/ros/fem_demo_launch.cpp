@@ -23,7 +23,8 @@
 #include <string>
 #include <vector>
 
-#include "fem/fem_scene.h"
+#include "fem/fem_scene_reader.h"
+#include "fem/fem_simulation.h"
 #include "launch_test_support.h"
 #include "ros/fem_simulator.h"
 

@@ -1,0 +1,408 @@
+#include "fem/fem_scene_reader.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <Eigen/Geometry>
+
+#include "fem/fem_cut_polygon.h"
+#include "fem/fem_mesh_source.h"
+#include "io/yaml_reader.h"
+
+namespace rc {
+
+namespace {
+
+[[noreturn]] void raiseFemSceneError(const std::string& message) {
+  throw FemSceneError(message);
+}
+
+struct Source : YamlReader {
+  explicit Source(std::string name) : YamlReader(std::move(name), &raiseFemSceneError) {}
+
+  std::vector<Vec3> points(const YAML::Node& node, const std::string& what, size_t min_count) const {
+    if (!node.IsSequence() || node.size() < min_count)
+      fail(node, what + ": expected a list of at least " + std::to_string(min_count) + " points [x, y, z]");
+    std::vector<Vec3> out;
+    for (size_t i = 0; i < node.size(); ++i)
+      out.push_back(vec3(node[i], what + "[" + std::to_string(i) + "]"));
+    return out;
+  }
+};
+
+std::string resolvePath(const std::string& base_dir, const std::string& file) {
+  const std::filesystem::path p(file);
+  if (p.is_absolute() || base_dir.empty()) return file;
+  return (std::filesystem::path(base_dir) / p).string();
+}
+
+class SceneReader {
+ public:
+  SceneReader(const Source& src, FemScene* scene, std::string base_dir)
+      : src_(src), scene_(*scene), base_dir_(std::move(base_dir)) {}
+
+  void read(const YAML::Node& root) {
+    src_.allowKeys(
+        root, {"name", "mesh", "placement", "material", "dynamics", "ground", "frames", "cuts", "output"},
+        "scene");
+    if (root["name"]) scene_.name = src_.string(root["name"], "name");
+    readMaterial(src_.require(root, "material", "scene"));
+    readDynamics(src_.require(root, "dynamics", "scene"));
+    if (root["ground"]) readGround(root["ground"]);
+    readFrames(src_.require(root, "frames", "scene"));
+    if (root["cuts"]) readCuts(root["cuts"]);
+    if (root["output"]) readOutput(root["output"]);
+    const YAML::Node mesh = src_.require(root, "mesh", "scene");
+    readMesh(mesh);
+    PolyhedralMesh built = buildMesh(mesh);
+    place(root["placement"], std::move(built), mesh);
+  }
+
+ private:
+  void readMaterial(const YAML::Node& node) {
+    src_.allowKeys(node,
+                   {"youngs_modulus", "poisson_ratio", "density", "vertex_sample_blend", "face_sample_blend"},
+                   "material");
+    scene_.youngs_modulus =
+        src_.positive(src_.require(node, "youngs_modulus", "material"), "material.youngs_modulus");
+    const YAML::Node nu = src_.require(node, "poisson_ratio", "material");
+    scene_.poisson_ratio = src_.number(nu, "material.poisson_ratio");
+    if (!(scene_.poisson_ratio > -1.0 && scene_.poisson_ratio < 0.5))
+      src_.fail(nu, "material.poisson_ratio must be in (-1, 0.5), got " + nu.Scalar());
+    if (node["density"]) scene_.density = src_.positive(node["density"], "material.density");
+    for (const char* key : {"vertex_sample_blend", "face_sample_blend"}) {
+      if (!node[key]) continue;
+      const double b = src_.number(node[key], std::string("material.") + key);
+      if (!(b > 0.0 && b <= 1.0))
+        src_.fail(node[key],
+                  std::string("material.") + key + " must be in (0, 1], got " + node[key].Scalar());
+      (std::string(key) == "vertex_sample_blend" ? scene_.quadrature.vertex_sample_blend
+                                                 : scene_.quadrature.face_sample_blend) = b;
+    }
+  }
+
+  void readDynamics(const YAML::Node& node) {
+    src_.allowKeys(node,
+                   {"time_step", "gravity", "stiffness_warping", "mass_damping", "stiffness_damping",
+                    "solver", "rotation_weights"},
+                   "dynamics");
+    WarpedDynamicsOptions& d = scene_.dynamics;
+    d.time_step = src_.positive(src_.require(node, "time_step", "dynamics"), "dynamics.time_step");
+    if (node["gravity"]) d.gravity = src_.vec3(node["gravity"], "dynamics.gravity");
+    if (node["stiffness_warping"])
+      d.stiffness_warping = src_.boolean(node["stiffness_warping"], "dynamics.stiffness_warping");
+    if (node["mass_damping"])
+      d.mass_damping = src_.nonNegative(node["mass_damping"], "dynamics.mass_damping");
+    if (node["stiffness_damping"])
+      d.stiffness_damping = src_.nonNegative(node["stiffness_damping"], "dynamics.stiffness_damping");
+    using Options = WarpedDynamicsOptions;
+    if (const YAML::Node w = node["rotation_weights"])
+      d.rotation_weights = src_.choice<Options::RotationWeights>(
+          w, "dynamics.rotation_weights",
+          {{"lumped_masses", Options::RotationWeights::kLumpedMasses},
+           {"node_volume_fractions", Options::RotationWeights::kNodeVolumeFractions}});
+    if (const YAML::Node s = node["solver"]) {
+      src_.allowKeys(s,
+                     {"type", "preconditioner", "tolerance", "max_iterations", "warm_start",
+                      "refactor_iterations", "extension_iterations", "contact_updates"},
+                     "dynamics.solver");
+      if (const YAML::Node t = s["type"])
+        d.solver = src_.choice<Options::Solver>(t, "dynamics.solver.type",
+                                                {{"cg", Options::Solver::kConjugateGradient},
+                                                 {"ldlt", Options::Solver::kSimplicialLDLT},
+                                                 {"cholmod", Options::Solver::kCholmod},
+                                                 {"cholmod_pcg", Options::Solver::kCholmodPcg}});
+      if (const YAML::Node p = s["preconditioner"])
+        d.preconditioner = src_.choice<Options::Preconditioner>(
+            p, "dynamics.solver.preconditioner",
+            {{"jacobi", Options::Preconditioner::kJacobi},
+             {"incomplete_cholesky", Options::Preconditioner::kIncompleteCholesky}});
+      if (s["tolerance"]) d.cg_tolerance = src_.positive(s["tolerance"], "dynamics.solver.tolerance");
+      if (s["max_iterations"])
+        d.cg_max_iterations =
+            int(src_.integer(s["max_iterations"], "dynamics.solver.max_iterations", 1, 1000000));
+      if (s["warm_start"]) d.cg_warm_start = src_.boolean(s["warm_start"], "dynamics.solver.warm_start");
+      if (s["refactor_iterations"])
+        d.pcg_refactor_iterations =
+            int(src_.integer(s["refactor_iterations"], "dynamics.solver.refactor_iterations", 1, 1000000));
+      if (s["extension_iterations"])
+        d.pcg_extension_iterations =
+            int(src_.integer(s["extension_iterations"], "dynamics.solver.extension_iterations", 0, 1000000));
+      if (s["contact_updates"])
+        d.pcg_contact_updates =
+            int(src_.integer(s["contact_updates"], "dynamics.solver.contact_updates", 0, 1000000));
+    }
+  }
+
+  void readGround(const YAML::Node& node) {
+    src_.allowKeys(node, {"normal", "offset", "friction"}, "ground");
+    GroundPlane& g = scene_.dynamics.ground;
+    g.enabled = true;
+    if (const YAML::Node n = node["normal"]) {
+      g.normal = src_.vec3(n, "ground.normal");
+      if (!(g.normal.norm() > 0)) src_.fail(n, "ground.normal must be non-zero");
+      g.normal.normalize();
+    }
+    if (node["offset"]) g.offset = src_.number(node["offset"], "ground.offset");
+    if (node["friction"]) g.friction = src_.nonNegative(node["friction"], "ground.friction");
+  }
+
+  void readFrames(const YAML::Node& node) {
+    src_.allowKeys(node, {"count", "steps_per_frame"}, "frames");
+    scene_.frame_count =
+        int(src_.integer(src_.require(node, "count", "frames"), "frames.count", 1, 10000000));
+    if (node["steps_per_frame"])
+      scene_.steps_per_frame =
+          int(src_.integer(node["steps_per_frame"], "frames.steps_per_frame", 1, 10000000));
+  }
+
+  void readCuts(const YAML::Node& node) {
+    if (!node.IsSequence()) src_.fail(node, "cuts: expected a list of plane or polygon cuts");
+    for (size_t i = 0; i < node.size(); ++i) {
+      const std::string where = "cuts[" + std::to_string(i) + "]";
+      const YAML::Node c = node[i];
+      FemSceneCut cut;
+      if (c.IsMap() && (c["polygons"] || c["blade"])) {
+        src_.allowKeys(c,
+                       {"time", "duration", "polygons", "blade", "path", "snap_relative_distance",
+                        "sliver_relative_thickness"},
+                       where);
+        cut.time = src_.nonNegative(src_.require(c, "time", where), where + ".time");
+        if (c["duration"]) cut.duration = src_.nonNegative(c["duration"], where + ".duration");
+        if (const YAML::Node polygons = c["polygons"]) {
+          if (c["blade"] || c["path"]) src_.fail(c, where + ": give either polygons or blade + path");
+          if (!polygons.IsSequence() || polygons.size() == 0)
+            src_.fail(polygons, where + ".polygons: expected a list of polygons (lists of points)");
+          for (size_t k = 0; k < polygons.size(); ++k)
+            cut.polygons.push_back(
+                src_.points(polygons[k], where + ".polygons[" + std::to_string(k) + "]", 3));
+        } else {
+          const std::vector<Vec3> blade = src_.points(c["blade"], where + ".blade", 2);
+          if (blade.size() != 2)
+            src_.fail(c["blade"], where + ".blade: expected two points (the cutting edge)");
+          const YAML::Node path = src_.require(c, "path", where);
+          try {
+            cut.polygons = bladeSweepPolygons(blade[0], blade[1], src_.points(path, where + ".path", 2));
+          } catch (const std::invalid_argument& e) {
+            src_.fail(path, where + ": " + e.what());
+          }
+        }
+        for (size_t k = 0; k < cut.polygons.size(); ++k) {
+          const std::vector<Vec3>& poly = cut.polygons[k];
+          Vec3 normal = Vec3::Zero(), center = Vec3::Zero();
+          double scale = 0.0;
+          for (size_t j = 0; j < poly.size(); ++j) {
+            normal += poly[j].cross(poly[(j + 1) % poly.size()]);
+            center += poly[j] / double(poly.size());
+            scale = std::max(scale, (poly[j] - poly[0]).norm());
+          }
+          if (!(normal.norm() > 1e-12 * scale * scale))
+            src_.fail(c, where + ": polygon " + std::to_string(k) + " has zero area");
+          normal.normalize();
+          for (const Vec3& p : poly)
+            if (std::abs(normal.dot(p - center)) > 1e-9 * scale)
+              src_.fail(c, where + ": polygon " + std::to_string(k) + " is not planar");
+        }
+      } else {
+        src_.allowKeys(c,
+                       {"time", "point", "normal", "region", "separate", "snap_relative_distance",
+                        "sliver_relative_thickness"},
+                       where);
+        cut.time = src_.nonNegative(src_.require(c, "time", where), where + ".time");
+        cut.point = src_.vec3(src_.require(c, "point", where), where + ".point");
+        const YAML::Node n = src_.require(c, "normal", where);
+        cut.normal = src_.vec3(n, where + ".normal");
+        if (!(cut.normal.norm() > 0)) src_.fail(n, where + ".normal must be non-zero");
+        cut.normal.normalize();
+        if (const YAML::Node r = c["region"]) {
+          cut.region = src_.points(r, where + ".region", 3);
+          for (size_t k = 0; k < cut.region.size(); ++k)
+            if (std::abs(cut.normal.dot(cut.region[k] - cut.point)) > 1e-9 * (1.0 + cut.region[k].norm()))
+              src_.fail(r[k], where + ".region[" + std::to_string(k) + "] does not lie in the cut plane");
+        }
+        if (c["separate"]) cut.separate = src_.boolean(c["separate"], where + ".separate");
+      }
+      if (c["snap_relative_distance"])
+        cut.snap_relative_distance =
+            src_.nonNegative(c["snap_relative_distance"], where + ".snap_relative_distance");
+      if (const YAML::Node t = c["sliver_relative_thickness"]) {
+        const double value = src_.nonNegative(t, where + ".sliver_relative_thickness");
+        if (!(value < 1.0)) src_.fail(t, where + ".sliver_relative_thickness must be below 1 (0: off)");
+        cut.slivers.enabled = value > 0.0;
+        cut.slivers.relative_thickness = value;
+      }
+      scene_.cuts.push_back(cut);
+    }
+    std::stable_sort(scene_.cuts.begin(), scene_.cuts.end(),
+                     [](const FemSceneCut& a, const FemSceneCut& b) { return a.time < b.time; });
+  }
+
+  void readOutput(const YAML::Node& node) {
+    src_.allowKeys(node, {"every", "vtu", "obj", "encoding"}, "output");
+    FemSceneOutput& o = scene_.output;
+    if (node["every"]) o.every = int(src_.integer(node["every"], "output.every", 0, 10000000));
+    if (node["vtu"]) o.vtu = src_.boolean(node["vtu"], "output.vtu");
+    if (node["obj"]) o.obj = src_.boolean(node["obj"], "output.obj");
+    if (const YAML::Node e = node["encoding"])
+      o.encoding = src_.choice<VtuEncoding>(
+          e, "output.encoding", {{"ascii", VtuEncoding::kAscii}, {"appended", VtuEncoding::kAppendedRaw}});
+  }
+
+  void readCells(const YAML::Node& node, FemMeshSource& s) {
+    const YAML::Node c = node["cells"];
+    if (!c) return;
+    if (!c.IsSequence() || c.size() != 3) src_.fail(c, "mesh.cells: expected [nx, ny, nz]");
+    for (int k = 0; k < 3; ++k) s.cells[k] = int(src_.integer(c[k], "mesh.cells", 1, 1000));
+  }
+
+  void readBox(const YAML::Node& node, FemMeshSource& s) {
+    s.lo = src_.vec3(src_.require(node, "lo", "mesh"), "mesh.lo");
+    s.hi = src_.vec3(src_.require(node, "hi", "mesh"), "mesh.hi");
+    for (int k = 0; k < 3; ++k)
+      if (!(s.lo[k] < s.hi[k])) src_.fail(node["hi"], "mesh: hi must exceed lo in every coordinate");
+    readCells(node, s);
+  }
+
+  void readMesh(const YAML::Node& node) {
+    FemMeshSource& s = scene_.source;
+    const YAML::Node type_node = src_.require(node, "type", "mesh");
+    s.type = src_.choice<FemMeshType>(type_node, "mesh.type",
+                                      {{"convex_hull", FemMeshType::kConvexHull},
+                                       {"hex_grid", FemMeshType::kHexGrid},
+                                       {"tet_grid", FemMeshType::kTetGrid},
+                                       {"random_planes", FemMeshType::kRandomPlanes},
+                                       {"random_splits", FemMeshType::kRandomSplits},
+                                       {"tetgen_surface", FemMeshType::kTetgenSurface},
+                                       {"tetgen_files", FemMeshType::kTetgenFiles}});
+    switch (s.type) {
+      case FemMeshType::kConvexHull:
+        src_.allowKeys(node, {"type", "points"}, "mesh");
+        s.points = src_.points(src_.require(node, "points", "mesh"), "mesh.points", 4);
+        break;
+      case FemMeshType::kHexGrid:
+      case FemMeshType::kTetGrid:
+        src_.allowKeys(node, {"type", "lo", "hi", "cells", "split"}, "mesh");
+        readBox(node, s);
+        if (const YAML::Node sp = node["split"]) {
+          if (s.type != FemMeshType::kTetGrid) src_.fail(sp, "mesh.split: only for type tet_grid");
+          const long n = src_.integer(sp, "mesh.split", 5, 6);
+          s.split = n == 5 ? PolyhedralMesh::TetrahedronSplit::kFive : PolyhedralMesh::TetrahedronSplit::kSix;
+        }
+        break;
+      case FemMeshType::kRandomPlanes:
+      case FemMeshType::kRandomSplits:
+        src_.allowKeys(node, {"type", "lo", "hi", "cells", "planes", "seed", "min_relative_gap"}, "mesh");
+        readBox(node, s);
+        s.planes = int(src_.integer(src_.require(node, "planes", "mesh"), "mesh.planes", 0, 100000));
+        if (node["seed"]) s.seed = unsigned(src_.integer(node["seed"], "mesh.seed", 0, 4294967295L));
+        if (node["min_relative_gap"]) {
+          s.min_relative_gap = src_.nonNegative(node["min_relative_gap"], "mesh.min_relative_gap");
+          if (!(s.min_relative_gap < 0.5))
+            src_.fail(node["min_relative_gap"], "mesh.min_relative_gap must be < 0.5");
+        }
+        break;
+      case FemMeshType::kTetgenSurface:
+        src_.allowKeys(node,
+                       {"type", "surface", "size", "max_volume", "max_radius_edge_ratio",
+                        "min_dihedral_degrees", "close_holes", "decimate_vertices"},
+                       "mesh");
+        s.surface =
+            resolvePath(base_dir_, src_.string(src_.require(node, "surface", "mesh"), "mesh.surface"));
+        if (node["size"]) s.size = src_.positive(node["size"], "mesh.size");
+        if (node["max_volume"]) s.max_volume = src_.nonNegative(node["max_volume"], "mesh.max_volume");
+        if (node["max_radius_edge_ratio"])
+          s.max_radius_edge_ratio =
+              src_.nonNegative(node["max_radius_edge_ratio"], "mesh.max_radius_edge_ratio");
+        if (node["min_dihedral_degrees"])
+          s.min_dihedral_degrees =
+              src_.nonNegative(node["min_dihedral_degrees"], "mesh.min_dihedral_degrees");
+        if (node["close_holes"]) s.close_holes = src_.boolean(node["close_holes"], "mesh.close_holes");
+        if (node["decimate_vertices"])
+          s.decimate_vertices =
+              int(src_.integer(node["decimate_vertices"], "mesh.decimate_vertices", 4, 100000000));
+        break;
+      case FemMeshType::kTetgenFiles:
+        src_.allowKeys(node, {"type", "node", "ele"}, "mesh");
+        s.node_file = resolvePath(base_dir_, src_.string(src_.require(node, "node", "mesh"), "mesh.node"));
+        s.ele_file = resolvePath(base_dir_, src_.string(src_.require(node, "ele", "mesh"), "mesh.ele"));
+        break;
+    }
+  }
+
+  PolyhedralMesh buildMesh(const YAML::Node& node) {
+    try {
+      return buildFemMesh(scene_.source);
+    } catch (const std::exception& e) {
+      src_.fail(node, std::string("mesh: ") + e.what());
+    }
+  }
+
+  /// placement: {translation, rotation: {axis, degrees}, velocity, angular_velocity}; the rotation turns the
+  /// mesh about its volume centroid, then it is translated; velocities are those of a rigid motion about the
+  /// placed centroid.
+  void place(const YAML::Node& node, PolyhedralMesh mesh, const YAML::Node& mesh_node) {
+    Vec3 translation = Vec3::Zero(), velocity = Vec3::Zero(), angular = Vec3::Zero();
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+    if (node) {
+      src_.allowKeys(node, {"translation", "rotation", "velocity", "angular_velocity"}, "placement");
+      if (node["translation"]) translation = src_.vec3(node["translation"], "placement.translation");
+      if (const YAML::Node r = node["rotation"]) {
+        src_.allowKeys(r, {"axis", "degrees"}, "placement.rotation");
+        const YAML::Node axis_node = src_.require(r, "axis", "placement.rotation");
+        const Vec3 axis = src_.vec3(axis_node, "placement.rotation.axis");
+        if (!(axis.norm() > 0)) src_.fail(axis_node, "placement.rotation.axis must be non-zero");
+        const double degrees =
+            src_.number(src_.require(r, "degrees", "placement.rotation"), "placement.rotation.degrees");
+        rotation = Eigen::AngleAxisd(degrees * M_PI / 180.0, axis.normalized()).toRotationMatrix();
+      }
+      if (node["velocity"]) velocity = src_.vec3(node["velocity"], "placement.velocity");
+      if (node["angular_velocity"])
+        angular = src_.vec3(node["angular_velocity"], "placement.angular_velocity");
+    }
+    Vec3 centroid = Vec3::Zero();
+    for (const ConvexPolyhedron& e : mesh.elements()) centroid += e.volume() * e.centroid();
+    centroid /= mesh.volume();
+    std::vector<Vec3> nodes(mesh.numNodes());
+    for (int i = 0; i < mesh.numNodes(); ++i)
+      nodes[i] = rotation * (mesh.node(i) - centroid) + centroid + translation;
+    std::vector<PolyhedralMesh::ElementFaces> elements(mesh.numElements());
+    for (int e = 0; e < mesh.numElements(); ++e) elements[e] = mesh.elementFaces(e);
+    try {
+      scene_.mesh = std::make_shared<const PolyhedralMesh>(nodes, std::move(elements));
+    } catch (const std::exception& e) {
+      src_.fail(mesh_node, std::string("mesh after placement: ") + e.what());
+    }
+    const Vec3 placed_centroid = centroid + translation;
+    scene_.initial_velocities.resize(nodes.size());
+    for (size_t i = 0; i < nodes.size(); ++i)
+      scene_.initial_velocities[i] = velocity + angular.cross(nodes[i] - placed_centroid);
+  }
+
+  const Source& src_;
+  FemScene& scene_;
+  std::string base_dir_;
+};
+
+}  // namespace
+
+FemScene parseFemScene(const std::string& yaml_text, const std::string& source_name,
+                       const std::string& base_dir) {
+  const Source src{source_name};
+  const YAML::Node root =
+      src.parseMap(yaml_text, "expected a map of scene keys (mesh, material, dynamics, frames, ...)");
+  FemScene scene;
+  scene.path = source_name;
+  scene.name = std::filesystem::path(source_name).stem().string();
+  SceneReader(src, &scene, base_dir).read(root);
+  return scene;
+}
+
+FemScene loadFemScene(const std::string& path) {
+  return parseFemScene(YamlReader::readFile(path, &raiseFemSceneError), path,
+                       std::filesystem::path(path).parent_path().string());
+}
+
+}  // namespace rc

@@ -1,0 +1,161 @@
+#include "fem/fem_scene_run.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "io/pvd_io.h"
+
+namespace rc {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string formatNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[40];
+  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  return buf;
+}
+
+std::string jsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+FemRunStats runFemScene(const FemScene& scene, const FemRunOptions& options) {
+  FemRunStats stats;
+  stats.scene = scene.name;
+  stats.frame_count = scene.frame_count;
+  FemSimulation sim(scene);
+  stats.nodes_start = sim.numNodes();
+  stats.elements_start = sim.numElements();
+
+  const bool write =
+      !options.out_dir.empty() && scene.output.every > 0 && (scene.output.vtu || scene.output.obj);
+  std::vector<PvdEntry> pvd;
+  auto output = [&](int frame) {
+    if (!write || frame % scene.output.every != 0) return;
+    const Clock::time_point start = Clock::now();
+    char number[16];
+    std::snprintf(number, sizeof(number), "%04d", frame);
+    const std::filesystem::path dir(options.out_dir);
+    const std::vector<FemBodyState> states = sim.bodyStates();
+    if (scene.output.vtu) {
+      const std::string file = scene.name + "_" + number + ".vtu";
+      writeFemVtu((dir / file).string(), states, scene.output.encoding);
+      stats.files.push_back((dir / file).string());
+      pvd.push_back({file, sim.time()});
+      const std::string pvd_path = (dir / (scene.name + ".pvd")).string();
+      writePvd(pvd_path, pvd);
+      if (pvd.size() == 1) stats.files.push_back(pvd_path);
+    }
+    if (scene.output.obj) {
+      const std::string file = (dir / (scene.name + "_surface_" + number + ".obj")).string();
+      writeFemObj(file, states);
+      stats.files.push_back(file);
+    }
+    sim.phaseTimes().output += secondsSince(start);
+  };
+  if (write) std::filesystem::create_directories(options.out_dir);
+  output(0);
+
+  for (int frame = 1; frame <= scene.frame_count; ++frame) {
+    const Clock::time_point start = Clock::now();
+    const long iterations_before = sim.solverIterations();
+    try {
+      for (int s = 0; s < scene.steps_per_frame; ++s) sim.step();
+    } catch (const std::exception& e) {
+      stats.error = e.what();
+      break;
+    }
+    stats.frames = frame;
+    if (options.on_frame) {
+      FemFrameReport r;
+      r.frame = frame;
+      r.frame_count = scene.frame_count;
+      r.time = sim.time();
+      r.steps = sim.steps();
+      r.nodes = sim.numNodes();
+      r.elements = sim.numElements();
+      r.bodies = sim.numBodies();
+      r.cuts = sim.cutsApplied();
+      r.frame_iterations = sim.solverIterations() - iterations_before;
+      r.frame_seconds = secondsSince(start);
+      options.on_frame(r);
+    }
+    output(frame);
+  }
+
+  stats.nodes = sim.numNodes();
+  stats.elements = sim.numElements();
+  stats.bodies = sim.numBodies();
+  stats.cuts = sim.cutsApplied();
+  for (int b = 0; b < sim.numBodies(); ++b) stats.crack_faces += sim.body(b).model().mesh().numCrackFaces();
+  stats.slivers_removed = sim.sliversRemoved();
+  stats.slivers_kept = sim.sliversKept();
+  stats.steps = sim.steps();
+  stats.simulated_time = sim.time();
+  stats.times = sim.phaseTimes();
+  stats.wall_seconds = stats.times.integration + stats.times.dynamics + stats.times.topology;
+  stats.solver_iterations = sim.solverIterations();
+  stats.max_step_iterations = sim.maxStepIterations();
+  stats.unconverged_solves = sim.unconvergedSolves();
+  stats.min_ground_distance = sim.minGroundDistance();
+  for (int b = 0; b < sim.numBodies(); ++b) stats.kinetic_energy += sim.body(b).kineticEnergy();
+  return stats;
+}
+
+std::string femRunStatsJson(const FemRunStats& s) {
+  std::ostringstream j;
+  const double ms_per_frame = s.frames > 0 ? 1e3 * s.wall_seconds / s.frames : NAN;
+  auto perFrame = [&](double seconds) { return s.frames > 0 ? 1e3 * seconds / s.frames : NAN; };
+  j << "{\"scene\":" << jsonString(s.scene) << ",\"nodes_start\":" << s.nodes_start
+    << ",\"elements_start\":" << s.elements_start << ",\"nodes\":" << s.nodes
+    << ",\"elements\":" << s.elements << ",\"bodies\":" << s.bodies << ",\"cuts\":" << s.cuts
+    << ",\"crack_faces\":" << s.crack_faces << ",\"slivers_removed\":" << s.slivers_removed
+    << ",\"slivers_kept\":" << s.slivers_kept << ",\"frames\":" << s.frames
+    << ",\"frame_count\":" << s.frame_count << ",\"steps\":" << s.steps
+    << ",\"simulated_time\":" << formatNumber(s.simulated_time)
+    << ",\"ms\":{\"integration\":" << formatNumber(1e3 * s.times.integration)
+    << ",\"bases\":" << formatNumber(1e3 * s.times.integration)
+    << ",\"rotations\":" << formatNumber(1e3 * s.times.rotations)
+    << ",\"assembly\":" << formatNumber(1e3 * s.times.assembly)
+    << ",\"solve\":" << formatNumber(1e3 * s.times.solve)
+    << ",\"dynamics\":" << formatNumber(1e3 * s.times.dynamics)
+    << ",\"topology\":" << formatNumber(1e3 * s.times.topology)
+    << ",\"output\":" << formatNumber(1e3 * s.times.output)
+    << ",\"total\":" << formatNumber(1e3 * s.wall_seconds)
+    << "},\"ms_per_frame\":" << formatNumber(ms_per_frame)
+    << ",\"ms_per_frame_phases\":{\"bases\":" << formatNumber(perFrame(s.times.integration))
+    << ",\"rotations\":" << formatNumber(perFrame(s.times.rotations))
+    << ",\"assembly\":" << formatNumber(perFrame(s.times.assembly))
+    << ",\"solve\":" << formatNumber(perFrame(s.times.solve)) << ",\"other_dynamics\":"
+    << formatNumber(perFrame(s.times.dynamics - s.times.rotations - s.times.assembly - s.times.solve))
+    << ",\"topology\":" << formatNumber(perFrame(s.times.topology)) << "}"
+    << ",\"ms_per_step\":" << formatNumber(s.steps > 0 ? 1e3 * s.times.dynamics / double(s.steps) : NAN)
+    << ",\"solver_iterations\":" << s.solver_iterations
+    << ",\"max_step_iterations\":" << s.max_step_iterations
+    << ",\"unconverged_solves\":" << s.unconverged_solves
+    << ",\"min_ground_distance\":" << formatNumber(s.min_ground_distance)
+    << ",\"kinetic_energy\":" << formatNumber(s.kinetic_energy)
+    << ",\"error\":" << (s.error.empty() ? std::string("null") : jsonString(s.error))
+    << ",\"files\":" << s.files.size() << "}";
+  return j.str();
+}
+
+}  // namespace rc
