@@ -21,7 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "shell/shell_scene.h"
+#include "shell/shell_scene_reader.h"
+#include "shell/shell_simulation.h"
 
 namespace {
 

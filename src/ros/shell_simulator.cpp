@@ -9,6 +9,7 @@
 
 #include "ros/point_cloud2_converter.h"
 #include "ros/simulation_commands.h"
+#include "shell/shell_scene_reader.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-// The shell_sim node (thesis 7): runs a thin-shell scene file (shell/shell_scene.h, config/shell/*.yaml)
+// The shell_sim node (thesis 7): runs a thin-shell scene file (shell/shell_simulation.h, config/shell/*.yaml)
 // frame by frame in real time, publishes the dense surfels, the nodes and the fibers for rviz, and pushes
 // nodes with forces given by service.
 //
@@ -31,7 +31,7 @@
 #include <vector>
 
 #include "shell/shell_applied_force.h"
-#include "shell/shell_scene.h"
+#include "shell/shell_simulation.h"
 
 namespace rc {
 

@@ -26,7 +26,8 @@
 #include "render/framing_camera.h"
 #include "render/image_io.h"
 #include "render/surfel_renderer.h"
-#include "shell/shell_scene.h"
+#include "shell/shell_scene_reader.h"
+#include "shell/shell_scene_run.h"
 
 namespace {
 

@@ -23,7 +23,7 @@
 
 #include "launch_test_support.h"
 #include "ros/shell_simulator.h"
-#include "shell/shell_scene.h"
+#include "shell/shell_scene_reader.h"
 
 namespace {
 

@@ -14,7 +14,8 @@
 #include <string>
 
 #include "core/kd_tree.h"
-#include "shell/shell_scene.h"
+#include "shell/shell_scene_reader.h"
+#include "shell/shell_scene_run.h"
 
 using namespace rc;
 

@@ -1,0 +1,440 @@
+#include "shell/shell_scene_reader.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "io/cloud_io.h"
+#include "io/yaml_reader.h"
+#include "surface/analytic_shapes.h"
+#include "surface/radius_estimation.h"
+
+namespace rc {
+
+namespace {
+
+[[noreturn]] void raiseShellSceneError(const std::string& message) {
+  throw ShellSceneError(message);
+}
+
+/// Area-weighted vertex normals of a mesh.
+std::vector<Vec3> vertexNormals(const TriangleMesh& mesh) {
+  std::vector<Vec3> n(mesh.vertices.size(), Vec3::Zero());
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3& a = mesh.vertices.positions[t[0]];
+    const Vec3 face = (mesh.vertices.positions[t[1]] - a).cross(mesh.vertices.positions[t[2]] - a);
+    for (uint32_t v : t) n[v] += face;
+  }
+  for (Vec3& v : n) v = v.norm() > 0 ? Vec3(v.normalized()) : Vec3(Vec3::UnitZ());
+  return n;
+}
+
+/// `count` area-uniform samples on the triangles, normals interpolated from the vertex normals.
+SurfelCloud sampleMesh(const TriangleMesh& mesh, const std::vector<Vec3>& normals, size_t count) {
+  std::vector<double> cumulative;
+  double total = 0.0;
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3& a = mesh.vertices.positions[t[0]];
+    total += 0.5 * (mesh.vertices.positions[t[1]] - a).cross(mesh.vertices.positions[t[2]] - a).norm();
+    cumulative.push_back(total);
+  }
+  SurfelCloud cloud;
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (size_t s = 0; s < count; ++s) {
+    const double pick = u(rng) * total;
+    const size_t f =
+        std::min(size_t(std::lower_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin()),
+                 cumulative.size() - 1);
+    double r1 = u(rng), r2 = u(rng);
+    if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;
+    const Triangle& t = mesh.triangles[f];
+    const double w0 = 1.0 - r1 - r2;
+    cloud.positions.push_back(w0 * mesh.vertices.positions[t[0]] + r1 * mesh.vertices.positions[t[1]] +
+                              r2 * mesh.vertices.positions[t[2]]);
+    Vec3 n = w0 * normals[t[0]] + r1 * normals[t[1]] + r2 * normals[t[2]];
+    cloud.normals.push_back(n.norm() > 0 ? Vec3(n.normalized()) : normals[t[0]]);
+  }
+  // Random samples leave voids wider than the mean spacing: radii that cover the gaps between neighbours
+  // (3.3) keep the rendered surface hole-free; capped at 2.5 mean spacings (isolated samples at sharp edges).
+  RadiusEstimationConfig radii;
+  radii.max_radius = 2.5 * std::sqrt(total / count);
+  estimateRadii(cloud, radii);
+  return cloud;
+}
+
+class SceneReader {
+ public:
+  SceneReader(const YamlReader& src, ShellScene* scene) : src_(src), scene_(*scene) {}
+
+  void read(const YAML::Node& root) {
+    src_.allowKeys(
+        root,
+        {"name", "source", "placement", "velocity", "nodes", "material", "plasticity", "fracture",
+         "anisotropy", "weak_point", "dynamics", "ground", "pins", "balloon", "frames", "skinning", "output"},
+        "scene");
+    if (root["name"]) scene_.name = src_.string(root["name"], "name");
+    readSource(src_.require(root, "source", "scene"));
+    if (root["placement"]) readPlacement(root["placement"]);
+    if (root["velocity"]) scene_.initial_velocity = src_.vec3(root["velocity"], "velocity");
+    readNodes(src_.require(root, "nodes", "scene"));
+    readMaterial(src_.require(root, "material", "scene"));
+    if (root["plasticity"]) readPlasticity(root["plasticity"]);
+    if (root["fracture"]) readFracture(root["fracture"]);
+    if (root["anisotropy"]) readAnisotropy(root["anisotropy"]);
+    if (root["weak_point"]) readWeakPoint(root["weak_point"]);
+    readDynamics(src_.require(root, "dynamics", "scene"));
+    if (root["ground"]) readGround(root["ground"]);
+    if (root["pins"]) readPins(root["pins"]);
+    if (root["balloon"]) readBalloon(root["balloon"]);
+    readFrames(src_.require(root, "frames", "scene"));
+    if (root["skinning"]) {
+      src_.allowKeys(root["skinning"], {"nodes"}, "skinning");
+      scene_.skinning_nodes =
+          size_t(src_.integer(src_.require(root["skinning"], "nodes", "skinning"), "skinning.nodes", 2, 32));
+    }
+    if (root["output"]) readOutput(root["output"]);
+  }
+
+ private:
+  void readSource(const YAML::Node& node) {
+    src_.allowKeys(node, {"file", "sample_count", "fit_size", "flip_normals", "sheet", "sphere"}, "source");
+    const int kinds = int(bool(node["file"])) + int(bool(node["sheet"])) + int(bool(node["sphere"]));
+    if (kinds != 1) src_.fail(node, "source: give exactly one of 'file', 'sheet', 'sphere'");
+    if (node["file"]) {
+      readFile(node);
+    } else {
+      for (const char* key : {"sample_count", "fit_size", "flip_normals"})
+        if (node[key]) src_.fail(node[key], std::string("source.") + key + ": only for a 'file' source");
+      if (node["sheet"]) readSheet(node["sheet"]);
+      if (node["sphere"]) readSphere(node["sphere"]);
+    }
+  }
+
+  void readFile(const YAML::Node& node) {
+    const std::string file = src_.string(node["file"], "source.file");
+    std::filesystem::path path(file);
+    if (path.is_relative()) path = std::filesystem::path(src_.sourceName()).parent_path() / path;
+    TriangleMesh mesh;
+    try {
+      mesh = readMesh(path.string());
+    } catch (const std::exception& e) {
+      src_.fail(node["file"], "source.file: cannot read '" + path.string() + "': " + e.what());
+    }
+    if (mesh.vertices.empty()) src_.fail(node["file"], "source.file: '" + path.string() + "' has no points");
+    SurfelCloud& cloud = scene_.surfels;
+    if (node["sample_count"]) {
+      const size_t count = size_t(src_.integer(node["sample_count"], "source.sample_count", 1, 100000000));
+      if (mesh.triangles.empty())
+        src_.fail(node["sample_count"], "source.sample_count: '" + path.string() + "' has no triangles");
+      const std::vector<Vec3> normals =
+          mesh.vertices.hasNormals() ? mesh.vertices.normals : vertexNormals(mesh);
+      cloud = sampleMesh(mesh, normals, count);
+    } else {
+      cloud = mesh.vertices;
+      if (!cloud.hasNormals()) {
+        if (mesh.triangles.empty())
+          src_.fail(node["file"], "source.file: '" + path.string() + "' has neither normals nor triangles");
+        cloud.normals = vertexNormals(mesh);
+      }
+      for (Vec3& n : cloud.normals) n.normalize();
+    }
+    if (node["flip_normals"] && src_.boolean(node["flip_normals"], "source.flip_normals"))
+      for (Vec3& n : cloud.normals) n = -n;
+    if (node["fit_size"]) {
+      const double size = src_.positive(node["fit_size"], "source.fit_size");
+      Vec3 lo, hi;
+      cloud.bounds(&lo, &hi);
+      const double scale = size / (hi - lo).maxCoeff();
+      const Vec3 center = 0.5 * (lo + hi);
+      for (Vec3& p : cloud.positions) p = scale * (p - center);
+      for (double& r : cloud.radii) r *= scale;
+    }
+  }
+
+  /// Jittered grid on [-w/2, w/2] x [-h/2, h/2] in z = 0, normal +z, coloured like a printed poster.
+  void readSheet(const YAML::Node& node) {
+    src_.allowKeys(node, {"size", "spacing", "jitter", "colors", "tile"}, "source.sheet");
+    const YAML::Node size_node = src_.require(node, "size", "source.sheet");
+    if (!size_node.IsSequence() || size_node.size() != 2)
+      src_.fail(size_node, "source.sheet.size: expected [w, h]");
+    const double w = src_.positive(size_node[0], "source.sheet.size"),
+                 h = src_.positive(size_node[1], "source.sheet.size");
+    const double spacing =
+        src_.positive(src_.require(node, "spacing", "source.sheet"), "source.sheet.spacing");
+    const double jitter = node["jitter"] ? src_.unitInterval(node["jitter"], "source.sheet.jitter") : 0.0;
+    enum class Colors { kNone, kChecker, kRings };
+    const Colors colors =
+        node["colors"]
+            ? src_.choice<Colors>(
+                  node["colors"], "source.sheet.colors",
+                  {{"none", Colors::kNone}, {"checker", Colors::kChecker}, {"rings", Colors::kRings}})
+            : Colors::kNone;
+    const double tile =
+        node["tile"] ? src_.positive(node["tile"], "source.sheet.tile") : 0.1 * std::min(w, h);
+    const long nx = long(std::round(w / spacing)), ny = long(std::round(h / spacing));
+    if (nx < 2 || ny < 2) src_.fail(node["spacing"], "source.sheet.spacing: larger than the sheet");
+    if (double(nx) * double(ny) > 5e7) src_.fail(node["spacing"], "source.sheet.spacing: too many surfels");
+    SurfelCloud& cloud = scene_.surfels;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-0.5 * jitter, 0.5 * jitter);
+    const double sx = w / nx, sy = h / ny;
+    for (long a = 0; a < nx; ++a) {
+      for (long b = 0; b < ny; ++b) {
+        const Vec3 p(-0.5 * w + (a + 0.5 + u(rng)) * sx, -0.5 * h + (b + 0.5 + u(rng)) * sy, 0.0);
+        cloud.positions.push_back(p);
+        cloud.normals.push_back(Vec3::UnitZ());
+        if (colors == Colors::kChecker) {
+          const bool dark = (long(std::floor(p.x() / tile)) + long(std::floor(p.y() / tile))) % 2 != 0;
+          cloud.colors.push_back(dark ? Rgba{40, 60, 160, 255} : Rgba{240, 220, 90, 255});
+        } else if (colors == Colors::kRings) {
+          const double r = p.head<2>().norm() / tile;
+          const double t = 0.5 + 0.5 * std::cos(2.0 * M_PI * r);
+          cloud.colors.push_back(
+              Rgba{uint8_t(200 * t + 40), uint8_t(60 + 100 * (1 - t)), uint8_t(220 * (1 - t)), 255});
+        }
+      }
+    }
+    cloud.radii.assign(cloud.size(), 0.75 * std::max(sx, sy));
+  }
+
+  void readSphere(const YAML::Node& node) {
+    src_.allowKeys(node, {"radius", "count", "center"}, "source.sphere");
+    const double r = src_.positive(src_.require(node, "radius", "source.sphere"), "source.sphere.radius");
+    const size_t count = size_t(
+        src_.integer(src_.require(node, "count", "source.sphere"), "source.sphere.count", 12, 50000000));
+    const Vec3 c = node["center"] ? src_.vec3(node["center"], "source.sphere.center") : Vec3::Zero();
+    scene_.surfels = AnalyticSphere(c, r).sample(count);
+    scene_.surfels.radii.assign(count, 1.5 * std::sqrt(4.0 * r * r / count));
+  }
+
+  void readPlacement(const YAML::Node& node) {
+    src_.allowKeys(node, {"rotation", "translation"}, "placement");
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+    if (node["rotation"]) {
+      const YAML::Node r = node["rotation"];
+      src_.allowKeys(r, {"axis", "degrees"}, "placement.rotation");
+      const Vec3 axis = src_.vec3(src_.require(r, "axis", "placement.rotation"), "placement.rotation.axis");
+      if (!(axis.norm() > 0)) src_.fail(r["axis"], "placement.rotation.axis: must not be zero");
+      const double deg =
+          src_.number(src_.require(r, "degrees", "placement.rotation"), "placement.rotation.degrees");
+      rotation = Eigen::AngleAxisd(deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
+    }
+    const Vec3 t =
+        node["translation"] ? src_.vec3(node["translation"], "placement.translation") : Vec3::Zero();
+    SurfelCloud& c = scene_.surfels;
+    for (Vec3& p : c.positions) p = rotation * p + t;
+    for (Vec3& n : c.normals) n = rotation * n;
+    for (Vec3& a : c.axes1) a = rotation * a;
+    for (Vec3& a : c.axes2) a = rotation * a;
+  }
+
+  void readNodes(const YAML::Node& node) {
+    src_.allowKeys(node, {"spacing", "count", "neighbors", "relax_iterations"}, "nodes");
+    if (bool(node["spacing"]) == bool(node["count"]))
+      src_.fail(node, "nodes: give exactly one of 'spacing', 'count'");
+    if (node["spacing"]) scene_.nodes.spacing = src_.positive(node["spacing"], "nodes.spacing");
+    if (node["count"]) {
+      scene_.nodes.target_count = size_t(src_.integer(node["count"], "nodes.count", 4, 10000000));
+      if (scene_.nodes.target_count > scene_.surfels.size())
+        src_.fail(node["count"], "nodes.count: more nodes than the " + std::to_string(scene_.surfels.size()) +
+                                     " surfels of the source");
+    }
+    if (node["neighbors"])
+      scene_.nodes.neighbor_count = size_t(src_.integer(node["neighbors"], "nodes.neighbors", 4, 16));
+    if (node["relax_iterations"])
+      scene_.nodes.relax_iterations =
+          int(src_.integer(node["relax_iterations"], "nodes.relax_iterations", 0, 100));
+  }
+
+  void readMaterial(const YAML::Node& node) {
+    src_.allowKeys(node, {"stretch_stiffness", "bending_stiffness", "density", "damping", "balance_membrane"},
+                   "material");
+    ShellMaterial& m = scene_.material;
+    m.stretch_stiffness =
+        src_.nonNegative(src_.require(node, "stretch_stiffness", "material"), "material.stretch_stiffness");
+    m.bending_stiffness =
+        src_.nonNegative(src_.require(node, "bending_stiffness", "material"), "material.bending_stiffness");
+    if (!(m.stretch_stiffness + m.bending_stiffness > 0))
+      src_.fail(node, "material: stretch_stiffness and bending_stiffness are both 0");
+    if (node["density"]) m.areal_density = src_.positive(node["density"], "material.density");
+    if (node["damping"]) m.damping = src_.nonNegative(node["damping"], "material.damping");
+    if (node["balance_membrane"])
+      scene_.balance_membrane = src_.boolean(node["balance_membrane"], "material.balance_membrane");
+  }
+
+  void readPlasticity(const YAML::Node& node) {
+    src_.allowKeys(node, {"stretch_yield", "bend_yield", "stretch_creep", "bend_creep", "weakening"},
+                   "plasticity");
+    ShellPlasticity& p = scene_.material_options.plasticity;
+    if (node["stretch_yield"])
+      p.stretch_yield = src_.nonNegative(node["stretch_yield"], "plasticity.stretch_yield");
+    if (node["bend_yield"]) p.bend_yield = src_.nonNegative(node["bend_yield"], "plasticity.bend_yield");
+    if (node["stretch_creep"])
+      p.stretch_creep = src_.nonNegative(node["stretch_creep"], "plasticity.stretch_creep");
+    if (node["bend_creep"]) p.bend_creep = src_.nonNegative(node["bend_creep"], "plasticity.bend_creep");
+    if (node["weakening"]) p.weakening = src_.nonNegative(node["weakening"], "plasticity.weakening");
+    scene_.plasticity = true;
+  }
+
+  void readFracture(const YAML::Node& node) {
+    src_.allowKeys(
+        node,
+        {"stretch_threshold", "bend_threshold", "max_cracks_per_step", "min_fiber_length", "max_crack_speed"},
+        "fracture");
+    ShellFracture& f = scene_.material_options.fracture;
+    if (!node["stretch_threshold"] && !node["bend_threshold"])
+      src_.fail(node, "fracture: give stretch_threshold and / or bend_threshold");
+    if (node["stretch_threshold"])
+      f.stretch_threshold = src_.positive(node["stretch_threshold"], "fracture.stretch_threshold");
+    if (node["bend_threshold"])
+      f.bend_threshold = src_.positive(node["bend_threshold"], "fracture.bend_threshold");
+    if (node["max_cracks_per_step"])
+      f.max_cracks_per_step =
+          size_t(src_.integer(node["max_cracks_per_step"], "fracture.max_cracks_per_step", 1, 100000));
+    if (node["min_fiber_length"])
+      f.min_fiber_length = src_.nonNegative(node["min_fiber_length"], "fracture.min_fiber_length");
+    if (node["max_crack_speed"])
+      f.max_crack_speed = src_.positive(node["max_crack_speed"], "fracture.max_crack_speed");
+    scene_.fracture = true;
+  }
+
+  void readAnisotropy(const YAML::Node& node) {
+    src_.allowKeys(node, {"direction", "stretch_ratio", "bend_ratio"}, "anisotropy");
+    ShellSceneAnisotropy& a = scene_.anisotropy;
+    a.direction = src_.vec3(src_.require(node, "direction", "anisotropy"), "anisotropy.direction");
+    if (!(a.direction.norm() > 0)) src_.fail(node["direction"], "anisotropy.direction: must not be zero");
+    a.direction.normalize();
+    if (node["stretch_ratio"])
+      a.stretch_ratio = src_.positive(node["stretch_ratio"], "anisotropy.stretch_ratio");
+    if (node["bend_ratio"]) a.bend_ratio = src_.positive(node["bend_ratio"], "anisotropy.bend_ratio");
+    a.enabled = true;
+  }
+
+  void readWeakPoint(const YAML::Node& node) {
+    src_.allowKeys(node, {"center", "radius", "stretch_threshold", "bend_threshold"}, "weak_point");
+    if (!scene_.fracture) src_.fail(node, "weak_point: needs a 'fracture' block");
+    ShellSceneWeakPoint& w = scene_.weak_point;
+    w.center = src_.vec3(src_.require(node, "center", "weak_point"), "weak_point.center");
+    w.radius = src_.positive(src_.require(node, "radius", "weak_point"), "weak_point.radius");
+    if (!node["stretch_threshold"] && !node["bend_threshold"])
+      src_.fail(node, "weak_point: give stretch_threshold and / or bend_threshold");
+    if (node["stretch_threshold"])
+      w.stretch_threshold = src_.positive(node["stretch_threshold"], "weak_point.stretch_threshold");
+    if (node["bend_threshold"])
+      w.bend_threshold = src_.positive(node["bend_threshold"], "weak_point.bend_threshold");
+    w.enabled = true;
+  }
+
+  void readDynamics(const YAML::Node& node) {
+    src_.allowKeys(node, {"time_step", "step_safety", "step_update_interval", "gravity", "blowup_factor"},
+                   "dynamics");
+    ShellSolverOptions& o = scene_.solver;
+    if (node["time_step"]) {
+      const YAML::Node t = node["time_step"];
+      if (!(t.IsScalar() && t.Scalar() == "auto"))
+        o.time_step = src_.positive(t, "dynamics.time_step (or auto)");
+    }
+    if (node["step_safety"]) {
+      o.step_safety = src_.positive(node["step_safety"], "dynamics.step_safety");
+      if (o.step_safety > 1.0) src_.fail(node["step_safety"], "dynamics.step_safety must be <= 1");
+    }
+    if (node["step_update_interval"])
+      o.step_update_interval =
+          int(src_.integer(node["step_update_interval"], "dynamics.step_update_interval", 1, 100000));
+    if (node["gravity"]) o.gravity = src_.vec3(node["gravity"], "dynamics.gravity");
+    if (node["blowup_factor"])
+      o.blowup_factor = src_.positive(node["blowup_factor"], "dynamics.blowup_factor");
+  }
+
+  void readGround(const YAML::Node& node) {
+    src_.allowKeys(node, {"point", "normal", "restitution", "friction"}, "ground");
+    ShellSolverOptions& o = scene_.solver;
+    o.ground = true;
+    if (node["point"]) o.ground_point = src_.vec3(node["point"], "ground.point");
+    if (node["normal"]) {
+      o.ground_normal = src_.vec3(node["normal"], "ground.normal");
+      if (!(o.ground_normal.norm() > 0)) src_.fail(node["normal"], "ground.normal: must not be zero");
+      o.ground_normal.normalize();
+    }
+    if (node["restitution"])
+      o.ground_restitution = src_.unitInterval(node["restitution"], "ground.restitution");
+    if (node["friction"]) o.ground_friction = src_.unitInterval(node["friction"], "ground.friction");
+  }
+
+  void readPins(const YAML::Node& node) {
+    if (!node.IsSequence()) src_.fail(node, "pins: expected a list of {lo, hi[, velocity]}");
+    for (size_t k = 0; k < node.size(); ++k) {
+      const std::string where = "pins[" + std::to_string(k) + "]";
+      src_.allowKeys(node[k], {"lo", "hi", "velocity"}, where);
+      ShellScenePin pin;
+      pin.lo = src_.vec3(src_.require(node[k], "lo", where), where + ".lo");
+      pin.hi = src_.vec3(src_.require(node[k], "hi", where), where + ".hi");
+      if (!(pin.lo.array() <= pin.hi.array()).all())
+        src_.fail(node[k]["hi"], where + ": hi must not be below lo");
+      if (node[k]["velocity"]) pin.velocity = src_.vec3(node[k]["velocity"], where + ".velocity");
+      size_t inside = 0;
+      for (const Vec3& p : scene_.surfels.positions)
+        inside += (p.array() >= pin.lo.array()).all() && (p.array() <= pin.hi.array()).all();
+      if (inside == 0) src_.fail(node[k], where + ": the box holds no surfel of the source");
+      scene_.pins.push_back(pin);
+    }
+  }
+
+  void readBalloon(const YAML::Node& node) {
+    src_.allowKeys(node, {"pressure", "start_pressure", "ramp_time", "vent_time"}, "balloon");
+    ShellSceneBalloon& b = scene_.balloon;
+    b.pressure = src_.number(src_.require(node, "pressure", "balloon"), "balloon.pressure");
+    if (node["start_pressure"])
+      b.start_pressure = src_.number(node["start_pressure"], "balloon.start_pressure");
+    if (node["ramp_time"]) b.ramp_time = src_.nonNegative(node["ramp_time"], "balloon.ramp_time");
+    if (node["vent_time"]) b.vent_time = src_.nonNegative(node["vent_time"], "balloon.vent_time");
+    b.enabled = true;
+  }
+
+  void readFrames(const YAML::Node& node) {
+    src_.allowKeys(node, {"count", "steps_per_frame", "time"}, "frames");
+    scene_.frame_count = int(src_.integer(src_.require(node, "count", "frames"), "frames.count", 1, 1000000));
+    if (bool(node["steps_per_frame"]) == bool(node["time"]))
+      src_.fail(node, "frames: give exactly one of 'steps_per_frame', 'time'");
+    if (node["steps_per_frame"])
+      scene_.steps_per_frame =
+          int(src_.integer(node["steps_per_frame"], "frames.steps_per_frame", 1, 100000000));
+    if (node["time"]) scene_.frame_time = src_.positive(node["time"], "frames.time");
+  }
+
+  void readOutput(const YAML::Node& node) {
+    src_.allowKeys(node, {"every", "surfels", "cracks"}, "output");
+    if (node["every"]) scene_.output.every = int(src_.integer(node["every"], "output.every", 0, 1000000));
+    if (node["surfels"]) scene_.output.surfels = src_.boolean(node["surfels"], "output.surfels");
+    if (node["cracks"]) scene_.output.cracks = src_.boolean(node["cracks"], "output.cracks");
+  }
+
+  const YamlReader& src_;
+  ShellScene& scene_;
+};
+
+}  // namespace
+
+ShellScene parseShellScene(const std::string& yaml_text, const std::string& source_name) {
+  const YamlReader src(source_name, &raiseShellSceneError);
+  const YAML::Node root = src.parseMap(
+      yaml_text, "expected a map of scene keys (source, nodes, material, dynamics, frames, ...)");
+  ShellScene scene;
+  scene.path = source_name;
+  scene.name = std::filesystem::path(source_name).stem().string();
+  SceneReader(src, &scene).read(root);
+  return scene;
+}
+
+ShellScene loadShellScene(const std::string& path) {
+  return parseShellScene(YamlReader::readFile(path, &raiseShellSceneError), path);
+}
+
+}  // namespace rc

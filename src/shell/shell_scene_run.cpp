@@ -1,0 +1,128 @@
+#include "shell/shell_scene_run.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "io/cloud_io.h"
+
+namespace rc {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+size_t writeFrame(const ShellSimulation& sim, const std::string& dir, int frame) {
+  const ShellSceneOutput& out = sim.scene().output;
+  char suffix[32];
+  std::snprintf(suffix, sizeof suffix, "_%04d.ply", frame);
+  const std::filesystem::path folder(dir);
+  size_t files = 0;
+  if (out.surfels) {
+    writeCloud((folder / (sim.scene().name + "_surfels" + suffix)).string(), sim.surfels());
+    ++files;
+  }
+  if (out.cracks && sim.crackCount() > 0) {
+    writeCloud((folder / (sim.scene().name + "_cracks" + suffix)).string(), sim.crackSurfels());
+    ++files;
+  }
+  return files;
+}
+
+}  // namespace
+
+ShellRunStats runShellScene(const ShellScene& scene, const ShellRunOptions& options) {
+  ShellRunStats stats;
+  stats.name = scene.name;
+  stats.frame_count = scene.frame_count;
+  const Clock::time_point t0 = Clock::now();
+  ShellSimulation sim(scene);
+  stats.setup_ms = msSince(t0);
+  stats.nodes = sim.solver().nodes().size();
+  stats.sampling = sim.solver().nodes().sampling;
+  stats.surfels = scene.surfels.size();
+  stats.mean_radius_start = sim.meanRadius();
+  if (sim.membraneBalance()) {
+    stats.membrane_balanced = true;
+    stats.membrane_balance = *sim.membraneBalance();
+  }
+  const bool write = options.write_files && scene.output.every > 0;
+  if (write) {
+    std::filesystem::create_directories(options.out_dir);
+    stats.files += writeFrame(sim, options.out_dir, 0);
+    if (options.on_written_frame) options.on_written_frame(sim, 0);
+  }
+  try {
+    for (int f = 1; f <= scene.frame_count; ++f) {
+      const ShellFrameReport r = sim.advanceFrame();
+      stats.forces_ms += r.forces_ms;
+      stats.material_ms += r.material_ms;
+      stats.surface_ms += r.surface_ms;
+      stats.frames = f;
+      if (write && f % scene.output.every == 0) {
+        stats.files += writeFrame(sim, options.out_dir, f);
+        if (options.on_written_frame) options.on_written_frame(sim, f);
+      }
+      if (options.on_frame) options.on_frame(r);
+    }
+  } catch (const ShellInstabilityError& e) {
+    stats.instability = e.what();
+  }
+  if (stats.frames > 0) {
+    stats.forces_ms /= stats.frames;
+    stats.material_ms /= stats.frames;
+    stats.surface_ms /= stats.frames;
+  }
+  stats.fibers = sim.fiberCount();
+  stats.cracks = sim.crackCount();
+  stats.steps = sim.solver().stepCount();
+  stats.time = sim.solver().time();
+  stats.mean_radius_end = sim.meanRadius();
+  if (sim.crackCount() > 0) {
+    stats.first_crack_time = sim.material()->cracks().front().time;
+    stats.last_crack_time = sim.material()->cracks().back().time;
+    if (scene.balloon.enabled) stats.tear_pressure = scene.balloon.pressureAt(stats.first_crack_time);
+  }
+  return stats;
+}
+
+std::string shellRunStatsJson(const ShellRunStats& s) {
+  std::string instability;
+  for (char c : s.instability) {
+    if (c == '"' || c == '\\') instability += '\\';
+    instability += c;
+  }
+  char buf[1024];
+  std::snprintf(
+      buf, sizeof buf,
+      "{\"scene\": \"%s\", \"nodes\": %zu, \"fibers\": %zu, \"surfels\": %zu, \"cracks\": %zu, "
+      "\"frames\": %d, \"frame_count\": %d, \"steps\": %zu, \"time\": %.6g, \"setup_ms\": %.1f, "
+      "\"ms_per_frame\": {\"forces\": %.2f, \"material\": %.2f, \"surface\": %.2f, \"total\": %.2f}, "
+      "\"mean_radius\": {\"start\": %.6g, \"end\": %.6g}, \"files\": %zu, \"instability\": ",
+      s.name.c_str(), s.nodes, s.fibers, s.surfels, s.cracks, s.frames, s.frame_count, s.steps, s.time,
+      s.setup_ms, s.forces_ms, s.material_ms, s.surface_ms, s.forces_ms + s.material_ms + s.surface_ms,
+      s.mean_radius_start, s.mean_radius_end, s.files);
+  char tail[512];
+  std::snprintf(tail, sizeof tail,
+                ", \"cracks_at\": {\"first\": %.6g, \"last\": %.6g, \"tear_pressure\": %.6g}",
+                s.first_crack_time, s.last_crack_time, s.tear_pressure);
+  std::string balance = ", \"membrane_balance\": null";
+  if (s.membrane_balanced) {
+    char b[256];
+    const ShellMembraneBalanceReport& m = s.membrane_balance;
+    std::snprintf(b, sizeof b,
+                  ", \"membrane_balance\": {\"constrained_nodes\": %zu, \"residual_before\": %.4g, "
+                  "\"residual_after\": %.4g, \"clamped_fibers\": %zu, \"factors\": [%.4g, %.4g]}",
+                  m.constrained_nodes, m.residual_before, m.residual_after, m.clamped_fibers, m.min_factor,
+                  m.max_factor);
+    balance = b;
+  }
+  return std::string(buf) + (s.instability.empty() ? "null" : "\"" + instability + "\"") + tail + balance +
+         "}";
+}
+
+}  // namespace rc
