@@ -13,7 +13,7 @@
 #include <cstring>
 #include <string>
 
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 
 namespace {

@@ -15,8 +15,8 @@
 
 #include "sph/sph_dam_break_surge.h"
 #include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_builders.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 
 namespace {

@@ -43,7 +43,7 @@
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_object_penalty.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 #include "sph/sph_thermal.h"
 

@@ -1,4 +1,4 @@
-// The sph_sim node (thesis 8): runs an SPH scene file (sph/sph_scene_file.h, config/sph/*.yaml) in real time
+// The sph_sim node (thesis 8): runs an SPH scene file (sph/sph_simulation.h, config/sph/*.yaml) in real time
 // and publishes the particles for rviz; start, pause, single steps, reset and scene loading by service. Each
 // step runs the scene's temperature, melting / freezing and fluid sources as rc_sph does (SphSceneStepper).
 //
@@ -23,7 +23,7 @@
 #include <string>
 
 #include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene.h"
 #include "sph/sph_scene_stepper.h"
 
 namespace rc {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene.h"
+#include "sph/sph_scene_builders.h"
 
 namespace rc {
 

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "sph/sph_scene.h"
+#include "sph/sph_scene_builders.h"
 
 namespace rc {
 

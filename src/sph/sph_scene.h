@@ -1,7 +1,8 @@
-// SPH scene files (YAML, config/sph/*.yaml): solver parameters (thesis 8.1.4, appendix F.2), fluid blocks,
-// fluid sources, boundary walls / boxes / cylinders / planes, moving boundary boxes, frames, particle outputs
-// and the optional physics a scene switches on. The schema is documented at the top of
-// config/sph/dam_break_2d.yaml.
+// An SPH scene (thesis 8): what config/sph/*.yaml describes. Solver parameters (8.1.4, appendix F.2),
+// particles of the fluid blocks and solids, fluid sources, boundary walls / boxes / cylinders / planes, moving
+// boundary boxes, frames, particle and surface outputs and the optional physics a scene switches on.
+// sph_scene_reader reads it, SphSimulation (sph_simulation) steps it, runSphScene (sph_scene_run) runs its
+// frames. The schema is documented at the top of config/sph/dam_break_2d.yaml.
 #pragma once
 
 #include <stdexcept>
@@ -140,11 +141,5 @@ struct SphScene {
 /// phase_transition (key phase_transition; needs temperature and elasticity) and skin (key skin of a solid;
 /// needs elasticity). An unknown name is rejected. The keys of a physics not enabled are rejected.
 const std::vector<std::string>& sphOptionalPhysics();
-
-/// Reads a scene file. Throws SphSceneError naming the file, line and problem (syntax, unknown key, wrong
-/// type, bad value, unsupported physics).
-SphScene loadSphScene(const std::string& path);
-/// Same for YAML text; `source_name` stands for the file name in error messages.
-SphScene parseSphScene(const std::string& yaml_text, const std::string& source_name);
 
 }  // namespace rc

@@ -1,4 +1,4 @@
-// Scene helpers for the SPH solver: lattice-filled fluid boxes, boundary-particle walls, box planes, 2D dam
+// Scene builders for the SPH solver: lattice-filled fluid boxes, boundary-particle walls, box planes, 2D dam
 // break.
 #pragma once
 

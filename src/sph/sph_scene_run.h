@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene.h"
 #include "sph/sph_scene_setup.h"
 #include "sph/sph_thermal.h"
 

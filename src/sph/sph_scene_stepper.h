@@ -8,7 +8,7 @@
 
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_fluid_source.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene.h"
 #include "sph/sph_thermal.h"
 
 namespace rc {

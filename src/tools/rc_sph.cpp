@@ -8,7 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 
 int main(int argc, char** argv) {

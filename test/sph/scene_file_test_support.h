@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "core/triangle_mesh.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 
 namespace rc {
 

@@ -13,7 +13,7 @@
 
 #include "sph/sph_dam_break_surge.h"
 #include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene.h"
+#include "sph/sph_scene_builders.h"
 
 namespace rc {
 namespace {

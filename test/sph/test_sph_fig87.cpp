@@ -22,7 +22,7 @@
 #include "scene_file_test_support.h"
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_output.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 
 namespace rc {

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "sph/sph_scene.h"
+#include "sph/sph_scene_builders.h"
 
 namespace rc {
 namespace {

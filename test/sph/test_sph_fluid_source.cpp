@@ -11,8 +11,8 @@
 
 #include "scene_file_test_support.h"
 #include "sph/sph_fluid_source.h"
-#include "sph/sph_scene.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_builders.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 
 namespace rc {

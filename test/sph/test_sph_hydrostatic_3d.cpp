@@ -10,7 +10,7 @@
 
 #include "scene_file_test_support.h"
 #include "sph/sph_kernels.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 
 namespace rc {

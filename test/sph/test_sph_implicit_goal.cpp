@@ -22,7 +22,7 @@
 #include "sph/sph_implicit_goal_solver.h"
 #include "sph/sph_lattice.h"
 #include "sph/sph_object_penalty.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 
 namespace rc {

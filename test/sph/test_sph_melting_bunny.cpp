@@ -11,7 +11,7 @@
 
 #include "../shared_data.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 
 namespace rc {

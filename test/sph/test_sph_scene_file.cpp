@@ -1,6 +1,6 @@
 // SPH scene files (config/sph), the scene runner of rc_sph and the particle outputs (PLY, VTK .vtp).
 #include "sph/sph_dam_break_surge.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 
 #include <gtest/gtest.h>
 
@@ -21,7 +21,7 @@
 #include "scene_file_test_support.h"
 #include "sph/sph_lattice.h"
 #include "sph/sph_output.h"
-#include "sph/sph_scene.h"
+#include "sph/sph_scene_builders.h"
 #include "sph/sph_scene_run.h"
 
 namespace rc {
@@ -230,7 +230,7 @@ TEST(SphSceneFile, BadInputsNameFileLineAndProblem) {
   expectErrorAt(head + "enable: [magnetism]\n", 7, "unknown physics 'magnetism'");
   // Values the solver rejects point at their own line.
   expectErrorAt("dimension: 2\nspacing: 0.02\nsolver:\n  smoothing_ratio: 2.5\n  xsph: 1.5\n", 5, "xsph");
-  expectErrorAt(head + "output: {particles: {formats: [obj]}}\n", 7, "unknown format 'obj'");
+  expectErrorAt(head + "output: {particles: {formats: [obj]}}\n", 7, "unknown 'obj'");
   expectErrorAt(head + "boundary: {walls: [{lo: [0, 0], hi: [0.1, 0.3], closed_top: maybe}]}\n", 7,
                 "closed_top: expected true or false");
   expectErrorAt(
@@ -456,7 +456,7 @@ TEST(SphSceneFile, PhysicsKeysNeedTheirEnableEntry) {
                 "goal_stiffness: applies to model goal_position");
   expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], youngs_modulus: 1e4}\n", 9,
                 "youngs_modulus: applies to model strain");
-  expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], model: rubber}\n", 9, "unknown model 'rubber'");
+  expectErrorAt(elastic + "  - {lo: [0, 0.3], hi: [0.1, 0.4], model: rubber}\n", 9, "unknown 'rubber'");
   expectErrorAt(elastic + "  - {shape: cone, lo: [0, 0.3], hi: [0.1, 0.4]}\n", 9, "unknown shape 'cone'");
   expectErrorAt(elastic + "  - {shape: sphere, lo: [0, 0.3], hi: [0.1, 0.4]}\n", 9, "unknown key 'lo'");
   expectErrorAt(

@@ -19,7 +19,7 @@
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_kernels.h"
 #include "sph/sph_lattice.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 
 namespace rc {

@@ -17,7 +17,7 @@
 #include "io/obj_io.h"
 #include "io/ply_io.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 #include "sph/sph_skinning.h"
 
@@ -279,9 +279,9 @@ TEST(SphSceneSkin, BadSkinKeysNameFileAndLine) {
   expectErrorAt(on + "    skin: {every: 2}\n", 9, "give 'mesh'");
   expectErrorAt(on + "    skin:\n      resolution: 0\n", 10, "resolution");
   expectErrorAt(on + "    skin:\n      resolution: 2\n      transforms: rigid\n", 11,
-                "unknown choice 'rigid' (fitted, lattice)");
+                "unknown 'rigid' (known: fitted, lattice)");
   expectErrorAt(on + "    skin:\n      resolution: 2\n      orphans: drop\n", 11,
-                "unknown choice 'drop' (error, nearest)");
+                "unknown 'drop' (known: error, nearest)");
   expectErrorAt(on + "    skin:\n      resolution: 2\n      every: 0\n", 11, "every");
   expectErrorAt(on + "    skin:\n      resolution: 2\n      obj: false\n", 11, "obj and ply are both false");
   expectErrorAt(on + "    skin:\n      mesh: no_such_skin.obj\n", 10, "no_such_skin.obj");

@@ -14,7 +14,7 @@
 
 #include "scene_file_test_support.h"
 #include "sph/sph_elastic_solid.h"
-#include "sph/sph_scene_file.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
 #include "sph/sph_thermal.h"
 
@@ -120,7 +120,7 @@ TEST(SphSceneThermal, BadThermalKeysNameFileAndLine) {
                 10, "must be");
   expectErrorAt(
       both + "phase_transition:\n  freezing:\n    temperature: 0\n    phase: 2\n    material: {model: x}\n",
-      13, "unknown model 'x'");
+      13, "unknown 'x'");
   expectErrorAt(both + "phase_transition:\n  melting: {temperature: 1, phase: 4}\n", 10,
                 "no solid has phase 4");
   expectErrorAt(both + "phase_transition:\n  melting: {rate: 1}\n", 10, "missing 'temperature'");

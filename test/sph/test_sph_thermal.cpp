@@ -17,7 +17,7 @@
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_lattice.h"
-#include "sph/sph_scene.h"
+#include "sph/sph_scene_builders.h"
 
 namespace rc {
 namespace {

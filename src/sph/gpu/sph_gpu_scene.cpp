@@ -6,7 +6,7 @@
 
 #include "sph/sph_kernels.h"
 #include "sph/sph_lattice.h"
-#include "sph/sph_scene.h"
+#include "sph/sph_scene_builders.h"
 
 namespace rc {
 
