@@ -12,8 +12,9 @@
 #include "ros/point_cloud2_converter.h"
 #include "ros/simulation_commands.h"
 #include "sph/sph_output.h"
+#include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
-#include "sph/sph_scene_stepper.h"
+#include "sph/sph_simulation.h"
 #include "sph/sph_surface.h"
 
 namespace rc {
@@ -63,14 +64,12 @@ bool SphSimulator::load(const std::string& path, bool start, std::string* messag
     auto scene = std::make_unique<SphScene>(loadSphScene(path));
     if (params_.threads > 0) scene->config.num_threads = params_.threads;
     scene->config.throw_on_instability = false;  // reported in the stats, the simulation pauses
-    auto solver = std::make_unique<SphFluidSolver>(makeSphSolver(*scene));
-    auto stepper = std::make_unique<SphSceneStepper>(*scene, *solver);
-    stepper->emit(solver->time());  // the sources' first layers
+    auto simulation = std::make_unique<SphSimulation>(*scene);
+    simulation->emit(simulation->solver().time());  // the sources' first layers
     std::lock_guard<std::mutex> lock(mutex_);
-    stepper_.reset();  // refers to the old solver
+    simulation_.reset();  // refers to the old scene
     scene_ = std::move(scene);
-    solver_ = std::move(solver);
-    stepper_ = std::move(stepper);
+    simulation_ = std::move(simulation);
     running_ = start;
     instability_.clear();
     step_ms_ = 0.0;
@@ -86,11 +85,11 @@ bool SphSimulator::load(const std::string& path, bool start, std::string* messag
 }
 
 void SphSimulator::advance(double duration, uint64_t steps) {
-  const double end = solver_->time() + duration;
+  const double end = simulation_->solver().time() + duration;
   uint64_t done = 0;
   const auto start = std::chrono::steady_clock::now();
-  while (done < steps && solver_->time() < end) {
-    const SphStepStats& stats = stepper_->step();  // with temperature, phase changes and sources
+  while (done < steps && simulation_->solver().time() < end) {
+    const SphStepStats& stats = simulation_->step();  // with temperature, phase changes and sources
     ++done;
     if (stats.unstable) {
       instability_ = stats.instability;
@@ -107,7 +106,7 @@ void SphSimulator::advance(double duration, uint64_t steps) {
 void SphSimulator::timerCallback(const ros::WallTimerEvent&) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!solver_ || !running_) return;
+    if (!simulation_ || !running_) return;
     advance(params_.real_time_factor / params_.rate, std::numeric_limits<uint64_t>::max());
   }
   publish();
@@ -115,11 +114,11 @@ void SphSimulator::timerCallback(const ros::WallTimerEvent&) {
 
 void SphSimulator::publish() {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (!solver_) return;
+  if (!simulation_) return;
   const ros::Time stamp = ros::Time::now();
-  const SphParticles& particles = solver_->particles();
+  const SphParticles& particles = simulation_->solver().particles();
   if (particles_pub_.getNumSubscribers() > 0) {
-    const SphThermalModel* thermal = stepper_->thermal().get();
+    const SphThermalModel* thermal = simulation_->thermal().get();
     SurfelCloud cloud = sphParticlesToCloud(particles, thermal ? &thermal->temperatures() : nullptr);
     cloud.frame_id = params_.frame_id;
     cloud.stamp_ns = stamp.toNSec();
@@ -127,9 +126,9 @@ void SphSimulator::publish() {
   }
   if (params_.surface && surface_pub_.getNumSubscribers() > 0) {
     SphSurfaceConfig surface;
-    surface.smoothing_length = solver_->config().smoothing_length;
+    surface.smoothing_length = simulation_->solver().config().smoothing_length;
     surface.cell_size = params_.surface_cell_size;
-    surface.rest_density = solver_->config().rest_density;
+    surface.rest_density = simulation_->solver().config().rest_density;
     const TriangleMesh mesh = extractSphSurface(particles, surface);
     visualization_msgs::Marker marker;
     marker.header.frame_id = params_.frame_id;
@@ -160,9 +159,9 @@ void SphSimulator::publish() {
   stats.header.stamp = stamp;
   stats.scene = scene_->name;
   stats.running = running_;
-  stats.step = solver_->stepCount();
-  stats.time = solver_->time();
-  const SphStepStats& last = solver_->lastStats();
+  stats.step = simulation_->solver().stepCount();
+  stats.time = simulation_->solver().time();
+  const SphStepStats& last = simulation_->solver().lastStats();
   stats.dt = last.dt;
   stats.dt_limit = toString(last.limit);
   stats.particles = uint32_t(particles.size());
@@ -171,8 +170,8 @@ void SphSimulator::publish() {
   stats.max_density_error = last.max_density_error;
   stats.kinetic_energy = last.kinetic_energy;
   stats.step_ms = step_ms_;
-  stats.melted = stepper_->melted();
-  stats.frozen = stepper_->frozen();
+  stats.melted = simulation_->melted();
+  stats.frozen = simulation_->frozen();
   stats.instability = instability_;
   stats_pub_.publish(stats);
 }
@@ -181,7 +180,7 @@ bool SphSimulator::commandCallback(relaxed_connectivity::SimulationCommand::Requ
                                    relaxed_connectivity::SimulationCommand::Response& response) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!solver_) {
+    if (!simulation_) {
       response.success = false;
       response.message = "no scene loaded (call ~load_scene)";
       return true;
@@ -189,27 +188,26 @@ bool SphSimulator::commandCallback(relaxed_connectivity::SimulationCommand::Requ
     SimulationCommandHandlers handlers;
     handlers.start = [&]() -> CommandResult {
       if (!instability_.empty())
-        return {false, "unstable at step " + std::to_string(solver_->stepCount()) + ": reset first"};
+        return {false,
+                "unstable at step " + std::to_string(simulation_->solver().stepCount()) + ": reset first"};
       running_ = true;
       return {true, "running"};
     };
     handlers.pause = [&]() -> CommandResult {
       running_ = false;
-      return {true, "paused at t = " + std::to_string(solver_->time()) + " s"};
+      return {true, "paused at t = " + std::to_string(simulation_->solver().time()) + " s"};
     };
     handlers.step = [&](uint32_t steps) -> CommandResult {
       running_ = false;
       if (!instability_.empty()) return {false, "unstable: reset first"};
       advance(std::numeric_limits<double>::infinity(), steps);
-      return {true, "step " + std::to_string(solver_->stepCount()) +
-                        ", t = " + std::to_string(solver_->time()) + " s" +
+      return {true, "step " + std::to_string(simulation_->solver().stepCount()) +
+                        ", t = " + std::to_string(simulation_->solver().time()) + " s" +
                         (instability_.empty() ? "" : " (" + instability_ + ")")};
     };
     handlers.reset = [&]() -> CommandResult {
-      stepper_.reset();
-      solver_ = std::make_unique<SphFluidSolver>(makeSphSolver(*scene_));
-      stepper_ = std::make_unique<SphSceneStepper>(*scene_, *solver_);
-      stepper_->emit(solver_->time());
+      simulation_ = std::make_unique<SphSimulation>(*scene_);
+      simulation_->emit(simulation_->solver().time());
       running_ = false;
       instability_.clear();
       return {true, "reset to t = 0"};
@@ -224,7 +222,7 @@ bool SphSimulator::loadCallback(relaxed_connectivity::LoadSphScene::Request& req
                                 relaxed_connectivity::LoadSphScene::Response& response) {
   response.success = load(request.path, request.start, &response.message);
   std::lock_guard<std::mutex> lock(mutex_);
-  response.particles = solver_ ? uint32_t(solver_->particles().size()) : 0;
+  response.particles = simulation_ ? uint32_t(simulation_->solver().particles().size()) : 0;
   return true;
 }
 

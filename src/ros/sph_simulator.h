@@ -1,6 +1,6 @@
 // The sph_sim node (thesis 8): runs an SPH scene file (sph/sph_simulation.h, config/sph/*.yaml) in real time
 // and publishes the particles for rviz; start, pause, single steps, reset and scene loading by service. Each
-// step runs the scene's temperature, melting / freezing and fluid sources as rc_sph does (SphSceneStepper).
+// step runs the scene's temperature, melting / freezing and fluid sources as rc_sph does (SphSimulation).
 //
 // Publishes   ~particles (sensor_msgs/PointCloud2: x y z, velocity[3], density, pressure (float32), kind
 //             (uint8: 0 fluid, 1 static boundary, 2 moving boundary); scenes with temperature add
@@ -24,7 +24,7 @@
 
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_scene.h"
-#include "sph/sph_scene_stepper.h"
+#include "sph/sph_simulation.h"
 
 namespace rc {
 
@@ -68,8 +68,7 @@ class SphSimulator {
   SphSimulatorParams params_;
   std::mutex mutex_;  // scene/solver against service calls
   std::unique_ptr<SphScene> scene_;
-  std::unique_ptr<SphFluidSolver> solver_;
-  std::unique_ptr<SphSceneStepper> stepper_;  // temperature, phase changes, sources (after each step)
+  std::unique_ptr<SphSimulation> simulation_;  // solver, temperature, phase changes, sources
   bool running_ = false;
   std::string instability_;
   double step_ms_ = 0.0;

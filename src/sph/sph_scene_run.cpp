@@ -15,7 +15,7 @@
 #include "sph/sph_elastic_solid.h"
 #include "sph/sph_fluid_source.h"
 #include "sph/sph_output.h"
-#include "sph/sph_scene_stepper.h"
+#include "sph/sph_simulation.h"
 #include "sph/sph_skinning.h"
 #include "sph/sph_surface.h"
 
@@ -228,9 +228,16 @@ void appendVector(std::string& out, const char* key, const Vec3& v) {
 }  // namespace
 
 SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options) {
+  SphSimulation simulation(scene, solver, options.thermal);
+  return runSphScene(simulation, options);
+}
+
+SphRunStats runSphScene(SphSimulation& simulation, const SphRunOptions& options) {
   SphRunStats stats;
+  const SphScene& scene = simulation.scene();
+  SphFluidSolver& solver = simulation.solver();
   // Temperature (8.2.4) and fluid sources after every solver step; sources also emit before the first.
-  SphSceneStepper stepper(scene, solver, options.thermal);
+  SphSimulation& stepper = simulation;
   const std::shared_ptr<SphThermalModel>& thermal = stepper.thermal();
   const std::vector<SphFluidSource>& sources = stepper.sources();
   stats.thermal = thermal != nullptr;

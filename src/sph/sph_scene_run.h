@@ -11,6 +11,7 @@
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_scene.h"
 #include "sph/sph_scene_setup.h"
+#include "sph/sph_simulation.h"
 #include "sph/sph_thermal.h"
 
 namespace rc {
@@ -84,15 +85,18 @@ struct SphRunStats {
   std::vector<std::string> files;
 };
 
-/// Runs scene.frame_count frames of scene.frame_time on `solver` (made by makeSphSolver, possibly with
-/// changed threads). Outputs (options.out_dir): particle files, surface meshes and the solids' skins. Frames
-/// end exactly on multiples of frame_time, like SphFluidSolver::advance(frame_time) per frame, and give the
-/// same state bitwise. An unstable step stops the run (it is reported in SphRunStats::instability, nothing is
-/// thrown); I/O errors throw. With temperature, the thermal model steps after every solver step with that
-/// step's dt, and particle files get temperature and phase. Scenes with sources emit their due layers before
-/// the first step and after every step (after the thermal model; new particles get the source's
+/// Runs scene.frame_count frames of scene.frame_time on the simulation (not stepped yet; the sources' first
+/// layers are emitted here). Outputs (options.out_dir): particle files, surface meshes and the solids' skins.
+/// Frames end exactly on multiples of frame_time, like SphFluidSolver::advance(frame_time) per frame, and
+/// give the same state bitwise. An unstable step stops the run (it is reported in SphRunStats::instability,
+/// nothing is thrown); I/O errors throw. With temperature, the thermal model steps after every solver step
+/// with that step's dt, and particle files get temperature and phase. Scenes with sources emit their due
+/// layers before the first step and after every step (after the thermal model; new particles get the source's
 /// temperature) and call SphFluidSolver::particlesChanged() when particles were added: every per-particle
 /// array of the solver, its force terms and the thermal model grows with the particles.
+SphRunStats runSphScene(SphSimulation& simulation, const SphRunOptions& options = {});
+/// The same on `solver` (made by makeSphSolver(scene), possibly with changed threads) with options.thermal
+/// (made by makeSphThermal when null); a simulation brings its own thermal model.
 SphRunStats runSphScene(const SphScene& scene, SphFluidSolver& solver, const SphRunOptions& options = {});
 
 /// The statistics as one line of JSON (no newline); non-finite numbers become null. particles_end is always

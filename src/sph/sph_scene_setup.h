@@ -1,5 +1,5 @@
 // The simulation objects of a loaded SPH scene: the solver with its force terms (elastic solids, collisions)
-// and the thermal model. Used by runSphScene (the rc_sph tool), SphSceneStepper and the sph_sim node.
+// and the thermal model. Used by runSphScene (the rc_sph tool), SphSimulation and the sph_sim node.
 #pragma once
 
 #include <cstdint>

@@ -52,8 +52,8 @@ int main(int argc, char** argv) {
       std::fflush(stderr);
     };
   try {
-    rc::SphFluidSolver solver = rc::makeSphSolver(scene);
-    const rc::SphRunStats stats = rc::runSphScene(scene, solver, options);
+    rc::SphSimulation simulation(scene);
+    const rc::SphRunStats stats = rc::runSphScene(simulation, options);
     if (!quiet && tty && stats.frames < stats.frame_count) std::fprintf(stderr, "\n");
     std::printf("%s\n", rc::sphRunStatsJson(stats).c_str());
     if (!stats.instability.empty()) {

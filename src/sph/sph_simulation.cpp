@@ -1,17 +1,26 @@
-#include "sph/sph_scene_stepper.h"
+#include "sph/sph_simulation.h"
 
 #include "sph/sph_scene_setup.h"
 
 namespace rc {
 
-SphSceneStepper::SphSceneStepper(const SphScene& scene, SphFluidSolver& solver,
-                                 std::shared_ptr<SphThermalModel> thermal)
-    : solver_(solver), thermal_(thermal ? std::move(thermal) : makeSphThermal(scene, solver)) {
+SphSimulation::SphSimulation(const SphScene& scene)
+    : scene_(scene),
+      own_solver_(std::make_unique<SphFluidSolver>(makeSphSolver(scene))),
+      solver_(*own_solver_),
+      thermal_(makeSphThermal(scene, solver_)) {
+  for (const SphFluidSourceConfig& config : scene.sources)
+    sources_.emplace_back(config, solver_.kernels(), solver_.config().rest_density);
+}
+
+SphSimulation::SphSimulation(const SphScene& scene, SphFluidSolver& solver,
+                             std::shared_ptr<SphThermalModel> thermal)
+    : scene_(scene), solver_(solver), thermal_(thermal ? std::move(thermal) : makeSphThermal(scene, solver)) {
   for (const SphFluidSourceConfig& config : scene.sources)
     sources_.emplace_back(config, solver.kernels(), solver.config().rest_density);
 }
 
-void SphSceneStepper::emit(double time) {
+void SphSimulation::emit(double time) {
   bool added = false;
   SphParticles& p = solver_.particles();
   for (SphFluidSource& source : sources_) {
@@ -28,7 +37,7 @@ void SphSceneStepper::emit(double time) {
   if (added) solver_.particlesChanged();
 }
 
-void SphSceneStepper::afterStep(const SphStepStats& st) {
+void SphSimulation::afterStep(const SphStepStats& st) {
   if (thermal_) {
     const SphThermalStats& ts = thermal_->step(solver_, st.dt);
     melted_ += ts.melted;
@@ -40,7 +49,7 @@ void SphSceneStepper::afterStep(const SphStepStats& st) {
   }
 }
 
-const SphStepStats& SphSceneStepper::step() {
+const SphStepStats& SphSimulation::step() {
   const SphStepStats& st = solver_.step();
   if (!st.unstable) afterStep(st);
   return st;

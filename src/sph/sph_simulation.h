@@ -1,6 +1,7 @@
-// The per-step physics of a scene beyond the SPH solver: the thermal model (heat conduction, melting and
-// freezing, thesis 8.2.4) and the fluid sources, stepped after every solver step. Shared by runSphScene (the
-// rc_sph tool) and the sph_sim node, so both advance a scene the same way.
+// A running SPH scene (thesis 8): the solver with its force terms (makeSphSolver) and the per-step physics
+// beyond it, the thermal model (heat conduction, melting and freezing, 8.2.4) and the fluid sources, stepped
+// after every solver step. The object that runSphScene (rc_sph), the sph_sim node and the tests step, so all
+// advance a scene the same way.
 #pragma once
 
 #include <memory>
@@ -13,12 +14,23 @@
 
 namespace rc {
 
-class SphSceneStepper {
+class SphSimulation {
  public:
-  /// `solver` made by makeSphSolver(scene) and outliving the stepper; `thermal`: the scene's model (made by
-  /// makeSphThermal when null and the scene enables temperature).
-  SphSceneStepper(const SphScene& scene, SphFluidSolver& solver,
-                  std::shared_ptr<SphThermalModel> thermal = nullptr);
+  /// The scene's own solver (makeSphSolver) and thermal model (makeSphThermal); `scene` outlives the
+  /// simulation. Call emit(solver().time()) before the first step for the sources' first layers (runSphScene
+  /// does).
+  explicit SphSimulation(const SphScene& scene);
+  /// Steps `solver`, made by makeSphSolver(scene) (possibly with changed threads) and outliving the
+  /// simulation; `thermal`: the scene's model (made by makeSphThermal when null and the scene enables
+  /// temperature).
+  SphSimulation(const SphScene& scene, SphFluidSolver& solver,
+                std::shared_ptr<SphThermalModel> thermal = nullptr);
+  SphSimulation(const SphSimulation&) = delete;
+  SphSimulation& operator=(const SphSimulation&) = delete;
+
+  const SphScene& scene() const { return scene_; }
+  SphFluidSolver& solver() { return solver_; }
+  const SphFluidSolver& solver() const { return solver_; }
 
   /// Whether anything runs after a solver step (temperature or sources); false: afterStep does nothing.
   bool active() const { return thermal_ != nullptr || !sources_.empty(); }
@@ -43,6 +55,8 @@ class SphSceneStepper {
   double particleSteps() const { return particle_steps_; }
 
  private:
+  const SphScene& scene_;                       // outlives the simulation
+  std::unique_ptr<SphFluidSolver> own_solver_;  // null when stepping a given solver
   SphFluidSolver& solver_;
   std::shared_ptr<SphThermalModel> thermal_;
   std::vector<SphFluidSource> sources_;
