@@ -13,7 +13,7 @@
 
 #include "fem/fem_scene_reader.h"
 #include "ros/point_cloud2_converter.h"
-#include "ros/simulation_commands.h"
+#include "ros/simulation_loop.h"
 
 namespace rc {
 
@@ -85,30 +85,49 @@ FemSimulator::FemSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : nh_(nh),
       private_nh_(private_nh),
       params_(readFemSimulatorParams(private_nh)),
-      tf_listener_(tf_buffer_, nh) {
+      tf_listener_(tf_buffer_, nh),
+      loop_("fem_sim", loopCallbacks()) {
   surface_pub_ = private_nh_.advertise<visualization_msgs::Marker>("surface", 1);
   nodes_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("nodes", 1);
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::FemStats>("stats", 1);
   scene_ = std::make_unique<FemScene>(loadFemScene(params_.scene));
   simulation_ = std::make_unique<FemSimulation>(*scene_);
-  running_ = params_.autostart;
+  loop_.setRunning(params_.autostart);
   ROS_INFO_STREAM("fem_sim: loaded " << params_.scene << ": " << simulation_->numElements() << " elements, "
                                      << simulation_->numNodes() << " nodes, " << scene_->cuts.size()
                                      << " scheduled cuts");
-  command_srv_ = private_nh_.advertiseService("command", &FemSimulator::commandCallback, this);
   cut_srv_ = private_nh_.advertiseService("cut", &FemSimulator::cutCallback, this);
-  timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &FemSimulator::timerCallback, this);
+  loop_.start(nh_, private_nh_, params_.rate);
+}
+
+SimulationLoopCallbacks FemSimulator::loopCallbacks() {
+  SimulationLoopCallbacks c;
+  c.tick = [this] {
+    return advance(params_.real_time_factor / params_.rate, std::numeric_limits<uint64_t>::max());
+  };
+  c.step = [this](uint32_t steps) { return advance(std::numeric_limits<double>::infinity(), steps); };
+  c.where = [this] {
+    return "step " + std::to_string(simulation_->steps()) + ", t = " + std::to_string(simulation_->time()) +
+           " s";
+  };
+  c.reset = [this] {
+    resetSimulation();
+    return "reset to t = 0: " + std::to_string(simulation_->numElements()) + " elements, " +
+           std::to_string(simulation_->numNodes()) + " nodes";
+  };
+  c.publish = [this] { publish(); };
+  return c;
 }
 
 void FemSimulator::resetSimulation() {
   simulation_ = std::make_unique<FemSimulation>(*scene_);
-  running_ = false;
-  error_.clear();
+  loop_.setRunning(false);
+  loop_.setError("");
   interactive_cuts_ = 0;
   step_ms_ = 0.0;
 }
 
-void FemSimulator::advance(double duration, uint64_t steps) {
+std::string FemSimulator::advance(double duration, uint64_t steps) {
   const double end = simulation_->time() + duration;
   uint64_t done = 0;
   const auto start = std::chrono::steady_clock::now();
@@ -120,28 +139,18 @@ void FemSimulator::advance(double duration, uint64_t steps) {
       // to the scene's start, paused, with the reason in the stats.
       const std::string what = e.what();
       resetSimulation();
-      error_ = what + " (reset to t = 0, paused)";
-      ROS_ERROR_STREAM("fem_sim: " << error_);
-      return;
+      return what + " (reset to t = 0, paused)";
     }
     ++done;
   }
   if (done > 0)
     step_ms_ =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / done;
-}
-
-void FemSimulator::timerCallback(const ros::WallTimerEvent&) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!running_) return;
-    advance(params_.real_time_factor / params_.rate, std::numeric_limits<uint64_t>::max());
-  }
-  publish();
+  return std::string();
 }
 
 void FemSimulator::publish() {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(loop_.mutex());
   const ros::Time stamp = ros::Time::now();
   const std::vector<FemBodyState> bodies = simulation_->bodyStates();
   size_t triangles = 0;
@@ -163,7 +172,7 @@ void FemSimulator::publish() {
   stats.header.frame_id = params_.frame_id;
   stats.header.stamp = stamp;
   stats.scene = scene_->name;
-  stats.running = running_;
+  stats.running = loop_.running();
   stats.step = uint64_t(simulation_->steps());
   stats.time = simulation_->time();
   stats.dt = scene_->dynamics.time_step;
@@ -178,41 +187,8 @@ void FemSimulator::publish() {
   stats.min_ground_distance = simulation_->minGroundDistance();
   stats.step_ms = step_ms_;
   stats.topology_ms = 1e3 * simulation_->phaseTimes().topology;
-  stats.error = error_;
+  stats.error = loop_.error();
   stats_pub_.publish(stats);
-}
-
-bool FemSimulator::commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
-                                   relaxed_connectivity::SimulationCommand::Response& response) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    SimulationCommandHandlers handlers;
-    handlers.start = [&]() -> CommandResult {
-      error_.clear();
-      running_ = true;
-      return {true, "running"};
-    };
-    handlers.pause = [&]() -> CommandResult {
-      running_ = false;
-      return {true, "paused at t = " + std::to_string(simulation_->time()) + " s"};
-    };
-    handlers.step = [&](uint32_t steps) -> CommandResult {
-      running_ = false;
-      error_.clear();
-      advance(std::numeric_limits<double>::infinity(), steps);
-      if (!error_.empty()) return {false, error_};
-      return {true, "step " + std::to_string(simulation_->steps()) +
-                        ", t = " + std::to_string(simulation_->time()) + " s"};
-    };
-    handlers.reset = [&]() -> CommandResult {
-      resetSimulation();
-      return {true, "reset to t = 0: " + std::to_string(simulation_->numElements()) + " elements, " +
-                        std::to_string(simulation_->numNodes()) + " nodes"};
-    };
-    dispatchSimulationCommand(request, response, handlers);
-  }
-  publish();
-  return true;
 }
 
 std::vector<Vec3> FemSimulator::polygonInSceneFrame(const relaxed_connectivity::FemCut::Request& request) {
@@ -246,14 +222,14 @@ bool FemSimulator::cutCallback(relaxed_connectivity::FemCut::Request& request,
   } catch (const std::exception& e) {
     response.message = e.what();
     ROS_WARN_STREAM("fem_sim: cut refused: " << response.message);
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(loop_.mutex());
     response.bodies = uint32_t(simulation_->numBodies());
     response.nodes = uint32_t(simulation_->numNodes());
     response.elements = uint32_t(simulation_->numElements());
     return true;
   }
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(loop_.mutex());
     {
       const auto start = std::chrono::steady_clock::now();
       try {

@@ -36,6 +36,7 @@
 #include "fem/fem_cut_polygon.h"
 #include "fem/fem_output.h"
 #include "fem/fem_simulation.h"
+#include "ros/simulation_loop.h"
 
 namespace rc {
 
@@ -63,17 +64,15 @@ class FemSimulator {
   /// Reads the parameters and loads ~scene (throws std::invalid_argument / FemSceneError).
   FemSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh);
 
-  bool running() const { return running_; }
+  bool running() const { return loop_.running(); }
 
  private:
-  void timerCallback(const ros::WallTimerEvent&);
+  SimulationLoopCallbacks loopCallbacks();
   /// Advances by up to `steps` steps or `duration` simulated seconds (whichever ends first); a failing step
-  /// resets to t = 0, paused, and sets error_.
-  void advance(double duration, uint64_t steps);
+  /// resets to t = 0, paused, and returns the error (empty: none).
+  std::string advance(double duration, uint64_t steps);
   void publish();
   void resetSimulation();
-  bool commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
-                       relaxed_connectivity::SimulationCommand::Response& response);
   bool cutCallback(relaxed_connectivity::FemCut::Request& request,
                    relaxed_connectivity::FemCut::Response& response);
   /// The polygon of a request in the scene frame (throws std::invalid_argument / std::runtime_error).
@@ -83,16 +82,13 @@ class FemSimulator {
   FemSimulatorParams params_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  std::mutex mutex_;  // simulation against service calls
+  SimulationLoop loop_;  // timer, ~command, running, error, the mutex guarding the simulation
   std::unique_ptr<FemScene> scene_;
   std::unique_ptr<FemSimulation> simulation_;
-  bool running_ = false;
-  std::string error_;
   int interactive_cuts_ = 0;
   double step_ms_ = 0.0;
   ros::Publisher surface_pub_, nodes_pub_, stats_pub_;
-  ros::ServiceServer command_srv_, cut_srv_;
-  ros::WallTimer timer_;
+  ros::ServiceServer cut_srv_;
 };
 
 }  // namespace rc

@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "ros/point_cloud2_converter.h"
-#include "ros/simulation_commands.h"
+#include "ros/simulation_loop.h"
 #include "shell/shell_scene_reader.h"
 
 namespace rc {
@@ -90,7 +90,10 @@ visualization_msgs::Marker shellFibersMarker(const ShellFibers& fibers, const st
 }
 
 ShellSimulator::ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), private_nh_(private_nh), params_(readShellSimulatorParams(private_nh)) {
+    : nh_(nh),
+      private_nh_(private_nh),
+      params_(readShellSimulatorParams(private_nh)),
+      loop_("shell_sim", loopCallbacks()) {
   surfels_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("surfels", 1);
   cracks_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("cracks", 1);
   nodes_pub_ = private_nh_.advertise<visualization_msgs::Marker>("nodes", 1);
@@ -107,21 +110,37 @@ ShellSimulator::ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   double length = 0.0;
   for (const Fiber& f : fibers.fibers) length += f.rest_length;
   node_size_ = fibers.size() > 0 ? 0.25 * length / double(fibers.size()) : 0.01;
-  running_ = params_.autostart;
+  loop_.setRunning(params_.autostart);
   ROS_INFO_STREAM("shell_sim: loaded " << params_.scene << ": " << simulation_->solver().nodes().size()
                                        << " nodes, " << simulation_->fiberCount() << " fibers, "
                                        << simulation_->surfels().size() << " surfels");
-  command_srv_ = private_nh_.advertiseService("command", &ShellSimulator::commandCallback, this);
   force_srv_ = private_nh_.advertiseService("apply_force", &ShellSimulator::forceCallback, this);
-  timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &ShellSimulator::timerCallback, this);
+  loop_.start(nh_, private_nh_, params_.rate);
+}
+
+SimulationLoopCallbacks ShellSimulator::loopCallbacks() {
+  SimulationLoopCallbacks c;
+  c.tick = [this] { return advance(1); };  // one frame per tick
+  c.step = [this](uint32_t frames) { return advance(int(std::min<uint32_t>(frames, 1000000))); };
+  c.where = [this] {
+    return "frame " + std::to_string(simulation_->frame()) +
+           ", t = " + std::to_string(simulation_->solver().time()) + " s";
+  };
+  c.reset = [this] {
+    resetSimulation();
+    return "reset to t = 0: " + std::to_string(simulation_->solver().nodes().size()) + " nodes, " +
+           std::to_string(simulation_->surfels().size()) + " surfels";
+  };
+  c.publish = [this] { publish(); };
+  return c;
 }
 
 void ShellSimulator::resetSimulation() {
   simulation_ = std::make_unique<ShellSimulation>(scene_);
   forces_.clear();
   last_frame_ = ShellFrameReport();
-  running_ = false;
-  error_.clear();
+  loop_.setRunning(false);
+  loop_.setError("");
 }
 
 void ShellSimulator::applyForces() {
@@ -143,7 +162,7 @@ void ShellSimulator::applyForces() {
                 forces_.end());
 }
 
-void ShellSimulator::advance(int frames) {
+std::string ShellSimulator::advance(int frames) {
   for (int k = 0; k < frames; ++k) {
     try {
       applyForces();
@@ -151,24 +170,14 @@ void ShellSimulator::advance(int frames) {
     } catch (const std::exception& e) {
       const std::string what = e.what();
       resetSimulation();
-      error_ = what + " (reset to t = 0, paused)";
-      ROS_ERROR_STREAM("shell_sim: " << error_);
-      return;
+      return what + " (reset to t = 0, paused)";
     }
   }
-}
-
-void ShellSimulator::timerCallback(const ros::WallTimerEvent&) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!running_) return;
-    advance(1);
-  }
-  publish();
+  return std::string();
 }
 
 void ShellSimulator::publish() {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(loop_.mutex());
   const ros::Time stamp = ros::Time::now();
   const ShellSolver& solver = simulation_->solver();
   if (surfels_pub_.getNumSubscribers() > 0) {
@@ -202,7 +211,7 @@ void ShellSimulator::publish() {
   stats.header.frame_id = params_.frame_id;
   stats.header.stamp = stamp;
   stats.scene = scene_.name;
-  stats.running = running_;
+  stats.running = loop_.running();
   stats.frame = uint32_t(simulation_->frame());
   stats.step = uint64_t(solver.stepCount());
   stats.time = solver.time();
@@ -219,49 +228,13 @@ void ShellSimulator::publish() {
   stats.forces_ms = last_frame_.forces_ms;
   stats.material_ms = last_frame_.material_ms;
   stats.surface_ms = last_frame_.surface_ms;
-  stats.error = error_;
+  stats.error = loop_.error();
   stats_pub_.publish(stats);
-}
-
-bool ShellSimulator::commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
-                                     relaxed_connectivity::SimulationCommand::Response& response) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    auto where = [&] {
-      return "frame " + std::to_string(simulation_->frame()) +
-             ", t = " + std::to_string(simulation_->solver().time()) + " s";
-    };
-    SimulationCommandHandlers handlers;
-    handlers.start = [&]() -> CommandResult {
-      error_.clear();
-      running_ = true;
-      return {true, "running"};
-    };
-    handlers.pause = [&]() -> CommandResult {
-      running_ = false;
-      return {true, "paused at " + where()};
-    };
-    handlers.step = [&](uint32_t frames) -> CommandResult {
-      running_ = false;
-      error_.clear();
-      advance(int(std::min<uint32_t>(frames, 1000000)));
-      if (!error_.empty()) return {false, error_};
-      return {true, where()};
-    };
-    handlers.reset = [&]() -> CommandResult {
-      resetSimulation();
-      return {true, "reset to t = 0: " + std::to_string(simulation_->solver().nodes().size()) + " nodes, " +
-                        std::to_string(simulation_->surfels().size()) + " surfels"};
-    };
-    dispatchSimulationCommand(request, response, handlers);
-  }
-  publish();
-  return true;
 }
 
 bool ShellSimulator::forceCallback(relaxed_connectivity::ShellForce::Request& request,
                                    relaxed_connectivity::ShellForce::Response& response) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(loop_.mutex());
   try {
     ShellAppliedForce applied = shellForceFromRequest(request, simulation_->solver().positions());
     response.nodes = uint32_t(applied.nodes.size());

@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "ros/simulation_loop.h"
 #include "shell/shell_applied_force.h"
 #include "shell/shell_simulation.h"
 
@@ -63,35 +64,30 @@ class ShellSimulator {
   /// Reads the parameters and loads ~scene (throws std::invalid_argument / ShellSceneError).
   ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh);
 
-  bool running() const { return running_; }
+  bool running() const { return loop_.running(); }
 
  private:
-  void timerCallback(const ros::WallTimerEvent&);
-  /// Simulates `frames` frames with the applied forces; a failing frame resets to t = 0, paused, and sets
-  /// error_.
-  void advance(int frames);
+  SimulationLoopCallbacks loopCallbacks();
+  /// Simulates `frames` frames with the applied forces; a failing frame resets to t = 0, paused, and
+  /// returns the error (empty: none).
+  std::string advance(int frames);
   /// Adds the impulses of the applied forces for the next frame (F dt / m per node).
   void applyForces();
   void publish();
   void resetSimulation();
-  bool commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
-                       relaxed_connectivity::SimulationCommand::Response& response);
   bool forceCallback(relaxed_connectivity::ShellForce::Request& request,
                      relaxed_connectivity::ShellForce::Response& response);
 
   ros::NodeHandle nh_, private_nh_;
   ShellSimulatorParams params_;
-  std::mutex mutex_;  // simulation against service calls
+  SimulationLoop loop_;  // timer, ~command, running, error, the mutex guarding the simulation
   ShellScene scene_;
   std::unique_ptr<ShellSimulation> simulation_;
   std::vector<ShellAppliedForce> forces_;
   ShellFrameReport last_frame_;
   double node_size_ = 0.0;  ///< marker size: a quarter of the mean rest fiber length
-  bool running_ = false;
-  std::string error_;
   ros::Publisher surfels_pub_, cracks_pub_, nodes_pub_, fibers_pub_, stats_pub_;
-  ros::ServiceServer command_srv_, force_srv_;
-  ros::WallTimer timer_;
+  ros::ServiceServer force_srv_;
 };
 
 }  // namespace rc

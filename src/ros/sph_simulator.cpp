@@ -10,7 +10,7 @@
 #include <stdexcept>
 
 #include "ros/point_cloud2_converter.h"
-#include "ros/simulation_commands.h"
+#include "ros/simulation_loop.h"
 #include "sph/sph_output.h"
 #include "sph/sph_scene_reader.h"
 #include "sph/sph_scene_run.h"
@@ -46,7 +46,10 @@ SphSimulatorParams readSphSimulatorParams(const ros::NodeHandle& pnh) {
 }
 
 SphSimulator::SphSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), private_nh_(private_nh), params_(readSphSimulatorParams(private_nh)) {
+    : nh_(nh),
+      private_nh_(private_nh),
+      params_(readSphSimulatorParams(private_nh)),
+      loop_("sph_sim", loopCallbacks()) {
   particles_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("particles", 1);
   surface_pub_ = private_nh_.advertise<visualization_msgs::Marker>("surface", 1);
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::SphStats>("stats", 1);
@@ -54,9 +57,30 @@ SphSimulator::SphSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
     std::string message;
     if (!load(params_.scene, params_.autostart, &message)) throw std::invalid_argument(message);
   }
-  command_srv_ = private_nh_.advertiseService("command", &SphSimulator::commandCallback, this);
   load_srv_ = private_nh_.advertiseService("load_scene", &SphSimulator::loadCallback, this);
-  timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &SphSimulator::timerCallback, this);
+  loop_.start(nh_, private_nh_, params_.rate);
+}
+
+SimulationLoopCallbacks SphSimulator::loopCallbacks() {
+  SimulationLoopCallbacks c;
+  c.ready = [this] { return simulation_ != nullptr; };
+  c.not_ready_message = "no scene loaded (call ~load_scene)";
+  c.tick = [this] {
+    return advance(params_.real_time_factor / params_.rate, std::numeric_limits<uint64_t>::max());
+  };
+  c.step = [this](uint32_t steps) { return advance(std::numeric_limits<double>::infinity(), steps); };
+  c.where = [this] {
+    return "step " + std::to_string(simulation_->solver().stepCount()) +
+           ", t = " + std::to_string(simulation_->solver().time()) + " s";
+  };
+  c.reset = [this] {
+    simulation_ = std::make_unique<SphSimulation>(*scene_);
+    simulation_->emit(simulation_->solver().time());
+    return std::string("reset to t = 0");
+  };
+  c.publish = [this] { publish(); };
+  c.error_needs_reset = true;  // the unstable state stays for inspection
+  return c;
 }
 
 bool SphSimulator::load(const std::string& path, bool start, std::string* message) {
@@ -66,12 +90,12 @@ bool SphSimulator::load(const std::string& path, bool start, std::string* messag
     scene->config.throw_on_instability = false;  // reported in the stats, the simulation pauses
     auto simulation = std::make_unique<SphSimulation>(*scene);
     simulation->emit(simulation->solver().time());  // the sources' first layers
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(loop_.mutex());
     simulation_.reset();  // refers to the old scene
     scene_ = std::move(scene);
     simulation_ = std::move(simulation);
-    running_ = start;
-    instability_.clear();
+    loop_.setRunning(start);
+    loop_.setError("");
     step_ms_ = 0.0;
     *message = "loaded " + path + ": " + std::to_string(scene_->particles.size()) + " particles";
     ROS_INFO_STREAM("sph_sim: " << *message);
@@ -84,36 +108,24 @@ bool SphSimulator::load(const std::string& path, bool start, std::string* messag
   return true;
 }
 
-void SphSimulator::advance(double duration, uint64_t steps) {
+std::string SphSimulator::advance(double duration, uint64_t steps) {
   const double end = simulation_->solver().time() + duration;
   uint64_t done = 0;
   const auto start = std::chrono::steady_clock::now();
   while (done < steps && simulation_->solver().time() < end) {
     const SphStepStats& stats = simulation_->step();  // with temperature, phase changes and sources
     ++done;
-    if (stats.unstable) {
-      instability_ = stats.instability;
-      running_ = false;
-      ROS_ERROR_STREAM("sph_sim: " << instability_ << " (paused; call ~command reset)");
-      break;
-    }
+    if (stats.unstable) break;
   }
   if (done > 0)
     step_ms_ =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / done;
-}
-
-void SphSimulator::timerCallback(const ros::WallTimerEvent&) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!simulation_ || !running_) return;
-    advance(params_.real_time_factor / params_.rate, std::numeric_limits<uint64_t>::max());
-  }
-  publish();
+  const SphStepStats& last = simulation_->solver().lastStats();
+  return done > 0 && last.unstable ? last.instability : std::string();
 }
 
 void SphSimulator::publish() {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(loop_.mutex());
   if (!simulation_) return;
   const ros::Time stamp = ros::Time::now();
   const SphParticles& particles = simulation_->solver().particles();
@@ -158,7 +170,7 @@ void SphSimulator::publish() {
   stats.header.frame_id = params_.frame_id;
   stats.header.stamp = stamp;
   stats.scene = scene_->name;
-  stats.running = running_;
+  stats.running = loop_.running();
   stats.step = simulation_->solver().stepCount();
   stats.time = simulation_->solver().time();
   const SphStepStats& last = simulation_->solver().lastStats();
@@ -172,56 +184,14 @@ void SphSimulator::publish() {
   stats.step_ms = step_ms_;
   stats.melted = simulation_->melted();
   stats.frozen = simulation_->frozen();
-  stats.instability = instability_;
+  stats.instability = loop_.error();
   stats_pub_.publish(stats);
-}
-
-bool SphSimulator::commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
-                                   relaxed_connectivity::SimulationCommand::Response& response) {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!simulation_) {
-      response.success = false;
-      response.message = "no scene loaded (call ~load_scene)";
-      return true;
-    }
-    SimulationCommandHandlers handlers;
-    handlers.start = [&]() -> CommandResult {
-      if (!instability_.empty())
-        return {false,
-                "unstable at step " + std::to_string(simulation_->solver().stepCount()) + ": reset first"};
-      running_ = true;
-      return {true, "running"};
-    };
-    handlers.pause = [&]() -> CommandResult {
-      running_ = false;
-      return {true, "paused at t = " + std::to_string(simulation_->solver().time()) + " s"};
-    };
-    handlers.step = [&](uint32_t steps) -> CommandResult {
-      running_ = false;
-      if (!instability_.empty()) return {false, "unstable: reset first"};
-      advance(std::numeric_limits<double>::infinity(), steps);
-      return {true, "step " + std::to_string(simulation_->solver().stepCount()) +
-                        ", t = " + std::to_string(simulation_->solver().time()) + " s" +
-                        (instability_.empty() ? "" : " (" + instability_ + ")")};
-    };
-    handlers.reset = [&]() -> CommandResult {
-      simulation_ = std::make_unique<SphSimulation>(*scene_);
-      simulation_->emit(simulation_->solver().time());
-      running_ = false;
-      instability_.clear();
-      return {true, "reset to t = 0"};
-    };
-    dispatchSimulationCommand(request, response, handlers);
-  }
-  publish();
-  return true;
 }
 
 bool SphSimulator::loadCallback(relaxed_connectivity::LoadSphScene::Request& request,
                                 relaxed_connectivity::LoadSphScene::Response& response) {
   response.success = load(request.path, request.start, &response.message);
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(loop_.mutex());
   response.particles = simulation_ ? uint32_t(simulation_->solver().particles().size()) : 0;
   return true;
 }

@@ -22,6 +22,7 @@
 #include <mutex>
 #include <string>
 
+#include "ros/simulation_loop.h"
 #include "sph/sph_fluid_solver.h"
 #include "sph/sph_scene.h"
 #include "sph/sph_simulation.h"
@@ -51,30 +52,25 @@ class SphSimulator {
 
   /// Loads a scene; on failure returns false with the error in *message and keeps the current state.
   bool load(const std::string& path, bool start, std::string* message);
-  bool running() const { return running_; }
+  bool running() const { return loop_.running(); }
 
  private:
-  void timerCallback(const ros::WallTimerEvent&);
+  SimulationLoopCallbacks loopCallbacks();
   /// Advances by up to `steps` steps or `duration` simulated seconds (whichever ends first); pauses and
-  /// reports an instability.
-  void advance(double duration, uint64_t steps);
+  /// returns the instability that stopped it (empty: none).
+  std::string advance(double duration, uint64_t steps);
   void publish();
-  bool commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
-                       relaxed_connectivity::SimulationCommand::Response& response);
   bool loadCallback(relaxed_connectivity::LoadSphScene::Request& request,
                     relaxed_connectivity::LoadSphScene::Response& response);
 
   ros::NodeHandle nh_, private_nh_;
   SphSimulatorParams params_;
-  std::mutex mutex_;  // scene/solver against service calls
+  SimulationLoop loop_;  // timer, ~command, running, instability, the mutex guarding scene and simulation
   std::unique_ptr<SphScene> scene_;
   std::unique_ptr<SphSimulation> simulation_;  // solver, temperature, phase changes, sources
-  bool running_ = false;
-  std::string instability_;
   double step_ms_ = 0.0;
   ros::Publisher particles_pub_, surface_pub_, stats_pub_;
-  ros::ServiceServer command_srv_, load_srv_;
-  ros::WallTimer timer_;
+  ros::ServiceServer load_srv_;
 };
 
 }  // namespace rc

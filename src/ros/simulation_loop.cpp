@@ -1,0 +1,83 @@
+#include "ros/simulation_loop.h"
+
+#include <stdexcept>
+
+#include "ros/simulation_commands.h"
+
+namespace rc {
+
+SimulationLoop::SimulationLoop(std::string name, SimulationLoopCallbacks callbacks)
+    : name_(std::move(name)), callbacks_(std::move(callbacks)) {
+  if (!callbacks_.tick || !callbacks_.step || !callbacks_.where || !callbacks_.reset || !callbacks_.publish)
+    throw std::invalid_argument(name_ + ": SimulationLoop needs tick, step, where, reset and publish");
+}
+
+void SimulationLoop::start(ros::NodeHandle nh, ros::NodeHandle private_nh, double rate) {
+  if (!(rate > 0)) throw std::invalid_argument(name_ + ": rate must be > 0 Hz");
+  command_srv_ = private_nh.advertiseService("command", &SimulationLoop::commandCallback, this);
+  timer_ = nh.createWallTimer(ros::WallDuration(1.0 / rate), &SimulationLoop::timerCallback, this);
+}
+
+void SimulationLoop::setError(const std::string& error) {
+  error_ = error;
+  if (error.empty()) return;
+  running_ = false;
+  ROS_ERROR_STREAM(name_ << ": " << error);
+}
+
+void SimulationLoop::timerCallback(const ros::WallTimerEvent&) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!running_ || (callbacks_.ready && !callbacks_.ready())) return;
+    setError(callbacks_.tick());
+  }
+  callbacks_.publish();
+}
+
+void SimulationLoop::command(const relaxed_connectivity::SimulationCommand::Request& request,
+                             relaxed_connectivity::SimulationCommand::Response& response) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (callbacks_.ready && !callbacks_.ready()) {
+      response.success = false;
+      response.message = callbacks_.not_ready_message;
+      return;
+    }
+    // With error_needs_reset an error keeps the state for inspection: only pause and reset go on.
+    auto blocked = [&] { return callbacks_.error_needs_reset && !error_.empty(); };
+    SimulationCommandHandlers handlers;
+    handlers.start = [&]() -> CommandResult {
+      if (blocked()) return {false, error_ + " at " + callbacks_.where() + ": reset first"};
+      error_.clear();
+      running_ = true;
+      return {true, "running"};
+    };
+    handlers.pause = [&]() -> CommandResult {
+      running_ = false;
+      return {true, "paused at " + callbacks_.where()};
+    };
+    handlers.step = [&](uint32_t count) -> CommandResult {
+      running_ = false;
+      if (blocked()) return {false, error_ + " at " + callbacks_.where() + ": reset first"};
+      error_.clear();
+      setError(callbacks_.step(count));
+      if (!error_.empty()) return {false, error_};
+      return {true, callbacks_.where()};
+    };
+    handlers.reset = [&]() -> CommandResult {
+      running_ = false;
+      error_.clear();
+      return {true, callbacks_.reset()};
+    };
+    dispatchSimulationCommand(request, response, handlers);
+  }
+  callbacks_.publish();
+}
+
+bool SimulationLoop::commandCallback(relaxed_connectivity::SimulationCommand::Request& request,
+                                     relaxed_connectivity::SimulationCommand::Response& response) {
+  command(request, response);
+  return true;
+}
+
+}  // namespace rc
