@@ -185,7 +185,6 @@ CsgRenderer::CsgRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
 
 CsgRenderer::~CsgRenderer() {
   timer_.stop();
-  clipper_.reset();
 }
 
 void CsgRenderer::reject(const std::string& what, const std::string& reason) {
@@ -309,45 +308,29 @@ bool CsgRenderer::renderIfChanged() {
 
   const Clock::time_point start_prepare = Clock::now();
   if (inputs_changed) {
-    // Build the new scene and clipper aside; the last good ones stay if this throws.
+    // Build the new patch set aside; the last good one stays if this throws.
     std::vector<PatchCloudInput> inputs;
     for (size_t i = 0; i < sources.size(); ++i)
       if (sources[i].cloud) inputs.push_back({sources[i].cloud.get(), i == 0 ? -1 : int(i) - 1});
-    auto scene = std::make_unique<SurfelCloud>();
-    if (!inputs.empty()) *scene = mergePatchClouds(inputs, params_.fixed_frame);
-    std::unique_ptr<CsgClipper> clipper;
-    if (tree && !scene->empty()) {
-      // Patches the tree does not name are not part of the CSG object.
-      const std::vector<int> in_tree = tree->patches();
-      const Attribute* ids = scene->attributes.find(kPatchIdAttribute);
-      std::vector<size_t> keep;
-      keep.reserve(scene->size());
-      for (size_t i = 0; i < scene->size(); ++i)
-        if (std::binary_search(in_tree.begin(), in_tree.end(), int(ids->get(i)))) keep.push_back(i);
-      if (keep.size() != scene->size()) scene->select(keep);
-      if (!scene->empty()) {
-        CsgClipperOptions options;
-        options.method = parsePartnerMethod(params_.partner_method);
-        clipper = std::make_unique<CsgClipper>(*scene, *tree, options);
-      }
-    }
-    clipper_ = std::move(clipper);  // the old clipper refers to the old scene: replace both together
-    scene_ = std::move(scene);
+    CsgClipperOptions options;
+    options.method = parsePartnerMethod(params_.partner_method);
+    patches_ = std::make_unique<PatchCloudSet>(inputs, tree, params_.fixed_frame, options);
   }
-  if (!scene_) return false;  // no input yet
+  if (!patches_) return false;  // no input yet
 
   Camera camera = params_.camera();
   camera.world_T_camera = pose;
   // Clip buffer partners depend on the view (Algorithm 4.1); the spatial index's were found at construction.
-  if (clipper_ && (clipper_->options().method == PartnerMethod::kClipBuffer)) clipper_->update(camera);
+  CsgClipper* clipper = patches_->clipper();
+  if (clipper && (clipper->options().method == PartnerMethod::kClipBuffer)) clipper->update(camera);
   const double prepare_time = secondsSince(start_prepare);
 
   const Clock::time_point start_render = Clock::now();
   RenderStats render_stats;
-  if (scene_->empty())
+  if (patches_->cloud().empty())
     renderBackground(camera);  // e.g. a tree naming only patches that have not arrived
   else
-    renderer_.render(*scene_, camera, &images_, clipper_.get(), &render_stats);
+    renderer_.render(patches_->cloud(), camera, &images_, clipper, &render_stats);
   const double render_time = secondsSince(start_render);
   last_pose_ = pose;
 
@@ -366,7 +349,7 @@ bool CsgRenderer::renderIfChanged() {
   relaxed_connectivity::CsgRenderStats stats;
   stats.header = header;
   stats.csg = expression;
-  stats.patches = uint32_t(patchIds(*scene_).size());
+  stats.patches = uint32_t(patchIds(patches_->cloud()).size());
   stats.surfels = uint32_t(render_stats.surfels);
   stats.splats = uint32_t(render_stats.splats);
   stats.fragments = uint32_t(render_stats.fragments);

@@ -39,6 +39,7 @@
 #include "core/surfel_cloud.h"
 #include "render/camera.h"
 #include "render/csg_tree.h"
+#include "render/patch_cloud_set.h"
 #include "render/surfel_renderer.h"
 
 namespace rc {
@@ -121,8 +122,7 @@ class CsgRenderer {
   std::string last_error_;
 
   // Render state (timer thread only)
-  std::unique_ptr<SurfelCloud> scene_;   // merged inputs of the tree's patches (clipper_ refers to it)
-  std::unique_ptr<CsgClipper> clipper_;  // null without a tree
+  std::unique_ptr<PatchCloudSet> patches_;  // merged inputs of the tree's patches and their clipper
   std::optional<Eigen::Isometry3d> last_pose_;
   RenderImages images_;
   uint32_t rendered_frames_ = 0;
