@@ -16,40 +16,19 @@
 
 namespace rc {
 
-/// Kernel whose gradient drives the pressure force (8.17).
+/// Kernel whose gradient drives the pressure force (8.17); measurements in docs/sph_choices.md.
 ///  kPoly6 (default): the density kernel (8.4), so the pressure force is the exact negative gradient of the
-///         compression energy sum_i m_i e(rho_i) (e' = p / rho^2, with (8.16) included): kinetic + potential
-///         + compression energy is conserved up to the time integration and lost only to viscosity, XSPH and
-///         plane hits (test/sph/test_sph_energy.cpp).
-///  kSpiky: the thesis' choice (appendix C; no clumping at low resolution). With the poly6 density it is not
-///         the gradient of any energy and pumps energy into the fluid wherever pressures are non-zero: 2D dam
-///         break (mu = 1, XSPH 0.1, zeta = 0.01) +28% in 0.25 s; inviscid 2D sloshing in a closed
-///         particle-walled box +454% in 0.5 s (poly6: -0.2%).
-///  3D (test/sph/test_sph_hydrostatic_3d.cpp): use kPoly6 with h = 2.5 dx. The poly6 gradient vanishes at
-///  r -> 0 (w'' < 0 for r < h / sqrt(5)), so under compression close pairs lose their repulsion and particles
-///  pair up; pairing raises the gradient moment M = -(1/3) sum_j V_j r_ij . grad W_ij and the pressures that
-///  balance gravity read low (settled 3D tank from a jittered lattice, p / rho g (H - y) after 1 s: 0.84 at
-///  h = 2 and 2.2 dx, 1.00 at 2.5 dx, 0.88 at 3 dx; at 2.5 dx pairs appear only after ~1.2 s). Not the
-///  walls, time step or XSPH (extrapolated walls, cfl 0.1, xsph 0 pair as fast). kSpiky does not cure it:
-///  it reads 1/M = 5.6-6.4% high at h = 2-2.2 dx, pairs under negative pressure (zeta > 0) and gains 15%
-///  energy in a 3D dam break at h = 2.5-3 dx.
+///         compression energy (kinetic + potential + compression energy conserved up to the integration).
+///  kSpiky: the thesis' choice (appendix C); not the gradient of any energy, it pumps energy into the fluid.
 enum class SphPressureKernel { kSpiky, kPoly6 };
 
-/// Pressure of boundary particles, which enter the pair force (8.17) like fluid particles.
-///  kSummation (default): density by summation (8.4), pressure by (8.15), clamped to >= 0 (walls never pull).
-///                 The wall pressure is then the derivative of the walls' compression energy
-///                 sum_w m_w e(rho_w) (e = 0 below rho_0), which SphStepStats::compression_energy includes,
-///                 so walls neither add nor remove energy. Walls read too little pressure near the floor
-///                 (their own support is cut off): in the hydrostatic tank the rows just above y = h read 7%
-///                 low (3% with kExtrapolated), the interior bands 1.2% (0.7%).
+/// Pressure of boundary particles, which enter the pair force (8.17) like fluid particles; measurements in
+/// docs/sph_choices.md.
+///  kSummation (default): density by summation (8.4), pressure by (8.15), clamped to >= 0 (walls never pull);
+///                 the derivative of the walls' compression energy, so walls neither add nor remove energy.
 ///  kExtrapolated: Adami, Hu & Adams 2012 (J. Comput. Phys. 231, eq. 27): the Shepard average of the
-///                 neighbouring fluid pressures plus the hydrostatic head between fluid and wall,
-///                 p_w = (sum_f p_f W_wf + g . sum_f rho_f (x_w - x_f) W_wf) / sum_f W_wf, clamped to >= 0
-///                 (walls never pull); the wall density follows from inverting (8.15). Wall accelerations are
-///                 taken as zero (moving boundaries move at constant velocity). More accurate at rest, but
-///                 the wall pressure is no energy's derivative and the walls do work on the fluid: inviscid
-///                 2D sloshing in a closed box (poly6) gains +21% in 0.5 s and +935% in 3 s (kSummation:
-///                 -0.2%, +0.04%); with mu = 1 Pa s the viscous loss hides it.
+///                 neighbouring fluid pressures plus the hydrostatic head, clamped to >= 0; more accurate at
+///                 rest, but the walls do work on the fluid.
 enum class SphBoundaryPressure { kSummation, kExtrapolated };
 
 struct SphFluidConfig {
