@@ -214,12 +214,33 @@ std::vector<PolygonCutStats> ProgressiveCutMesh::cutSurface(const std::vector<st
   return stats;
 }
 
-PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
-  components_.clear();
-  // The cut shape: plane, in-plane frame (e1, e2, normal right-handed) and counter-clockwise 2D polygon.
+namespace {
+
+// The cut shape: plane, in-plane frame (e1, e2, normal right-handed) and counter-clockwise 2D polygon.
+struct CutPolygon {
+  Vec3 normal = Vec3::Zero(), center = Vec3::Zero(), e1, e2;
+  std::vector<Vec2> shape;
+
+  Vec2 planar(const Vec3& x) const { return Vec2(e1.dot(x - center), e2.dot(x - center)); }
+  int numLines() const { return static_cast<int>(shape.size()); }
+  // Signed distance to polygon edge line k, positive inside.
+  double lineDistance(int k, const Vec2& x) const {
+    const Vec2 d = (shape[(k + 1) % numLines()] - shape[k]).normalized();
+    return cross2(d, x - shape[k]);
+  }
+};
+
+Vec2 alreadyPlanar(const Vec2& offset) {
+  return offset;
+}
+
+// Checks the polygon (>= 3 finite, coplanar points, convex) and builds its plane and 2D shape.
+CutPolygon makeCutPolygon(const std::vector<Vec3>& polygon) {
   if (polygon.size() < 3)
     fail("the cut polygon needs at least 3 points, got " + std::to_string(polygon.size()));
-  Vec3 normal = Vec3::Zero(), center = Vec3::Zero();
+  CutPolygon cut;
+  Vec3& normal = cut.normal;
+  Vec3& center = cut.center;
   for (size_t k = 0; k < polygon.size(); ++k) {
     if (!polygon[k].allFinite()) fail("cut polygon point " + std::to_string(k) + " is not finite");
     normal += polygon[k].cross(polygon[(k + 1) % polygon.size()]);  // Newell
@@ -232,88 +253,163 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
   for (size_t k = 0; k < polygon.size(); ++k)
     if (std::abs(normal.dot(polygon[k] - center)) > 1e-9 * polygon_scale)
       fail("cut polygon point " + std::to_string(k) + " is not in the polygon's plane");
-  const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
-  auto planar = [&](const Vec3& x) { return Vec2(e1.dot(x - center), e2.dot(x - center)); };
-  auto alreadyPlanar = [](const Vec2& offset) { return offset; };
-  std::vector<Vec2> shape;
-  for (const Vec3& p : polygon) shape.push_back(planar(p));
+  cut.e1 = normal.unitOrthogonal();
+  cut.e2 = normal.cross(cut.e1);
+  for (const Vec3& p : polygon) cut.shape.push_back(cut.planar(p));
   const double area_tolerance = 1e-12 * polygon_scale * polygon_scale;
-  if (!isConvexPolygon(shape, area_tolerance, area_tolerance)) fail("the cut polygon is not convex");
-  if (signedArea(shape) < 0.0) std::reverse(shape.begin(), shape.end());
-  const int num_lines = static_cast<int>(shape.size());
-  // Signed distance to polygon edge line k, positive inside.
-  auto lineDistance = [&](int k, const Vec2& x) {
-    const Vec2 d = (shape[(k + 1) % num_lines] - shape[k]).normalized();
-    return cross2(d, x - shape[k]);
+  if (!isConvexPolygon(cut.shape, area_tolerance, area_tolerance)) fail("the cut polygon is not convex");
+  if (signedArea(cut.shape) < 0.0) std::reverse(cut.shape.begin(), cut.shape.end());
+  return cut;
+}
+
+// Element pieces of a face in the cutting plane (face's orientation; 1: inside the polygon, a crack face).
+using FacePieces = std::vector<std::pair<Face, char>>;
+
+// Earlier pieces get the nodes later lines put on their edges (no T-junctions inside the face).
+void refinePieces(const std::map<std::pair<int, int>, int>& split_segment, FacePieces& pieces) {
+  std::function<void(int, int, Face&)> appendSplits = [&](int a, int b, Face& out) {
+    auto it = split_segment.find({std::min(a, b), std::max(a, b)});
+    if (it == split_segment.end()) return;
+    const int m = it->second;
+    appendSplits(a, m, out);
+    out.push_back(m);
+    appendSplits(m, b, out);
   };
+  for (auto& piece : pieces) {
+    Face refined;
+    for (size_t k = 0; k < piece.first.size(); ++k) {
+      refined.push_back(piece.first[k]);
+      appendSplits(piece.first[k], piece.first[(k + 1) % piece.first.size()], refined);
+    }
+    piece.first = std::move(refined);
+  }
+}
 
+}  // namespace
+
+// State of one cut shared by its phases.
+struct ProgressiveCutMesh::CutState {
+  CutPolygon polygon;
+  int first_new_node = 0;
+  std::vector<double> distance;         // per node: signed distance to the cutting plane
+  std::vector<int> side;                // per node: -1, 0 (within the snap distance), +1
+  std::vector<char> crossed, selected;  // per element before the split: crossed, split
+  std::vector<int> parent;              // per element after the split: its element before
+  // New nodes on mesh edges (a < b), inserted into every face using the edge.
+  std::map<std::pair<int, int>, std::vector<int>> edge_refinement;
+  std::map<std::tuple<int, int, int>, int> clip_node;  // (segment end, segment end, line) -> node
   PolygonCutStats stats;
-  const double snap = snap_distance_;
-  const int first_new_node = numNodes();
+};
 
-  // 9.3.1 split of every element crossed by the plane whose section overlaps the cut shape.
-  std::vector<double> distance(nodes_.size());
-  std::vector<int> side(nodes_.size());
+// Elements after the plane split, before they replace elements_.
+struct ProgressiveCutMesh::CutElements {
+  std::vector<ElementFaces> elements;
+  std::vector<std::vector<char>> crack;
+  std::vector<int> input_element;
+  std::set<std::vector<int>> split_faces;  // sorted node ids of the faces the plane split
+  double max_snapped_distance = 0.0, min_part_scale = INFINITY;
+};
+
+PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
+  components_.clear();
+  CutState cut;
+  cut.polygon = makeCutPolygon(polygon);
+  cut.first_new_node = numNodes();
+  selectCrossedElements(cut);
+  splitByPlane(cut);
+  splitFacesInPlane(cut);
+  insertEdgeNodes(cut);
+
+  // Duplicate nodes the crack separates; crack faces that cannot open get a centroid node (pocket).
+  PolygonCutStats& stats = cut.stats;
+  duplicateSeparatedNodes(stats);
+  stats.num_pocket_nodes = openClosedCracks();
+  if (stats.num_pocket_nodes > 0) duplicateSeparatedNodes(stats);
+
+  removeSliversOfCut(cut);
+  return stats;
+}
+
+// 9.3.1 split of every element crossed by the plane whose section overlaps the cut shape: marks them.
+void ProgressiveCutMesh::selectCrossedElements(CutState& cut) const {
+  const CutPolygon& shape = cut.polygon;
+  const double snap = snap_distance_;
+  std::vector<double>& distance = cut.distance;
+  std::vector<int>& side = cut.side;
+  distance.resize(nodes_.size());
+  side.resize(nodes_.size());
   for (size_t i = 0; i < nodes_.size(); ++i) {
-    distance[i] = normal.dot(nodes_[i] - center);
+    distance[i] = shape.normal.dot(nodes_[i] - shape.center);
     side[i] = std::abs(distance[i]) <= snap ? 0 : (distance[i] > 0.0 ? 1 : -1);
   }
   const int num_elements = numElements();
-  std::vector<char> crossed(num_elements, 0), selected(num_elements, 0);
+  cut.crossed.assign(num_elements, 0);
+  cut.selected.assign(num_elements, 0);
   for (int e = 0; e < num_elements; ++e) {
     const ElementSides sides = elementSides(elements_[e], side);
     if (!sides.positive && !sides.negative)
       throw std::runtime_error("ProgressiveCutMesh: element " + std::to_string(e) +
                                " lies within the snap distance of the cutting plane");
-    crossed[e] = sides.crossed();
-    if (!crossed[e]) continue;
+    cut.crossed[e] = sides.crossed();
+    if (!cut.crossed[e]) continue;
     std::vector<Vec2> points;  // element section
     for (const Vec3& x : planeSectionPoints(elements_[e], side, distance, nodes_))
-      points.push_back(planar(x));
+      points.push_back(shape.planar(x));
     std::vector<Vec2> section;
     for (int k : counterClockwiseOrder(points, alreadyPlanar)) section.push_back(points[k]);
-    selected[e] = convexPolygonsOverlap(section, shape, snap);
+    cut.selected[e] = convexPolygonsOverlap(section, shape.shape, snap);
   }
+}
 
+// The selected elements split into their two parts (9.3.1); crossed elements left whole split their faces
+// shared with split elements alike.
+void ProgressiveCutMesh::splitByPlane(CutState& cut) {
   // New nodes on mesh edges (plane crossings and polygon edges in the plane), inserted into every face
   // using the edge (T-junctions, 9.3.1).
-  std::map<std::pair<int, int>, std::vector<int>> edge_refinement;
-  EdgeCrossingNodes plane_crossing(distance, [&](int a, int b, double t) {
+  EdgeCrossingNodes plane_crossing(cut.distance, [&](int a, int b, double t) {
     const int id = addNode((1.0 - t) * nodes_[a] + t * nodes_[b], {{a, 1.0 - t}, {b, t}});
-    distance.push_back(0.0);
-    side.push_back(0);
-    edge_refinement[{a, b}].push_back(id);
-    ++stats.num_new_nodes;
+    cut.distance.push_back(0.0);
+    cut.side.push_back(0);
+    cut.edge_refinement[{a, b}].push_back(id);
+    ++cut.stats.num_new_nodes;
     return id;
   });
+  CutElements split = splitSelectedElements(cut, plane_crossing);
+  splitSharedFacesOfWholeElements(cut, plane_crossing, split);
+  elements_ = std::move(split.elements);
+  crack_ = std::move(split.crack);
+  input_element_ = std::move(split.input_element);
+  if (split.max_snapped_distance > 0.0 && std::isfinite(split.min_part_scale))
+    relative_tolerance_ =
+        std::max(relative_tolerance_, 4.0 * split.max_snapped_distance / split.min_part_scale);
+}
+
+ProgressiveCutMesh::CutElements ProgressiveCutMesh::splitSelectedElements(CutState& cut,
+                                                                          EdgeCrossingNodes& plane_crossing) {
   auto sectionOrder = [&](const std::vector<int>& section_nodes) {
     std::vector<Vec2> points;
-    for (int v : section_nodes) points.push_back(planar(nodes_[v]));
+    for (int v : section_nodes) points.push_back(cut.polygon.planar(nodes_[v]));
     return counterClockwiseOrder(points, alreadyPlanar);
   };
-
-  std::set<std::vector<int>> split_faces;
-  std::vector<ElementFaces> elements;
-  std::vector<std::vector<char>> crack;
-  std::vector<int> parent, input_element;
-  double max_snapped_distance = 0.0, min_part_scale = INFINITY;
-  for (int e = 0; e < num_elements; ++e) {
-    if (!selected[e]) {
-      elements.push_back(std::move(elements_[e]));
-      crack.push_back(std::move(crack_[e]));
-      parent.push_back(e);
-      input_element.push_back(input_element_[e]);
+  CutElements out;
+  for (int e = 0; e < static_cast<int>(cut.selected.size()); ++e) {
+    if (!cut.selected[e]) {
+      out.elements.push_back(std::move(elements_[e]));
+      out.crack.push_back(std::move(crack_[e]));
+      cut.parent.push_back(e);
+      out.input_element.push_back(input_element_[e]);
       continue;
     }
-    ++stats.num_split_elements;
+    ++cut.stats.num_split_elements;
     const ElementFaces& faces = elements_[e];
-    ElementSplit split = splitElement(faces, side, plane_crossing, sectionOrder);
+    ElementSplit split = splitElement(faces, cut.side, plane_crossing, sectionOrder);
     if (split.face_in_plane >= 0)
       throw std::runtime_error("ProgressiveCutMesh: face " + std::to_string(split.face_in_plane) +
                                " of element " + std::to_string(e) +
                                " lies in the cutting plane but the element is crossed");
-    for (int v : split.section) max_snapped_distance = std::max(max_snapped_distance, std::abs(distance[v]));
-    for (int f : split.split_faces) split_faces.insert(sortedFaceKey(faces[f]));
+    for (int v : split.section)
+      out.max_snapped_distance = std::max(out.max_snapped_distance, std::abs(cut.distance[v]));
+    for (int f : split.split_faces) out.split_faces.insert(sortedFaceKey(faces[f]));
     // Crack flags follow the faces; the section is no crack face.
     auto crackFlags = [&](const std::vector<int>& source) {
       std::vector<char> flags;
@@ -326,49 +422,53 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
       std::vector<Vec3> points;
       for (const Face& face : *part)
         for (int v : face) points.push_back(nodes_[v]);
-      min_part_scale = std::min(min_part_scale, boundingDiagonal(points));
+      out.min_part_scale = std::min(out.min_part_scale, boundingDiagonal(points));
     }
-    elements.push_back(std::move(split.negative));
-    crack.push_back(std::move(negative_crack));
-    elements.push_back(std::move(split.positive));
-    crack.push_back(std::move(positive_crack));
-    parent.push_back(e);
-    parent.push_back(e);
-    input_element.push_back(-1);
-    input_element.push_back(-1);
+    out.elements.push_back(std::move(split.negative));
+    out.crack.push_back(std::move(negative_crack));
+    out.elements.push_back(std::move(split.positive));
+    out.crack.push_back(std::move(positive_crack));
+    cut.parent.push_back(e);
+    cut.parent.push_back(e);
+    out.input_element.push_back(-1);
+    out.input_element.push_back(-1);
   }
-  // Crossed elements left whole split their faces shared with split elements alike (coplanar faces).
-  for (size_t e = 0; e < elements.size(); ++e) {
-    if (selected[parent[e]] || !crossed[parent[e]]) continue;
+  return out;
+}
+
+// Crossed elements left whole split their faces shared with split elements alike (coplanar faces).
+void ProgressiveCutMesh::splitSharedFacesOfWholeElements(const CutState& cut,
+                                                         EdgeCrossingNodes& plane_crossing,
+                                                         CutElements& split) const {
+  for (size_t e = 0; e < split.elements.size(); ++e) {
+    const int p = cut.parent[e];
+    if (cut.selected[p] || !cut.crossed[p]) continue;
     ElementFaces faces;
     std::vector<char> flags;
-    for (size_t f = 0; f < elements[e].size(); ++f) {
-      const Face& face = elements[e][f];
-      if (!split_faces.count(sortedFaceKey(face))) {
+    for (size_t f = 0; f < split.elements[e].size(); ++f) {
+      const Face& face = split.elements[e][f];
+      if (!split.split_faces.count(sortedFaceKey(face))) {
         faces.push_back(face);
-        flags.push_back(crack[e][f]);
+        flags.push_back(split.crack[e][f]);
         continue;
       }
-      input_element[e] = -1;
-      FaceSplit halves = splitFace(face, side, plane_crossing);
+      split.input_element[e] = -1;
+      FaceSplit halves = splitFace(face, cut.side, plane_crossing);
       faces.push_back(std::move(halves.positive));
       faces.push_back(std::move(halves.negative));
-      flags.push_back(crack[e][f]);
-      flags.push_back(crack[e][f]);
+      flags.push_back(split.crack[e][f]);
+      flags.push_back(split.crack[e][f]);
     }
-    elements[e] = std::move(faces);
-    crack[e] = std::move(flags);
+    split.elements[e] = std::move(faces);
+    split.crack[e] = std::move(flags);
   }
-  elements_ = std::move(elements);
-  crack_ = std::move(crack);
-  input_element_ = std::move(input_element);
-  if (max_snapped_distance > 0.0 && std::isfinite(min_part_scale))
-    relative_tolerance_ = std::max(relative_tolerance_, 4.0 * max_snapped_distance / min_part_scale);
+}
 
-  // 9.3.2: faces in the cutting plane shared by two elements are split along the polygon edges into convex
-  // pieces (sequential clipping by the edge lines); pieces inside the polygon become crack faces.
-  std::map<std::tuple<int, int, int>, int> clip_node;  // (segment end, segment end, line) -> node
-  std::map<std::pair<int, int>, std::vector<std::pair<Face, char>>> replacement;  // (element, face)
+// 9.3.2: faces in the cutting plane shared by two elements are split along the polygon edges into convex
+// pieces (sequential clipping by the edge lines); pieces inside the polygon become crack faces.
+void ProgressiveCutMesh::splitFacesInPlane(CutState& cut) {
+  std::map<std::pair<int, int>, FacePieces> replacement;  // (element, face)
+  const std::vector<int>& side = cut.side;
   const FaceGroups groups = FaceGroups(elements_, [&](int e, int f) {
     for (int v : elements_[e][f])
       if (side[v] != 0) return false;
@@ -383,92 +483,13 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
     for (int v : face) in_plane = in_plane && side[v] == 0;
     if (!in_plane || crack_[e0][f0] || crack_[e1][f1]) continue;
     std::vector<Vec2> face2;
-    for (int v : face) face2.push_back(planar(nodes_[v]));
-    if (!convexPolygonsOverlap(face2, shape, snap)) continue;
-    // Original face edges each node lies on (to insert polygon-edge nodes into all faces using the edge).
-    std::map<int, std::vector<int>> on_edges;
-    const int num_corners = static_cast<int>(face.size());
-    for (int i = 0; i < num_corners; ++i) {
-      on_edges[face[i]] = {(i + num_corners - 1) % num_corners, i};
-      std::sort(on_edges[face[i]].begin(), on_edges[face[i]].end());
-    }
-    std::vector<std::pair<Face, char>> pieces;
-    std::map<std::pair<int, int>, int> split_segment;  // segment of a piece -> node splitting it
-    Face remaining = face;
-    for (int k = 0; k < num_lines && !remaining.empty(); ++k) {
-      std::vector<double> d;
-      std::vector<int> s;
-      bool any_inside = false, any_outside = false;
-      for (int v : remaining) {
-        d.push_back(lineDistance(k, planar(nodes_[v])));
-        s.push_back(d.back() > snap ? 1 : (d.back() < -snap ? -1 : 0));
-        any_inside = any_inside || s.back() > 0;
-        any_outside = any_outside || s.back() < 0;
-      }
-      if (!any_outside) continue;
-      if (!any_inside) {
-        pieces.emplace_back(remaining, 0);
-        remaining.clear();
-        break;
-      }
-      Face inside, outside;
-      for (size_t j = 0; j < remaining.size(); ++j) {
-        const size_t jn = (j + 1) % remaining.size();
-        const int a = remaining[j], b = remaining[jn];
-        if (s[j] >= 0) inside.push_back(a);
-        if (s[j] <= 0) outside.push_back(a);
-        if (s[j] * s[jn] >= 0) continue;
-        const auto key = std::make_tuple(std::min(a, b), std::max(a, b), k);
-        auto it = clip_node.find(key);
-        int m;
-        std::vector<int> edges;
-        std::set_intersection(on_edges[a].begin(), on_edges[a].end(), on_edges[b].begin(), on_edges[b].end(),
-                              std::back_inserter(edges));
-        if (it != clip_node.end()) {
-          m = it->second;
-        } else {
-          const double t = d[j] / (d[j] - d[jn]);
-          const Vec3 x = (1.0 - t) * nodes_[a] + t * nodes_[b];
-          m = addNode(x, edges.empty() ? faceStencil(nodes_, face, x) : NodeStencil{{a, 1.0 - t}, {b, t}});
-          distance.push_back(0.0);
-          side.push_back(0);
-          clip_node.emplace(key, m);
-          ++stats.num_new_nodes;
-        }
-        split_segment[{std::min(a, b), std::max(a, b)}] = m;
-        on_edges[m] = edges;
-        for (int i : edges) {
-          const int u0 = face[i], u1 = face[(i + 1) % num_corners];
-          edge_refinement[std::make_pair(std::min(u0, u1), std::max(u0, u1))].push_back(m);
-        }
-        inside.push_back(m);
-        outside.push_back(m);
-      }
-      pieces.emplace_back(outside, 0);
-      remaining = inside;
-    }
-    if (!remaining.empty()) pieces.emplace_back(remaining, 1);
-    // Earlier pieces get the nodes later lines put on their edges (no T-junctions inside the face).
-    std::function<void(int, int, Face&)> appendSplits = [&](int a, int b, Face& out) {
-      auto it = split_segment.find({std::min(a, b), std::max(a, b)});
-      if (it == split_segment.end()) return;
-      const int m = it->second;
-      appendSplits(a, m, out);
-      out.push_back(m);
-      appendSplits(m, b, out);
-    };
-    for (auto& piece : pieces) {
-      Face refined;
-      for (size_t k = 0; k < piece.first.size(); ++k) {
-        refined.push_back(piece.first[k]);
-        appendSplits(piece.first[k], piece.first[(k + 1) % piece.first.size()], refined);
-      }
-      piece.first = std::move(refined);
-    }
-    std::vector<std::pair<Face, char>> reversed;
+    for (int v : face) face2.push_back(cut.polygon.planar(nodes_[v]));
+    if (!convexPolygonsOverlap(face2, cut.polygon.shape, snap_distance_)) continue;
+    const FacePieces pieces = clipFaceByPolygon(cut, face);
+    FacePieces reversed;
     for (const auto& piece : pieces) {
       reversed.emplace_back(Face(piece.first.rbegin(), piece.first.rend()), piece.second);
-      stats.num_new_crack_faces += 2 * piece.second;
+      cut.stats.num_new_crack_faces += 2 * piece.second;
     }
     // Pieces are in face's (element e0's) orientation; e1 uses the face reversed.
     replacement[{e0, f0}] = pieces;
@@ -496,8 +517,84 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
     elements_[e] = std::move(faces);
     crack_[e] = std::move(flags);
   }
+}
 
-  // New edge nodes go into every face that still uses the whole edge.
+// Clips a face in the plane by the polygon's edge lines in turn: the part outside each line is a piece, the
+// part inside all of them the crack piece. New nodes on the face's edges are recorded for all faces using
+// the edge.
+std::vector<std::pair<PolyhedralMesh::Face, char>> ProgressiveCutMesh::clipFaceByPolygon(CutState& cut,
+                                                                                         const Face& face) {
+  const double snap = snap_distance_;
+  // Original face edges each node lies on (to insert polygon-edge nodes into all faces using the edge).
+  std::map<int, std::vector<int>> on_edges;
+  const int num_corners = static_cast<int>(face.size());
+  for (int i = 0; i < num_corners; ++i) {
+    on_edges[face[i]] = {(i + num_corners - 1) % num_corners, i};
+    std::sort(on_edges[face[i]].begin(), on_edges[face[i]].end());
+  }
+  FacePieces pieces;
+  std::map<std::pair<int, int>, int> split_segment;  // segment of a piece -> node splitting it
+  Face remaining = face;
+  for (int k = 0; k < cut.polygon.numLines() && !remaining.empty(); ++k) {
+    std::vector<double> d;
+    std::vector<int> s;
+    bool any_inside = false, any_outside = false;
+    for (int v : remaining) {
+      d.push_back(cut.polygon.lineDistance(k, cut.polygon.planar(nodes_[v])));
+      s.push_back(d.back() > snap ? 1 : (d.back() < -snap ? -1 : 0));
+      any_inside = any_inside || s.back() > 0;
+      any_outside = any_outside || s.back() < 0;
+    }
+    if (!any_outside) continue;
+    if (!any_inside) {
+      pieces.emplace_back(remaining, 0);
+      remaining.clear();
+      break;
+    }
+    Face inside, outside;
+    for (size_t j = 0; j < remaining.size(); ++j) {
+      const size_t jn = (j + 1) % remaining.size();
+      const int a = remaining[j], b = remaining[jn];
+      if (s[j] >= 0) inside.push_back(a);
+      if (s[j] <= 0) outside.push_back(a);
+      if (s[j] * s[jn] >= 0) continue;
+      const auto key = std::make_tuple(std::min(a, b), std::max(a, b), k);
+      auto it = cut.clip_node.find(key);
+      int m;
+      std::vector<int> edges;
+      std::set_intersection(on_edges[a].begin(), on_edges[a].end(), on_edges[b].begin(), on_edges[b].end(),
+                            std::back_inserter(edges));
+      if (it != cut.clip_node.end()) {
+        m = it->second;
+      } else {
+        const double t = d[j] / (d[j] - d[jn]);
+        const Vec3 x = (1.0 - t) * nodes_[a] + t * nodes_[b];
+        m = addNode(x, edges.empty() ? faceStencil(nodes_, face, x) : NodeStencil{{a, 1.0 - t}, {b, t}});
+        cut.distance.push_back(0.0);
+        cut.side.push_back(0);
+        cut.clip_node.emplace(key, m);
+        ++cut.stats.num_new_nodes;
+      }
+      split_segment[{std::min(a, b), std::max(a, b)}] = m;
+      on_edges[m] = edges;
+      for (int i : edges) {
+        const int u0 = face[i], u1 = face[(i + 1) % num_corners];
+        cut.edge_refinement[std::make_pair(std::min(u0, u1), std::max(u0, u1))].push_back(m);
+      }
+      inside.push_back(m);
+      outside.push_back(m);
+    }
+    pieces.emplace_back(outside, 0);
+    remaining = inside;
+  }
+  if (!remaining.empty()) pieces.emplace_back(remaining, 1);
+  refinePieces(split_segment, pieces);
+  return pieces;
+}
+
+// New edge nodes go into every face that still uses the whole edge.
+void ProgressiveCutMesh::insertEdgeNodes(CutState& cut) {
+  std::map<std::pair<int, int>, std::vector<int>>& edge_refinement = cut.edge_refinement;
   for (auto& entry : edge_refinement) {
     auto& ids = entry.second;
     std::sort(ids.begin(), ids.end());
@@ -532,35 +629,32 @@ PolygonCutStats ProgressiveCutMesh::cut(const std::vector<Vec3>& polygon) {
       face = refined;
       input_element_[e] = -1;
     }
+}
 
-  // Duplicate nodes the crack separates; crack faces that cannot open get a centroid node (pocket).
-  duplicateSeparatedNodes(stats);
-  stats.num_pocket_nodes = openClosedCracks();
-  if (stats.num_pocket_nodes > 0) duplicateSeparatedNodes(stats);
-
-  // Thin parts of the split elements are merged into their neighbours (9.2, local to the cut).
-  if (slivers_.enabled && stats.num_split_elements > 0) {
-    std::vector<int> candidates;
-    for (size_t e = 0; e < parent.size(); ++e)
-      if (selected[parent[e]]) candidates.push_back(static_cast<int>(e));
-    EditableMesh edit{std::move(nodes_), std::move(displacements_), std::move(elements_), std::move(crack_)};
-    CutSliverEdits edits;
-    stats.slivers = removeCutSlivers(edit, candidates, first_new_node, relative_tolerance_, slivers_, &edits);
-    nodes_ = std::move(edit.nodes);
-    displacements_ = std::move(edit.displacements);
-    elements_ = std::move(edit.elements);
-    crack_ = std::move(edit.crack_faces);
-    std::vector<int> input_element(edits.kept_elements.size());
-    for (size_t e = 0; e < edits.kept_elements.size(); ++e)
-      input_element[e] = input_element_[edits.kept_elements[e]];
-    input_element_ = std::move(input_element);
-    for (NodeStencil& stencil : edits.new_node_stencils) {
-      stencils_.push_back(std::move(stencil));
-      duplicate_of_.push_back(-1);
-    }
-    relative_tolerance_ = std::max(relative_tolerance_, stats.slivers.relative_tolerance);
+// Thin parts of the split elements are merged into their neighbours (9.2, local to the cut).
+void ProgressiveCutMesh::removeSliversOfCut(CutState& cut) {
+  PolygonCutStats& stats = cut.stats;
+  if (!slivers_.enabled || stats.num_split_elements == 0) return;
+  std::vector<int> candidates;
+  for (size_t e = 0; e < cut.parent.size(); ++e)
+    if (cut.selected[cut.parent[e]]) candidates.push_back(static_cast<int>(e));
+  EditableMesh edit{std::move(nodes_), std::move(displacements_), std::move(elements_), std::move(crack_)};
+  CutSliverEdits edits;
+  stats.slivers =
+      removeCutSlivers(edit, candidates, cut.first_new_node, relative_tolerance_, slivers_, &edits);
+  nodes_ = std::move(edit.nodes);
+  displacements_ = std::move(edit.displacements);
+  elements_ = std::move(edit.elements);
+  crack_ = std::move(edit.crack_faces);
+  std::vector<int> input_element(edits.kept_elements.size());
+  for (size_t e = 0; e < edits.kept_elements.size(); ++e)
+    input_element[e] = input_element_[edits.kept_elements[e]];
+  input_element_ = std::move(input_element);
+  for (NodeStencil& stencil : edits.new_node_stencils) {
+    stencils_.push_back(std::move(stencil));
+    duplicate_of_.push_back(-1);
   }
-  return stats;
+  relative_tolerance_ = std::max(relative_tolerance_, stats.slivers.relative_tolerance);
 }
 
 void ProgressiveCutMesh::duplicateSeparatedNodes(PolygonCutStats& stats) {

@@ -14,6 +14,8 @@
 
 namespace rc {
 
+class EdgeCrossingNodes;
+
 struct PolygonCutOptions {
   /// Needle avoidance (9.2): nodes closer than this (relative to the initial mesh bounding-box diagonal) to
   /// a cutting plane or a polygon edge line count as lying on it (no new node next to them).
@@ -96,7 +98,19 @@ class ProgressiveCutMesh {
   const std::vector<int>& unchangedInputElements() const { return input_element_; }
 
  private:
-  struct Frame;
+  struct CutState;
+  struct CutElements;
+  // Phases of cut().
+  void selectCrossedElements(CutState& cut) const;
+  void splitByPlane(CutState& cut);
+  CutElements splitSelectedElements(CutState& cut, EdgeCrossingNodes& plane_crossing);
+  void splitSharedFacesOfWholeElements(const CutState& cut, EdgeCrossingNodes& plane_crossing,
+                                       CutElements& split) const;
+  void splitFacesInPlane(CutState& cut);
+  std::vector<std::pair<PolyhedralMesh::Face, char>> clipFaceByPolygon(CutState& cut,
+                                                                       const PolyhedralMesh::Face& face);
+  void insertEdgeNodes(CutState& cut);
+  void removeSliversOfCut(CutState& cut);
   int addNode(const Vec3& x, NodeStencil stencil);
   void duplicateSeparatedNodes(PolygonCutStats& stats);
   int openClosedCracks();

@@ -84,7 +84,64 @@ bool sameBuiltElement(const std::vector<Vec3>& nodes, const ConvexPolyhedron& bu
   return t == built.triangles().size();
 }
 
+// Sorted node ids of every face in a flat pool: face g has key_pool[key_start[g] .. key_start[g + 1]).
+struct FaceKeys {
+  std::vector<int> key_start, key_pool;
+
+  // Shorter keys first, then lexicographic; equal keys in element order.
+  bool less(int x, int y) const {
+    const int nx = key_start[x + 1] - key_start[x], ny = key_start[y + 1] - key_start[y];
+    if (nx != ny) return nx < ny;
+    const int cmp =
+        std::memcmp(key_pool.data() + key_start[x], key_pool.data() + key_start[y], sizeof(int) * nx);
+    return cmp != 0 ? cmp < 0 : x < y;  // equal keys in element order
+  }
+  bool same(int x, int y) const {
+    const int nx = key_start[x + 1] - key_start[x];
+    return nx == key_start[y + 1] - key_start[y] &&
+           std::equal(key_pool.begin() + key_start[x], key_pool.begin() + key_start[x + 1],
+                      key_pool.begin() + key_start[y]);
+  }
+
+  // Equal keys adjacent, in element order: sorted by a 64-bit prefix of the first three ids (decides most
+  // comparisons), runs of equal prefix by the whole key.
+  std::vector<int> sortedOrder() const {
+    const int num_faces = static_cast<int>(key_start.size()) - 1;
+    std::vector<std::pair<uint64_t, int>> prefixed(num_faces);
+    bool packable = true;
+    for (int g = 0; g < num_faces; ++g) {
+      uint64_t packed = 0;
+      for (int k = 0; k < 3; ++k) {
+        const int v = key_pool[key_start[g] + k] + 1;  // faces have >= 3 nodes
+        packable = packable && v < (1 << 21);
+        packed = (packed << 21) | static_cast<uint64_t>(v & ((1 << 21) - 1));
+      }
+      prefixed[g] = {packed, g};
+    }
+    if (!packable)
+      for (auto& entry : prefixed) entry.first = 0;
+    std::sort(prefixed.begin(), prefixed.end());
+    std::vector<int> order(num_faces);
+    for (int k = 0; k < num_faces;) {
+      int end = k + 1;
+      while (end < num_faces && prefixed[end].first == prefixed[k].first) ++end;
+      for (int j = k; j < end; ++j) order[j] = prefixed[j].second;
+      if (end - k > 1)
+        std::sort(order.begin() + k, order.begin() + end, [this](int x, int y) { return less(x, y); });
+      k = end;
+    }
+    return order;
+  }
+};
+
 }  // namespace
+
+// Faces of all elements by global index g = face_start[e] + f: the element, the face of the element and,
+// for an interior face, the other element face using its node set (-1: boundary face).
+struct PolyhedralMesh::FaceAdjacency {
+  std::vector<int> face_start;  // global face index of (e, 0); one past the last face at the end
+  std::vector<int> face_element, face_local, other_user;
+};
 
 PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
                                double relative_tolerance, std::vector<FaceRef> crack_faces)
@@ -94,10 +151,21 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
                                double relative_tolerance, std::vector<FaceRef> crack_faces,
                                const std::vector<const ConvexPolyhedron*>& prebuilt)
     : nodes_(std::move(nodes)), element_faces_(std::move(elements)), crack_faces_(std::move(crack_faces)) {
+  checkInput(prebuilt.size());
+  const FaceAdjacency faces = buildFaceAdjacency();
+  const std::vector<std::vector<Triangle>> face_triangles =
+      buildElements(faces, relative_tolerance, prebuilt);
+  const std::vector<char> boundary_triangle_is_crack = buildBoundary(faces, face_triangles);
+  checkConformingBoundary(boundary_triangle_is_crack);
+  checkVolumes();
+}
+
+// Nodes finite and used, faces with >= 3 valid node ids, crack faces existing and listed once (sorted).
+void PolyhedralMesh::checkInput(size_t num_prebuilt) {
   const int n = numNodes();
   if (element_faces_.empty()) fail("the mesh has no elements");
-  if (!prebuilt.empty() && prebuilt.size() != element_faces_.size())
-    fail("the prebuilt list has " + std::to_string(prebuilt.size()) + " entries for " +
+  if (num_prebuilt != 0 && num_prebuilt != element_faces_.size())
+    fail("the prebuilt list has " + std::to_string(num_prebuilt) + " entries for " +
          std::to_string(element_faces_.size()) + " elements");
   for (int i = 0; i < n; ++i)
     if (!nodes_[i].allFinite()) fail("node " + std::to_string(i) + " is not finite");
@@ -124,62 +192,36 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
     if (c > 0 && crack_faces_[c - 1] == crack_faces_[c])
       fail(faceName(e, f) + " is listed twice as crack face");
   }
+}
 
-  // Faces by node set (sorted node ids in a flat pool): faces sorted by key, equal keys are one face used by
-  // up to two elements; the first user (element order) triangulates it, the second reverses that.
-  std::vector<int> face_start(element_faces_.size() + 1, 0);  // global face index of (e, 0)
+// Faces by node set (sorted node ids in a flat pool): faces sorted by key, equal keys are one face used by
+// up to two elements; the first user (element order) triangulates it, the second reverses that.
+PolyhedralMesh::FaceAdjacency PolyhedralMesh::buildFaceAdjacency() const {
+  FaceAdjacency adjacency;
+  std::vector<int>& face_start = adjacency.face_start;
+  face_start.assign(element_faces_.size() + 1, 0);
   for (size_t e = 0; e < element_faces_.size(); ++e)
     face_start[e + 1] = face_start[e] + static_cast<int>(element_faces_[e].size());
   const int num_faces = face_start.back();
-  std::vector<int> key_start(num_faces + 1, 0), key_pool, face_element(num_faces), face_local(num_faces);
+  std::vector<int>& face_element = adjacency.face_element;
+  std::vector<int>& face_local = adjacency.face_local;
+  face_element.resize(num_faces);
+  face_local.resize(num_faces);
+  FaceKeys keys;
+  keys.key_start.assign(num_faces + 1, 0);
   for (size_t e = 0; e < element_faces_.size(); ++e)
     for (size_t f = 0; f < element_faces_[e].size(); ++f) {
       const int g = face_start[e] + static_cast<int>(f);
       face_element[g] = static_cast<int>(e);
       face_local[g] = static_cast<int>(f);
       const Face& face = element_faces_[e][f];
-      key_pool.insert(key_pool.end(), face.begin(), face.end());
-      std::sort(key_pool.end() - face.size(), key_pool.end());
-      key_start[g + 1] = static_cast<int>(key_pool.size());
+      keys.key_pool.insert(keys.key_pool.end(), face.begin(), face.end());
+      std::sort(keys.key_pool.end() - face.size(), keys.key_pool.end());
+      keys.key_start[g + 1] = static_cast<int>(keys.key_pool.size());
     }
-  auto keyLess = [&](int x, int y) {
-    const int nx = key_start[x + 1] - key_start[x], ny = key_start[y + 1] - key_start[y];
-    if (nx != ny) return nx < ny;
-    const int cmp =
-        std::memcmp(key_pool.data() + key_start[x], key_pool.data() + key_start[y], sizeof(int) * nx);
-    return cmp != 0 ? cmp < 0 : x < y;  // equal keys in element order
-  };
-  auto sameKey = [&](int x, int y) {
-    const int nx = key_start[x + 1] - key_start[x];
-    return nx == key_start[y + 1] - key_start[y] &&
-           std::equal(key_pool.begin() + key_start[x], key_pool.begin() + key_start[x + 1],
-                      key_pool.begin() + key_start[y]);
-  };
-  // Equal keys adjacent, in element order: sorted by a 64-bit prefix of the first three ids (decides most
-  // comparisons), runs of equal prefix by the whole key.
-  std::vector<std::pair<uint64_t, int>> prefixed(num_faces);
-  bool packable = true;
-  for (int g = 0; g < num_faces; ++g) {
-    uint64_t packed = 0;
-    for (int k = 0; k < 3; ++k) {
-      const int v = key_pool[key_start[g] + k] + 1;  // faces have >= 3 nodes
-      packable = packable && v < (1 << 21);
-      packed = (packed << 21) | static_cast<uint64_t>(v & ((1 << 21) - 1));
-    }
-    prefixed[g] = {packed, g};
-  }
-  if (!packable)
-    for (auto& entry : prefixed) entry.first = 0;
-  std::sort(prefixed.begin(), prefixed.end());
-  std::vector<int> order(num_faces);
-  for (int k = 0; k < num_faces;) {
-    int end = k + 1;
-    while (end < num_faces && prefixed[end].first == prefixed[k].first) ++end;
-    for (int j = k; j < end; ++j) order[j] = prefixed[j].second;
-    if (end - k > 1) std::sort(order.begin() + k, order.begin() + end, keyLess);
-    k = end;
-  }
-  std::vector<int> other_user(num_faces, -1);  // the other element face of an interior face
+  const std::vector<int> order = keys.sortedOrder();
+  std::vector<int>& other_user = adjacency.other_user;  // the other element face of an interior face
+  other_user.assign(num_faces, -1);
   // Problems are reported for the first face in element order that shows one (the third user of a face,
   // the second user of a badly oriented pair).
   int error_face = num_faces;
@@ -193,7 +235,7 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
   auto name = [&](int g) { return faceName(face_element[g], face_local[g]); };
   for (int k = 0; k < num_faces;) {
     int end = k + 1;
-    while (end < num_faces && sameKey(order[k], order[end])) ++end;
+    while (end < num_faces && keys.same(order[k], order[end])) ++end;
     const int first = order[k];
     if (end - k > 2) report(order[k + 2], name(order[k + 2]) + " is used by more than two elements");
     if (end - k >= 2) {
@@ -210,14 +252,23 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
     k = end;
   }
   if (error_face < num_faces) fail(error);
-  std::vector<std::vector<Triangle>> face_triangles(num_faces);  // global ids, in its element's orientation
+  return adjacency;
+}
+
+// One ConvexPolyhedron per element (a matching prebuilt one relabelled, else built and validated). Returns
+// per global face its triangles (global ids, in its element's orientation).
+std::vector<std::vector<PolyhedralMesh::Triangle>> PolyhedralMesh::buildElements(
+    const FaceAdjacency& adjacency, double relative_tolerance,
+    const std::vector<const ConvexPolyhedron*>& prebuilt) {
+  const std::vector<int>& face_start = adjacency.face_start;
+  std::vector<std::vector<Triangle>> face_triangles(face_start.back());
   elements_.reserve(element_faces_.size());
-  std::vector<int> local(n, -1);
+  std::vector<int> local(numNodes(), -1);
   for (size_t e = 0; e < element_faces_.size(); ++e) {
     const ElementFaces& faces = element_faces_[e];
     for (size_t f = 0; f < faces.size(); ++f) {
       const int g = face_start[e] + static_cast<int>(f);
-      const int other = other_user[g];
+      const int other = adjacency.other_user[g];
       if (other < 0 || other > g) {
         face_triangles[g] = bestFanTriangulation(nodes_, faces[f]);
       } else {
@@ -260,17 +311,23 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
       fail("element " + std::to_string(e) + ": " + error.what());
     }
   }
+  return face_triangles;
+}
 
-  is_boundary_node_.assign(n, 0);
+// Boundary nodes and triangles, interior face count, and the check that the boundary is a closed manifold.
+// Returns per boundary triangle whether it lies on a crack face.
+std::vector<char> PolyhedralMesh::buildBoundary(const FaceAdjacency& adjacency,
+                                                const std::vector<std::vector<Triangle>>& face_triangles) {
+  is_boundary_node_.assign(numNodes(), 0);
   std::vector<std::pair<int, int>> boundary_edges;  // directed boundary polygon edges
   std::vector<char> boundary_triangle_is_crack;
   for (size_t e = 0; e < element_faces_.size(); ++e)
     for (size_t f = 0; f < element_faces_[e].size(); ++f) {
-      const int g = face_start[e] + static_cast<int>(f);
-      if (other_user[g] >= 0) {
+      const int g = adjacency.face_start[e] + static_cast<int>(f);
+      if (adjacency.other_user[g] >= 0) {
         if (isCrackFace(int(e), int(f)))
           fail(faceName(int(e), int(f)) + " is listed as crack face but still connects two elements");
-        const int other = other_user[g];
+        const int other = adjacency.other_user[g];
         if (other < g) ++num_interior_faces_;  // triangulated by the first user, reversed by the second
         continue;
       }
@@ -298,57 +355,60 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
                             std::make_pair(edge.second, edge.first)))
       fail("the boundary is not closed at edge (" + std::to_string(edge.first) + ", " +
            std::to_string(edge.second) + "): hanging node or non-conforming faces");
+  return boundary_triangle_is_crack;
+}
 
-  // Non-conforming faces that still close the boundary (e.g. a square split along different diagonals by
-  // the two elements): coplanar, opposite boundary triangles with overlapping interiors.
-  {
-    double scale = 0.0;
-    for (const Vec3& p : nodes_) scale = std::max(scale, (p - nodes_[0]).norm());
-    const double tol = 1e-9 * scale;
-    struct PlaneTriangle {
-      double offset;
-      Vec3 normal;  // canonical sign
-      int sign, index;
-    };
-    std::vector<PlaneTriangle> planes;
-    for (size_t t = 0; t < boundary_triangles_.size(); ++t) {
-      const auto& tri = boundary_triangles_[t];
-      Vec3 normal = (nodes_[tri[1]] - nodes_[tri[0]]).cross(nodes_[tri[2]] - nodes_[tri[0]]);
-      if (!(normal.norm() > tol * scale)) continue;  // zero-area triangles cover nothing
-      normal.normalize();
-      int axis;
-      normal.cwiseAbs().maxCoeff(&axis);
-      const int sign = normal[axis] > 0.0 ? 1 : -1;
-      normal *= sign;
-      planes.push_back({normal.dot(nodes_[tri[0]]), normal, sign, static_cast<int>(t)});
-    }
-    std::sort(planes.begin(), planes.end(),
-              [](const PlaneTriangle& a, const PlaneTriangle& b) { return a.offset < b.offset; });
-    for (size_t i = 0; i < planes.size(); ++i)
-      for (size_t j = i + 1; j < planes.size() && planes[j].offset - planes[i].offset <= tol; ++j) {
-        if (planes[i].sign == planes[j].sign || planes[i].normal.dot(planes[j].normal) < 1.0 - 1e-9) continue;
-        // The two sides of an internal crack coincide by design.
-        if (boundary_triangle_is_crack[planes[i].index] && boundary_triangle_is_crack[planes[j].index])
-          continue;
-        const Vec3 e1 = planes[i].normal.unitOrthogonal(), e2 = planes[i].normal.cross(e1);
-        std::array<Eigen::Vector2d, 3> a, b;
-        for (int k = 0; k < 3; ++k) {
-          const Vec3& p = nodes_[boundary_triangles_[planes[i].index][k]];
-          const Vec3& q = nodes_[boundary_triangles_[planes[j].index][k]];
-          a[k] = Eigen::Vector2d(e1.dot(p), e2.dot(p));
-          b[k] = Eigen::Vector2d(e1.dot(q), e2.dot(q));
-        }
-        if (trianglesOverlap(a, b, tol)) {
-          const auto& ta = boundary_triangles_[planes[i].index];
-          fail("non-conforming faces: boundary triangles (" + std::to_string(ta[0]) + ", " +
-               std::to_string(ta[1]) + ", " + std::to_string(ta[2]) +
-               ") and another overlap with opposite orientation (faces of neighbouring elements do not "
-               "match)");
-        }
-      }
+// Non-conforming faces that still close the boundary (e.g. a square split along different diagonals by
+// the two elements): coplanar, opposite boundary triangles with overlapping interiors.
+void PolyhedralMesh::checkConformingBoundary(const std::vector<char>& boundary_triangle_is_crack) const {
+  double scale = 0.0;
+  for (const Vec3& p : nodes_) scale = std::max(scale, (p - nodes_[0]).norm());
+  const double tol = 1e-9 * scale;
+  struct PlaneTriangle {
+    double offset;
+    Vec3 normal;  // canonical sign
+    int sign, index;
+  };
+  std::vector<PlaneTriangle> planes;
+  for (size_t t = 0; t < boundary_triangles_.size(); ++t) {
+    const auto& tri = boundary_triangles_[t];
+    Vec3 normal = (nodes_[tri[1]] - nodes_[tri[0]]).cross(nodes_[tri[2]] - nodes_[tri[0]]);
+    if (!(normal.norm() > tol * scale)) continue;  // zero-area triangles cover nothing
+    normal.normalize();
+    int axis;
+    normal.cwiseAbs().maxCoeff(&axis);
+    const int sign = normal[axis] > 0.0 ? 1 : -1;
+    normal *= sign;
+    planes.push_back({normal.dot(nodes_[tri[0]]), normal, sign, static_cast<int>(t)});
   }
+  std::sort(planes.begin(), planes.end(),
+            [](const PlaneTriangle& a, const PlaneTriangle& b) { return a.offset < b.offset; });
+  for (size_t i = 0; i < planes.size(); ++i)
+    for (size_t j = i + 1; j < planes.size() && planes[j].offset - planes[i].offset <= tol; ++j) {
+      if (planes[i].sign == planes[j].sign || planes[i].normal.dot(planes[j].normal) < 1.0 - 1e-9) continue;
+      // The two sides of an internal crack coincide by design.
+      if (boundary_triangle_is_crack[planes[i].index] && boundary_triangle_is_crack[planes[j].index])
+        continue;
+      const Vec3 e1 = planes[i].normal.unitOrthogonal(), e2 = planes[i].normal.cross(e1);
+      std::array<Eigen::Vector2d, 3> a, b;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3& p = nodes_[boundary_triangles_[planes[i].index][k]];
+        const Vec3& q = nodes_[boundary_triangles_[planes[j].index][k]];
+        a[k] = Eigen::Vector2d(e1.dot(p), e2.dot(p));
+        b[k] = Eigen::Vector2d(e1.dot(q), e2.dot(q));
+      }
+      if (trianglesOverlap(a, b, tol)) {
+        const auto& ta = boundary_triangles_[planes[i].index];
+        fail("non-conforming faces: boundary triangles (" + std::to_string(ta[0]) + ", " +
+             std::to_string(ta[1]) + ", " + std::to_string(ta[2]) +
+             ") and another overlap with opposite orientation (faces of neighbouring elements do not "
+             "match)");
+      }
+    }
+}
 
-  // Overlap check: element volumes add up to the volume enclosed by the boundary.
+// Overlap check: element volumes add up to the volume enclosed by the boundary.
+void PolyhedralMesh::checkVolumes() {
   double element_volume = 0.0, enclosed = 0.0;
   for (const ConvexPolyhedron& element : elements_) element_volume += element.volume();
   const Vec3 origin = nodes_[boundary_triangles_.front()[0]];

@@ -81,6 +81,17 @@ class PolyhedralMesh {
   int numPrebuiltElements() const { return num_prebuilt_elements_; }
 
  private:
+  struct FaceAdjacency;
+  // Phases of the constructor.
+  void checkInput(size_t num_prebuilt);
+  FaceAdjacency buildFaceAdjacency() const;
+  std::vector<std::vector<Triangle>> buildElements(const FaceAdjacency& adjacency, double relative_tolerance,
+                                                   const std::vector<const ConvexPolyhedron*>& prebuilt);
+  std::vector<char> buildBoundary(const FaceAdjacency& adjacency,
+                                  const std::vector<std::vector<Triangle>>& face_triangles);
+  void checkConformingBoundary(const std::vector<char>& boundary_triangle_is_crack) const;
+  void checkVolumes();
+
   std::vector<Vec3> nodes_;
   std::vector<ElementFaces> element_faces_;
   std::vector<ConvexPolyhedron> elements_;

@@ -266,31 +266,43 @@ Plane localSliverPlane(const MeshState& state, const std::vector<int>& group,
   return fit;
 }
 
-// Removes element s as in 9.2, together with the neighbours that lie in its sliver plane within thin_distance
-// (relative to the sliver's diameter; they would be flattened further). Throws std::runtime_error where the
-// construction fails. Returns the number of elements removed (not counting collapsed ones); deleted
-// elements are left empty. undo (local mode) receives the touched elements' previous state.
-int removeElement(MeshState& state, int s, const RemovalSettings& settings,
-                  const std::vector<char>& is_boundary_node, RemovalCounts& counts, RemovalUndo* undo) {
-  std::vector<Vec3>& nodes = state.nodes;
-  const bool has_disp = !state.displacements.empty(), has_crack = !state.crack.empty();
-  std::vector<int> ids = elementNodes(state.elements[s]);
-  double diameter = 0.0;
+// Least-squares plane through the nodes ids.
+Plane fitPlaneOfNodes(const std::vector<Vec3>& nodes, const std::vector<int>& ids) {
+  std::vector<Vec3> p;
+  for (int v : ids) p.push_back(nodes[v]);
+  return fitPlane(p);
+}
+
+// The sliver and the neighbours that lie in its plane (9.2), its nodes and the sliver plane.
+struct FlatGroup {
+  std::vector<int> ids;  // nodes of the group's elements
+  double diameter = 0.0, eps = 0.0, area_eps = 0.0;
+  std::vector<char> in_group;  // per element
+  std::vector<int> group;      // the sliver first
+  Plane plane;
+};
+
+// Grows the group from sliver s by face neighbours with all nodes within thin_relative * diameter of the
+// plane (refitted after each one).
+FlatGroup findFlatGroup(const MeshState& state, int s, const RemovalSettings& settings,
+                        const std::vector<char>& is_boundary_node) {
+  const std::vector<Vec3>& nodes = state.nodes;
+  FlatGroup flat;
+  std::vector<int>& ids = flat.ids;
+  ids = elementNodes(state.elements[s]);
   for (int a : ids)
-    for (int b : ids) diameter = std::max(diameter, (nodes[a] - nodes[b]).norm());
-  const double eps = 1e-9 * diameter, area_eps = eps * diameter;
-  const double thin_relative = settings.thin_relative;
+    for (int b : ids) flat.diameter = std::max(flat.diameter, (nodes[a] - nodes[b]).norm());
+  flat.eps = 1e-9 * flat.diameter;
+  flat.area_eps = flat.eps * flat.diameter;
+  const double diameter = flat.diameter, eps = flat.eps, thin_relative = settings.thin_relative;
 
   // Flat group: the sliver and face neighbours with all nodes near its plane.
-  std::vector<char> in_group(state.elements.size(), 0);
+  std::vector<char>& in_group = flat.in_group;
+  in_group.assign(state.elements.size(), 0);
   in_group[s] = 1;
-  std::vector<int> group = {s};
-  Plane plane = settings.local ? fitPlane([&] {
-    std::vector<Vec3> p;
-    for (int v : ids) p.push_back(nodes[v]);
-    return p;
-  }())
-                               : sliverPlane(nodes, ids, is_boundary_node, eps);
+  std::vector<int>& group = flat.group;
+  group = {s};
+  Plane plane = settings.local ? fitPlaneOfNodes(nodes, ids) : sliverPlane(nodes, ids, is_boundary_node, eps);
   for (bool grown = true; grown;) {
     grown = false;
     for (size_t g = 0; g < group.size() && !grown; ++g)
@@ -298,18 +310,17 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
         for (const auto& user : faceUsers(state, face)) {
           const int e = user.first;
           if (in_group[e]) continue;
-          bool flat = true;
+          bool flat_element = true;
           for (int v : elementNodes(state.elements[e]))
-            flat = flat && std::abs(plane.normal.dot(nodes[v] - plane.center)) <= thin_relative * diameter;
-          if (!flat) continue;
+            flat_element = flat_element &&
+                           std::abs(plane.normal.dot(nodes[v] - plane.center)) <= thin_relative * diameter;
+          if (!flat_element) continue;
           in_group[e] = 1;
           group.push_back(e);
           for (int v : elementNodes(state.elements[e]))
             if (std::find(ids.begin(), ids.end(), v) == ids.end()) ids.push_back(v);
           if (settings.local) {
-            std::vector<Vec3> p;
-            for (int v : ids) p.push_back(nodes[v]);
-            plane = fitPlane(p);
+            plane = fitPlaneOfNodes(nodes, ids);
           } else {
             plane = sliverPlane(nodes, ids, is_boundary_node, eps);
           }
@@ -322,44 +333,74 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
   if (settings.local)
     plane =
         localSliverPlane(state, group, in_group, ids, settings.first_new_node, eps, thin_relative * diameter);
-  const Vec3 center = plane.center, normal = plane.normal;
-  const Vec3 e1 = normal.unitOrthogonal(), e2 = normal.cross(e1);
-  auto plane2d = [&](int v) { return Vec2(e1.dot(nodes[v] - center), e2.dot(nodes[v] - center)); };
+  flat.plane = plane;
+  return flat;
+}
 
-  // Elements using the group's nodes: the only ones the removal changes.
+// The sliver plane with an in-plane frame (e1, e2, normal).
+struct PlaneFrame {
+  Vec3 center, normal, e1, e2;
+  explicit PlaneFrame(const Plane& plane)
+      : center(plane.center), normal(plane.normal), e1(normal.unitOrthogonal()), e2(normal.cross(e1)) {}
+  Vec2 project(const std::vector<Vec3>& nodes, int v) const {
+    return Vec2(e1.dot(nodes[v] - center), e2.dot(nodes[v] - center));
+  }
+};
+
+// Elements using the group's nodes: the only ones the removal changes.
+std::vector<int> affectedElements(const MeshState& state, const std::vector<int>& ids) {
   std::vector<int> affected;
   for (int v : ids) affected.insert(affected.end(), state.adjacency[v].begin(), state.adjacency[v].end());
   std::sort(affected.begin(), affected.end());
   affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
-  if (undo) {
-    undo->elements = affected;
-    for (int e : affected) {
-      undo->faces.push_back(state.elements[e]);
-      if (has_crack) undo->crack.push_back(state.crack[e]);
-      undo->element_nodes.push_back(elementNodes(state.elements[e]));
-    }
-    undo->num_nodes = nodes.size();
-    for (int v : ids) {
-      undo->positions.emplace_back(v, nodes[v]);
-      if (has_disp) undo->displacements.emplace_back(v, state.displacements[v]);
-    }
-  }
+  return affected;
+}
 
-  // Project, then merge nodes closer than the merge distance (union-find over the element's nodes).
-  std::vector<char> moved(nodes.size(), 0), on_plane(nodes.size(), 0);
+void saveUndo(const MeshState& state, const std::vector<int>& affected, const std::vector<int>& ids,
+              RemovalUndo* undo) {
+  const bool has_disp = !state.displacements.empty(), has_crack = !state.crack.empty();
+  undo->elements = affected;
+  for (int e : affected) {
+    undo->faces.push_back(state.elements[e]);
+    if (has_crack) undo->crack.push_back(state.crack[e]);
+    undo->element_nodes.push_back(elementNodes(state.elements[e]));
+  }
+  undo->num_nodes = state.nodes.size();
+  for (int v : ids) {
+    undo->positions.emplace_back(v, state.nodes[v]);
+    if (has_disp) undo->displacements.emplace_back(v, state.displacements[v]);
+  }
+}
+
+// Per node: whether the removal moved it (projected or new) and the node it is merged into.
+struct NodeMerge {
+  std::vector<char> moved;
+  std::vector<int> target;
+};
+
+// Project, then merge nodes closer than the merge distance (union-find over the element's nodes).
+NodeMerge projectAndMergeNodes(MeshState& state, const FlatGroup& flat, const Vec3& center,
+                               const Vec3& normal, const RemovalSettings& settings, RemovalCounts& counts) {
+  std::vector<Vec3>& nodes = state.nodes;
+  const std::vector<int>& ids = flat.ids;
+  const bool has_disp = !state.displacements.empty();
+  NodeMerge merge;
+  std::vector<char>& moved = merge.moved;
+  moved.assign(nodes.size(), 0);
+  std::vector<char> on_plane(nodes.size(), 0);
   std::map<int, Vec3> original;
   for (int v : ids) original[v] = nodes[v];
   for (int v : ids) {
     const double d = normal.dot(nodes[v] - center);
     counts.max_projection = std::max(counts.max_projection, std::abs(d));
-    on_plane[v] = std::abs(d) <= eps;
+    on_plane[v] = std::abs(d) <= flat.eps;
     nodes[v] -= d * normal;
     moved[v] = 1;
   }
   std::vector<int> merged(nodes.size());
   std::iota(merged.begin(), merged.end(), 0);
   std::function<int(int)> root = [&](int v) { return merged[v] == v ? v : merged[v] = root(merged[v]); };
-  const double merge_distance = settings.merge_relative_distance * diameter;
+  const double merge_distance = settings.merge_relative_distance * flat.diameter;
   for (size_t i = 0; i < ids.size(); ++i)
     for (size_t j = i + 1; j < ids.size(); ++j)
       if ((nodes[ids[i]] - nodes[ids[j]]).norm() < merge_distance) {
@@ -368,7 +409,8 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
       }
   std::map<int, std::vector<int>> clusters;
   for (int v : ids) clusters[root(v)].push_back(v);
-  std::vector<int> target(nodes.size());  // merged node -> the node kept
+  std::vector<int>& target = merge.target;  // merged node -> the node kept
+  target.resize(nodes.size());
   std::iota(target.begin(), target.end(), 0);
   for (const auto& cluster : clusters) {
     if (cluster.second.size() < 2) continue;
@@ -394,8 +436,15 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
     if (has_disp) state.displacements[keep] = displacement / k;
     for (int v : cluster.second) target[v] = keep;
   }
+  return merge;
+}
 
-  // Apply the merge: drop repeated nodes, faces without area and elements without volume.
+// Apply the merge: drop repeated nodes, faces without area and elements without volume. Returns per element
+// whether it collapsed.
+std::vector<char> applyNodeMerge(MeshState& state, const std::vector<int>& affected, const FlatGroup& flat,
+                                 const NodeMerge& merge, RemovalCounts& counts) {
+  const std::vector<Vec3>& nodes = state.nodes;
+  const bool has_crack = !state.crack.empty();
   std::vector<char> deleted(state.elements.size(), 0);
   for (int e : affected) {
     ElementFaces next;
@@ -405,19 +454,19 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
       const Face& face = state.elements[e][fi];
       Face f;
       for (int v : face) {
-        touched = touched || moved[v];
-        const int r = target[v];
+        touched = touched || merge.moved[v];
+        const int r = merge.target[v];
         if (f.empty() || f.back() != r) f.push_back(r);
       }
       while (f.size() > 1 && f.front() == f.back()) f.pop_back();
       if (f.size() < 3) continue;
-      if (touched && newellNormal(nodes, f).norm() <= 2.0 * area_eps) continue;
+      if (touched && newellNormal(nodes, f).norm() <= 2.0 * flat.area_eps) continue;
       next.push_back(std::move(f));
       if (has_crack) flags.push_back(state.crack[e][fi]);
     }
     state.elements[e] = std::move(next);
     if (has_crack) state.crack[e] = std::move(flags);
-    if (in_group[e] || !touched) continue;
+    if (flat.in_group[e] || !touched) continue;
     if (state.elements[e].size() < 4) {
       deleted[e] = 1;
       continue;
@@ -429,46 +478,70 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
     if (std::abs(surfaceVolume(nodes, state.elements[e])) <= 1e-9 * scale * scale * scale) deleted[e] = 1;
   }
   for (int e : affected) counts.collapsed += deleted[e];
+  return deleted;
+}
 
-  // Upper (counter-clockwise around the normal) and lower faces of the flattened element; each set tiles the
-  // projected polygon.
-  // The flat group's surface: faces not shared by two group elements.
-  ElementFaces sliver;
-  std::vector<char> sliver_crack;
+// The flattened group's surface: its upper (counter-clockwise around the normal) and lower faces, each set
+// tiling the projected polygon, and the neighbours across them.
+struct SliverSurface {
+  ElementFaces faces;
+  std::vector<char> crack;
+  std::vector<std::vector<Vec2>> polygon;      // per face: 2D counter-clockwise
+  std::vector<int> orientation;                // per face: +1 upper, -1 lower
+  std::vector<std::pair<int, int>> neighbour;  // per face: (element, face) across it, or (-1, -1)
+};
+
+// Upper (counter-clockwise around the normal) and lower faces of the flattened element; each set tiles the
+// projected polygon.
+// The flat group's surface: faces not shared by two group elements.
+SliverSurface sliverSurface(const MeshState& state, const FlatGroup& flat, const PlaneFrame& frame) {
+  const bool has_crack = !state.crack.empty();
+  SliverSurface surface;
+  ElementFaces& sliver = surface.faces;
   {
     std::map<std::vector<int>, int> uses;
-    for (int g : group)
+    for (int g : flat.group)
       for (const Face& face : state.elements[g]) ++uses[sortedKey(face)];
-    for (int g : group)
+    for (int g : flat.group)
       for (size_t f = 0; f < state.elements[g].size(); ++f)
         if (uses[sortedKey(state.elements[g][f])] == 1) {
           sliver.push_back(state.elements[g][f]);
-          sliver_crack.push_back(has_crack ? state.crack[g][f] : 0);
+          surface.crack.push_back(has_crack ? state.crack[g][f] : 0);
         }
   }
-  std::vector<std::vector<Vec2>> polygon(sliver.size());
-  std::vector<int> orientation(sliver.size(), 0);
+  std::vector<std::vector<Vec2>>& polygon = surface.polygon;
+  std::vector<int>& orientation = surface.orientation;
+  polygon.resize(sliver.size());
+  orientation.assign(sliver.size(), 0);
   for (size_t f = 0; f < sliver.size(); ++f) {
     double area = 0.0;
     for (size_t k = 0; k < sliver[f].size(); ++k) {
-      polygon[f].push_back(plane2d(sliver[f][k]));
+      polygon[f].push_back(frame.project(state.nodes, sliver[f][k]));
       if (k > 0) area += cross2(polygon[f][k - 1], polygon[f][k]);
     }
     area += cross2(polygon[f].back(), polygon[f].front());
     orientation[f] = area > 0.0 ? 1 : -1;
     if (orientation[f] < 0) std::reverse(polygon[f].begin(), polygon[f].end());  // 2D counter-clockwise
   }
-  // Neighbours across the sliver faces (before their faces change); crack faces have none.
+  return surface;
+}
+
+// Neighbours across the sliver faces (before their faces change); crack faces have none.
+void findSliverNeighbours(const MeshState& state, const std::vector<int>& affected,
+                          const std::vector<char>& deleted, const FlatGroup& flat, SliverSurface& surface) {
+  const bool has_crack = !state.crack.empty();
+  const ElementFaces& sliver = surface.faces;
   std::map<std::vector<int>, std::vector<std::pair<int, int>>> face_users;
   for (int e : affected)
-    if (!deleted[e] && !in_group[e])
+    if (!deleted[e] && !flat.in_group[e])
       for (size_t f = 0; f < state.elements[e].size(); ++f)
         if (!has_crack || !state.crack[e][f])
           face_users[sortedKey(state.elements[e][f])].emplace_back(e, int(f));
   // The neighbour's copy runs opposite to the sliver's (merged needles may leave two faces on one node set).
-  std::vector<std::pair<int, int>> neighbour(sliver.size(), {-1, -1});
+  std::vector<std::pair<int, int>>& neighbour = surface.neighbour;
+  neighbour.assign(sliver.size(), {-1, -1});
   for (size_t f = 0; f < sliver.size(); ++f) {
-    if (sliver_crack[f]) continue;
+    if (surface.crack[f]) continue;
     auto it = face_users.find(sortedKey(sliver[f]));
     if (it == face_users.end()) continue;
     Face reversed(sliver[f].rbegin(), sliver[f].rend());
@@ -480,33 +553,50 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
       if (rotated == reversed) neighbour[f] = user;
     }
   }
+}
 
-  // Sliver points: its (merged) nodes and the intersections of upper with lower edges (new nodes).
-  std::vector<int> points = elementNodes(sliver);
+// Points of the sliver plane: the sliver's (merged) nodes, new edge intersection nodes, and per edge of the
+// tilings the nodes inside it.
+struct SliverPoints {
+  std::vector<int> points;
   std::map<int, Vec2> point2d;
-  for (int v : points) point2d[v] = plane2d(v);
   std::set<std::pair<int, int>> upper_edges, lower_edges;
+  std::map<std::pair<int, int>, std::vector<std::pair<double, int>>> on_edge;  // along (min, max)
+};
+
+// Sliver points: its (merged) nodes and the intersections of upper with lower edges (new nodes).
+SliverPoints intersectSliverEdges(MeshState& state, const SliverSurface& surface, const PlaneFrame& frame,
+                                  const FlatGroup& flat, const RemovalSettings& settings, NodeMerge& merge,
+                                  RemovalCounts& counts) {
+  std::vector<Vec3>& nodes = state.nodes;
+  const bool has_disp = !state.displacements.empty();
+  const ElementFaces& sliver = surface.faces;
+  const double eps = flat.eps;
+  SliverPoints sp;
+  std::vector<int>& points = sp.points;
+  std::map<int, Vec2>& point2d = sp.point2d;
+  points = elementNodes(sliver);
+  for (int v : points) point2d[v] = frame.project(nodes, v);
   for (size_t f = 0; f < sliver.size(); ++f)
     for (size_t k = 0; k < sliver[f].size(); ++k)
-      (orientation[f] > 0 ? upper_edges : lower_edges)
+      (surface.orientation[f] > 0 ? sp.upper_edges : sp.lower_edges)
           .insert(edgeKey(sliver[f][k], sliver[f][(k + 1) % sliver[f].size()]));
-  std::map<std::pair<int, int>, std::vector<std::pair<double, int>>> on_edge;  // along (min, max)
-  for (const auto& up : upper_edges)
-    for (const auto& low : lower_edges) {
+  for (const auto& up : sp.upper_edges)
+    for (const auto& low : sp.lower_edges) {
       if (up.first == low.first || up.first == low.second || up.second == low.first ||
           up.second == low.second)
         continue;
       const Vec2 p = point2d[up.first], r = point2d[up.second] - p;
       const Vec2 q = point2d[low.first], d = point2d[low.second] - q;
       const double denominator = cross2(r, d);
-      if (std::abs(denominator) <= area_eps) continue;  // parallel
+      if (std::abs(denominator) <= flat.area_eps) continue;  // parallel
       const double t = cross2(q - p, d) / denominator, u = cross2(q - p, r) / denominator;
       const double tol_t = eps / r.norm(), tol_u = eps / d.norm();
       if (t <= tol_t || t >= 1.0 - tol_t || u <= tol_u || u >= 1.0 - tol_u) continue;
       const int id = static_cast<int>(nodes.size());
       nodes.push_back((1.0 - t) * nodes[up.first] + t * nodes[up.second]);
-      moved.push_back(1);
-      target.push_back(id);
+      merge.moved.push_back(1);
+      merge.target.push_back(id);
       state.adjacency.emplace_back();
       if (settings.local) state.replacement.push_back(id);
       // The interpolant is linear on edges: the mean of its values along the two crossing edges.
@@ -521,48 +611,65 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
                    (1.0 - u) * state.displacements[low.first] + u * state.displacements[low.second]));
       point2d[id] = p + t * r;
       points.push_back(id);
-      on_edge[up].emplace_back(t, id);
-      on_edge[low].emplace_back(u, id);
+      sp.on_edge[up].emplace_back(t, id);
+      sp.on_edge[low].emplace_back(u, id);
       ++counts.new_nodes;
     }
-  // Nodes lying inside an edge of the other tiling (T-junctions in the plane).
-  for (const auto* edges : {&upper_edges, &lower_edges})
+  return sp;
+}
+
+// Nodes lying inside an edge of the other tiling (T-junctions in the plane).
+void addTJunctions(const ElementFaces& sliver, double eps, SliverPoints& sp) {
+  std::map<int, Vec2>& point2d = sp.point2d;
+  for (const auto* edges : {&sp.upper_edges, &sp.lower_edges})
     for (const auto& edge : *edges)
       for (int v : elementNodes(sliver)) {
         if (v == edge.first || v == edge.second) continue;
         const Vec2 p = point2d[edge.first], r = point2d[edge.second] - p;
         const double t = (point2d[v] - p).dot(r) / r.squaredNorm();
         if (t <= 0.0 || t >= 1.0 || std::abs(cross2(r, point2d[v] - p)) / r.norm() > eps) continue;
-        auto& list = on_edge[edge];
+        auto& list = sp.on_edge[edge];
         if (std::find_if(list.begin(), list.end(), [v](const auto& x) { return x.second == v; }) ==
             list.end())
           list.emplace_back(t, v);
       }
+}
 
-  // Re-tessellation: cells = upper face ∩ lower face (convex), counter-clockwise around the normal.
-  auto inside = [&](const std::vector<Vec2>& poly, const Vec2& x) {
-    for (size_t k = 0; k < poly.size(); ++k) {
-      const Vec2 edge = poly[(k + 1) % poly.size()] - poly[k];
-      if (cross2(edge, x - poly[k]) / edge.norm() < -eps) return false;
-    }
-    return true;
-  };
-  auto polygonArea = [](const std::vector<Vec2>& poly) {
-    double area = 0.0;
-    for (size_t k = 0; k < poly.size(); ++k) area += cross2(poly[k], poly[(k + 1) % poly.size()]);
-    return 0.5 * area;
-  };
-  // Per sliver face: its cells (2D ccw) and the sliver face on the other side of each.
-  std::vector<std::vector<std::pair<Face, int>>> cells_of(sliver.size());
-  for (size_t fu = 0; fu < sliver.size(); ++fu) {
+// Whether x lies in the counter-clockwise convex polygon poly (within eps).
+bool insideConvex(const std::vector<Vec2>& poly, const Vec2& x, double eps) {
+  for (size_t k = 0; k < poly.size(); ++k) {
+    const Vec2 edge = poly[(k + 1) % poly.size()] - poly[k];
+    if (cross2(edge, x - poly[k]) / edge.norm() < -eps) return false;
+  }
+  return true;
+}
+
+double polygonArea(const std::vector<Vec2>& poly) {
+  double area = 0.0;
+  for (size_t k = 0; k < poly.size(); ++k) area += cross2(poly[k], poly[(k + 1) % poly.size()]);
+  return 0.5 * area;
+}
+
+// Per sliver face: its cells (2D ccw) and the sliver face on the other side of each.
+using SliverCells = std::vector<std::vector<std::pair<Face, int>>>;
+
+// Re-tessellation: cells = upper face ∩ lower face (convex), counter-clockwise around the normal.
+SliverCells retessellateSliver(const SliverSurface& surface, SliverPoints& sp, const FlatGroup& flat) {
+  const std::vector<std::vector<Vec2>>& polygon = surface.polygon;
+  const std::vector<int>& orientation = surface.orientation;
+  std::map<int, Vec2>& point2d = sp.point2d;
+  const size_t num_faces = surface.faces.size();
+  SliverCells cells_of(num_faces);
+  for (size_t fu = 0; fu < num_faces; ++fu) {
     if (orientation[fu] < 0) continue;
     double covered = 0.0;
-    for (size_t fl = 0; fl < sliver.size(); ++fl) {
+    for (size_t fl = 0; fl < num_faces; ++fl) {
       if (orientation[fl] > 0) continue;
       Face cell;
       Vec2 mean = Vec2::Zero();
-      for (int v : points)
-        if (inside(polygon[fu], point2d[v]) && inside(polygon[fl], point2d[v])) {
+      for (int v : sp.points)
+        if (insideConvex(polygon[fu], point2d[v], flat.eps) &&
+            insideConvex(polygon[fl], point2d[v], flat.eps)) {
           cell.push_back(v);
           mean += point2d[v];
         }
@@ -575,16 +682,21 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
       std::vector<Vec2> cell2d;
       for (int v : cell) cell2d.push_back(point2d[v]);
       const double area = polygonArea(cell2d);
-      if (area <= area_eps) continue;
+      if (area <= flat.area_eps) continue;
       covered += area;
       cells_of[fu].emplace_back(cell, static_cast<int>(fl));
       cells_of[fl].emplace_back(cell, static_cast<int>(fu));
     }
-    if (std::abs(covered - polygonArea(polygon[fu])) > 1e-9 * diameter * diameter)
+    if (std::abs(covered - polygonArea(polygon[fu])) > 1e-9 * flat.diameter * flat.diameter)
       throw std::runtime_error("sliver re-tessellation does not cover upper face " + std::to_string(fu));
   }
+  return cells_of;
+}
 
-  // New and T-junction nodes enter every face along the split edges.
+// New and T-junction nodes enter every face along the split edges.
+void insertEdgeNodes(MeshState& state, const std::vector<int>& affected, const std::vector<char>& deleted,
+                     const std::vector<char>& in_group,
+                     std::map<std::pair<int, int>, std::vector<std::pair<double, int>>>& on_edge) {
   for (auto& entry : on_edge) std::sort(entry.second.begin(), entry.second.end());
   for (int e : affected) {
     if (deleted[e] || in_group[e]) continue;
@@ -603,14 +715,19 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
       face = std::move(next);
     }
   }
-  // Each neighbour's face on the sliver is replaced by the cells it covers (outward for the neighbour); a
-  // cell is a crack face where the sliver face on its other side was one.
+}
+
+// Each neighbour's face on the sliver is replaced by the cells it covers (outward for the neighbour); a
+// cell is a crack face where the sliver face on its other side was one.
+void replaceNeighbourFaces(MeshState& state, const SliverSurface& surface, const SliverCells& cells_of) {
+  const bool has_crack = !state.crack.empty();
   std::map<std::pair<int, int>, std::vector<std::pair<Face, char>>> replacement;
-  for (size_t f = 0; f < sliver.size(); ++f) {
-    if (neighbour[f].first < 0) continue;
+  for (size_t f = 0; f < surface.faces.size(); ++f) {
+    if (surface.neighbour[f].first < 0) continue;
     for (auto [cell, other] : cells_of[f]) {
-      if (orientation[f] > 0) std::reverse(cell.begin(), cell.end());  // neighbour above: outward is -normal
-      replacement[neighbour[f]].emplace_back(cell, sliver_crack[other]);
+      if (surface.orientation[f] > 0)
+        std::reverse(cell.begin(), cell.end());  // neighbour above: outward is -normal
+      replacement[surface.neighbour[f]].emplace_back(cell, surface.crack[other]);
     }
   }
   for (const auto& entry : replacement) {
@@ -621,22 +738,49 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
       if (has_crack) state.crack[entry.first.first].push_back(cell.second);
     }
   }
-  // A neighbour's face that merged nodes made coincide with a crack face of the group lies on the crack now.
-  if (has_crack) {
-    std::set<std::vector<int>> crack_keys;
-    for (int g : group)
-      for (size_t f = 0; f < state.elements[g].size(); ++f)
-        if (state.crack[g][f]) crack_keys.insert(sortedKey(state.elements[g][f]));
-    for (int e : affected)
-      if (!deleted[e] && !in_group[e])
-        for (size_t f = 0; f < state.elements[e].size(); ++f)
-          if (!state.elements[e][f].empty() && crack_keys.count(sortedKey(state.elements[e][f])))
-            state.crack[e][f] = 1;
-  }
-  for (int g : group) deleted[g] = 1;
+}
 
-  // Faces bent by the projection (non-planar, more than 3 nodes) are fan-triangulated, identically on both
-  // sides.
+// A neighbour's face that merged nodes made coincide with a crack face of the group lies on the crack now.
+void markCrackFacesOfGroup(MeshState& state, const std::vector<int>& affected,
+                           const std::vector<char>& deleted, const FlatGroup& flat) {
+  std::set<std::vector<int>> crack_keys;
+  for (int g : flat.group)
+    for (size_t f = 0; f < state.elements[g].size(); ++f)
+      if (state.crack[g][f]) crack_keys.insert(sortedKey(state.elements[g][f]));
+  for (int e : affected)
+    if (!deleted[e] && !flat.in_group[e])
+      for (size_t f = 0; f < state.elements[e].size(); ++f)
+        if (!state.elements[e][f].empty() && crack_keys.count(sortedKey(state.elements[e][f])))
+          state.crack[e][f] = 1;
+}
+
+// Fan triangulation of a bent face: apex with the largest smallest fan triangle.
+std::vector<Face> bestApexFan(const std::vector<Vec3>& nodes, const Face& face) {
+  const Vec3 n = newellNormal(nodes, face);
+  const int k = static_cast<int>(face.size());
+  int best = 0;
+  double best_area = -INFINITY;
+  for (int apex = 0; apex < k; ++apex) {
+    double smallest = INFINITY;
+    for (int j = 1; j + 1 < k; ++j)
+      smallest = std::min(smallest, n.dot((nodes[face[(apex + j) % k]] - nodes[face[apex]])
+                                              .cross(nodes[face[(apex + j + 1) % k]] - nodes[face[apex]])));
+    if (smallest > best_area) {
+      best_area = smallest;
+      best = apex;
+    }
+  }
+  std::vector<Face> fan;
+  for (int j = 1; j + 1 < k; ++j) fan.push_back({face[best], face[(best + j) % k], face[(best + j + 1) % k]});
+  return fan;
+}
+
+// Faces bent by the projection (non-planar, more than 3 nodes) are fan-triangulated, identically on both
+// sides.
+void triangulateBentFaces(MeshState& state, const std::vector<int>& affected,
+                          const std::vector<char>& deleted, const std::vector<char>& moved, double eps) {
+  const std::vector<Vec3>& nodes = state.nodes;
+  const bool has_crack = !state.crack.empty();
   std::map<std::vector<int>, std::pair<Face, std::vector<Face>>> triangulated;  // key -> (first copy, fan)
   for (int e : affected) {
     if (deleted[e]) continue;
@@ -659,25 +803,7 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
       const std::vector<int> key = sortedKey(face);
       auto it = triangulated.find(key);
       if (it == triangulated.end()) {
-        // Apex with the largest smallest fan triangle.
-        const Vec3 n = newellNormal(nodes, face);
-        const int k = static_cast<int>(face.size());
-        int best = 0;
-        double best_area = -INFINITY;
-        for (int apex = 0; apex < k; ++apex) {
-          double smallest = INFINITY;
-          for (int j = 1; j + 1 < k; ++j)
-            smallest =
-                std::min(smallest, n.dot((nodes[face[(apex + j) % k]] - nodes[face[apex]])
-                                             .cross(nodes[face[(apex + j + 1) % k]] - nodes[face[apex]])));
-          if (smallest > best_area) {
-            best_area = smallest;
-            best = apex;
-          }
-        }
-        std::vector<Face> fan;
-        for (int j = 1; j + 1 < k; ++j)
-          fan.push_back({face[best], face[(best + j) % k], face[(best + j + 1) % k]});
+        const std::vector<Face> fan = bestApexFan(nodes, face);
         it = triangulated.emplace(key, std::make_pair(face, fan)).first;
         for (const Face& t : fan) {
           next.push_back(t);
@@ -695,6 +821,14 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
     state.elements[e] = std::move(next);
     if (has_crack) state.crack[e] = std::move(flags);
   }
+}
+
+// Empties the deleted elements, maps nodes to their merge targets and updates the adjacency of the touched
+// elements' old and new nodes (local mode).
+void finishRemoval(MeshState& state, const std::vector<int>& affected, const std::vector<char>& deleted,
+                   const std::vector<int>& ids, const std::vector<int>& target,
+                   const RemovalSettings& settings, const RemovalUndo* undo) {
+  const bool has_crack = !state.crack.empty();
   for (int e : affected)
     if (deleted[e]) {
       state.elements[e].clear();
@@ -720,7 +854,40 @@ int removeElement(MeshState& state, int s, const RemovalSettings& settings,
         auto& list = state.adjacency[v];
         list.insert(std::lower_bound(list.begin(), list.end(), e), e);
       }
-  return static_cast<int>(group.size());
+}
+
+// Removes the flat group as in 9.2: projection onto its plane, node merging, re-tessellation of the plane by
+// the overlay of its upper and lower faces, and the neighbours' faces replaced by the cells. Returns the
+// number of elements removed (not counting collapsed ones).
+int removeFlatGroup(MeshState& state, const FlatGroup& flat, const RemovalSettings& settings,
+                    RemovalCounts& counts, RemovalUndo* undo) {
+  const PlaneFrame frame(flat.plane);
+  const std::vector<int> affected = affectedElements(state, flat.ids);
+  if (undo) saveUndo(state, affected, flat.ids, undo);
+  NodeMerge merge = projectAndMergeNodes(state, flat, frame.center, frame.normal, settings, counts);
+  std::vector<char> deleted = applyNodeMerge(state, affected, flat, merge, counts);
+  SliverSurface surface = sliverSurface(state, flat, frame);
+  findSliverNeighbours(state, affected, deleted, flat, surface);
+  SliverPoints points = intersectSliverEdges(state, surface, frame, flat, settings, merge, counts);
+  addTJunctions(surface.faces, flat.eps, points);
+  const SliverCells cells_of = retessellateSliver(surface, points, flat);
+  insertEdgeNodes(state, affected, deleted, flat.in_group, points.on_edge);
+  replaceNeighbourFaces(state, surface, cells_of);
+  if (!state.crack.empty()) markCrackFacesOfGroup(state, affected, deleted, flat);
+  for (int g : flat.group) deleted[g] = 1;
+  triangulateBentFaces(state, affected, deleted, merge.moved, flat.eps);
+  finishRemoval(state, affected, deleted, flat.ids, merge.target, settings, undo);
+  return static_cast<int>(flat.group.size());
+}
+
+// Removes element s as in 9.2, together with the neighbours that lie in its sliver plane within thin_distance
+// (relative to the sliver's diameter; they would be flattened further). Throws std::runtime_error where the
+// construction fails. Returns the number of elements removed (not counting collapsed ones); deleted
+// elements are left empty. undo (local mode) receives the touched elements' previous state.
+int removeElement(MeshState& state, int s, const RemovalSettings& settings,
+                  const std::vector<char>& is_boundary_node, RemovalCounts& counts, RemovalUndo* undo) {
+  const FlatGroup flat = findFlatGroup(state, s, settings, is_boundary_node);
+  return removeFlatGroup(state, flat, settings, counts, undo);
 }
 
 // Drops deleted (empty) elements and unused nodes (global mode, after each removal).
