@@ -18,6 +18,7 @@
 #include "sph/sph_implicit_goal_solver.h"
 #include "sph/sph_kernels.h"
 #include "sph/sph_lattice.h"
+#include "sph/sph_lattice_keys.h"
 #include "sph/sph_particles.h"
 #include "sph/sph_sorted_grid.h"
 
@@ -169,11 +170,11 @@ struct SphLatticeAssignment {
   std::vector<Eigen::Vector3i> indices;  ///< lattice index per neighbour
   std::vector<uint8_t> assigned;         ///< 0: lost its lattice point to a closer neighbour (or the centre)
   // Scratch of assignLatticePoints, kept between calls.
-  static constexpr int kTableHalfWidth = 8;  ///< the keeper table spans lattice indices [-8, 8)^3
-  std::vector<double> sq_dists;              ///< squared distance to the lattice point per neighbour
-  std::vector<int32_t> keepers;              ///< hash table of the keepers (indices outside the table)
-  std::vector<int32_t> table_keepers;        ///< keeper per lattice point of the table
-  std::vector<uint32_t> table_stamps;        ///< call stamp per table entry (older: empty)
+  static constexpr int kTableHalfWidth = kLatticeTableHalfWidth;  ///< lattice indices [-8, 8)^3
+  std::vector<double> sq_dists;        ///< squared distance to the lattice point per neighbour
+  std::vector<int32_t> keepers;        ///< hash table of the keepers (indices outside the table)
+  std::vector<int32_t> table_keepers;  ///< keeper per lattice point of the table
+  std::vector<uint32_t> table_stamps;  ///< call stamp per table entry (older: empty)
   uint32_t stamp = 0;
 };
 

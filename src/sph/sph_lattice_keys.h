@@ -7,9 +7,10 @@
 
 #include <Eigen/Core>
 
-#include "sph/sph_elastic_solid.h"
-
 namespace rc {
+
+/// The keeper table of SphLatticeAssignment spans lattice indices [-8, 8)^3.
+inline constexpr int kLatticeTableHalfWidth = 8;
 
 /// Lattice index packed into 30 bits (10 per coordinate, offset 512).
 [[gnu::always_inline]] inline uint32_t latticeKey(const Eigen::Vector3i& n) {
@@ -19,7 +20,7 @@ namespace rc {
 
 /// Slot of lattice index n in the keeper table of the indices [-8, 8)^3 (x fastest), -1 outside.
 [[gnu::always_inline]] inline int32_t latticeTableSlot(const Eigen::Vector3i& n) {
-  constexpr int kHalf = SphLatticeAssignment::kTableHalfWidth, kWidth = 2 * kHalf;
+  constexpr int kHalf = kLatticeTableHalfWidth, kWidth = 2 * kHalf;
   const unsigned ux = unsigned(n.x() + kHalf), uy = unsigned(n.y() + kHalf), uz = unsigned(n.z() + kHalf);
   if (ux >= unsigned(kWidth) || uy >= unsigned(kWidth) || uz >= unsigned(kWidth)) return -1;
   return int32_t((uz * kWidth + uy) * kWidth + ux);
