@@ -8,15 +8,15 @@
 #include <cstdio>
 #include <vector>
 
-#include "render/camera.h"
-#include "render/clip_partners.h"
-#include "render/csg_clipper.h"
+#include "render/csg/clip_partners.h"
+#include "render/csg/csg_clipper.h"
+#include "render/splat/camera.h"
 
 using namespace rc;
 
 namespace {
 
-struct Scene {
+struct CsgScene {
   const char* name;
   SurfelCloud cloud;
   CsgTree tree;
@@ -35,11 +35,11 @@ void setPatches(SurfelCloud& c, const std::vector<int>& patch) {
   for (size_t i = 0; i < patch.size(); ++i) a.set(i, patch[i]);
 }
 
-Scene cube900() {
-  Scene s{"cube 6 x 900",
-          {},
-          CsgTree::parse("((0 & 1) & (2 & 3)) & (4 & 5)"),
-          Camera::perspective(640, 480, 0.9)};
+CsgScene cube900() {
+  CsgScene s{"cube 6 x 900",
+             {},
+             CsgTree::parse("((0 & 1) & (2 & 3)) & (4 & 5)"),
+             Camera::perspective(640, 480, 0.9)};
   std::vector<int> patch;
   const Vec3 axes[3] = {Vec3::UnitX(), Vec3::UnitY(), Vec3::UnitZ()};
   const int k = 30;
@@ -66,11 +66,11 @@ void sphere(SurfelCloud& c, std::vector<int>& patch, const Vec3& centre, double 
   }
 }
 
-Scene sphereMinusSpheres() {
-  Scene s{"sphere - 4 spheres",
-          {},
-          CsgTree::parse("0 - (((1 | 2) | 3) | 4)"),
-          Camera::perspective(640, 480, 0.9)};
+CsgScene sphereMinusSpheres() {
+  CsgScene s{"sphere - 4 spheres",
+             {},
+             CsgTree::parse("0 - (((1 | 2) | 3) | 4)"),
+             Camera::perspective(640, 480, 0.9)};
   std::vector<int> patch;
   sphere(s.cloud, patch, Vec3(0, 0, 0), 1.0, 80000, 0);
   const Vec3 centres[4] = {Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1), Vec3(-0.6, -0.6, -0.53)};
@@ -98,7 +98,7 @@ int main() {
   std::printf("threads: %d\n", omp_get_max_threads());
   std::printf("%-20s %8s %-10s %7s %8s %12s %12s %8s %s\n", "scene", "surfels", "candidates", "edge", "pairs",
               "clipbuf_ms", "spatial_ms", "cb/sp", "equal");
-  for (Scene scene : {cube900(), sphereMinusSpheres()}) {
+  for (CsgScene scene : {cube900(), sphereMinusSpheres()}) {
     const SurfelDiscs discs = SurfelDiscs::fromCloud(scene.cloud);
     CsgClipper clipper(scene.cloud, scene.tree);
     const std::vector<uint32_t>& edges = clipper.edgeSurfels();

@@ -27,7 +27,7 @@
 #include <thread>
 #include <vector>
 
-#include "render/scene_renderer.h"
+#include "render/scene/csg_scene_renderer.h"
 
 namespace {
 
@@ -71,12 +71,12 @@ Spread spreadOf(std::vector<double> v) {
 struct FrameTimes {
   Spread total;
   double classify = 0, partners = 0, setup = 0, splat = 0;  // medians
-  rc::SceneFrameStats stats;                                // of the last frame
+  rc::CsgSceneFrameStats stats;                             // of the last frame
 };
 
 struct Series {
   std::vector<double> total, classify, partners, setup, splat;
-  FrameTimes finish(const rc::SceneFrameStats& stats) const {
+  FrameTimes finish(const rc::CsgSceneFrameStats& stats) const {
     FrameTimes t;
     t.total = spreadOf(total);
     t.classify = spreadOf(classify).median;
@@ -86,7 +86,7 @@ struct Series {
     t.stats = stats;
     return t;
   }
-  void add(const rc::SceneFrameStats& s) {
+  void add(const rc::CsgSceneFrameStats& s) {
     total.push_back(s.total_ms);
     classify.push_back(s.classify_ms);
     partners.push_back(s.partners_ms);
@@ -95,15 +95,15 @@ struct Series {
   }
 };
 
-/// Through SceneRenderer. moving = false renders the scene at t = 0 in every frame (static geometry: the
+/// Through CsgSceneRenderer. moving = false renders the scene at t = 0 in every frame (static geometry: the
 /// spatial partners are searched once and kept; the clip buffer method searches in every frame); moving =
 /// true advances a dynamic scene by 1/30 s per frame (motion, classification and partners in every frame).
-FrameTimes measureScene(const rc::Scene& scene, const rc::Camera& camera,
-                        const rc::SceneRenderOptions& options, int frames, bool moving,
-                        rc::RenderImages* images, std::unique_ptr<rc::SceneRenderer>* keep = nullptr) {
-  auto renderer = std::make_unique<rc::SceneRenderer>(scene, options);
+FrameTimes measureScene(const rc::CsgScene& scene, const rc::Camera& camera,
+                        const rc::CsgSceneRenderOptions& options, int frames, bool moving,
+                        rc::RenderImages* images, std::unique_ptr<rc::CsgSceneRenderer>* keep = nullptr) {
+  auto renderer = std::make_unique<rc::CsgSceneRenderer>(scene, options);
   Series series;
-  rc::SceneFrameStats stats;
+  rc::CsgSceneFrameStats stats;
   renderer->render(camera, 0, images, &stats);  // warm-up (and the one partner search of a static scene)
   for (int f = 0; f < frames; ++f) {
     renderer->render(camera, moving ? (f + 1) / 30.0 : 0.0, images, &stats);
@@ -118,15 +118,15 @@ double msSince(Clock::time_point t0) {
 }
 
 /// Static geometry, but the classification of all surfels (4.1.2, partners of all surfels) and the edge
-/// surfels' partners (4.2.1) recomputed in every frame, as SceneRenderer does after a motion.
-FrameTimes measureReclassify(const rc::Scene& scene, const rc::Camera& camera,
-                             const rc::SceneRenderOptions& options, int frames, rc::RenderImages* images) {
+/// surfels' partners (4.2.1) recomputed in every frame, as CsgSceneRenderer does after a motion.
+FrameTimes measureReclassify(const rc::CsgScene& scene, const rc::Camera& camera,
+                             const rc::CsgSceneRenderOptions& options, int frames, rc::RenderImages* images) {
   rc::CsgClipper clipper(scene.surfels, scene.csgTree(), options.clipper);
   rc::SurfelRenderer renderer(options.splat);
   Series series;
-  rc::SceneFrameStats s;
+  rc::CsgSceneFrameStats s;
   for (int f = -1; f < frames; ++f) {  // frame -1: warm-up
-    s = rc::SceneFrameStats();
+    s = rc::CsgSceneFrameStats();
     const auto t0 = Clock::now();
     clipper.classify();
     s.classify_ms = msSince(t0);
@@ -243,9 +243,9 @@ int main(int argc, char** argv) {
   std::printf(
       "| fig | scene | model | surfels | thesis (Table 4.1) | ours / thesis surfels |\n"
       "|---|---|---|---|---|---|\n");
-  std::vector<rc::Scene> scenes;
+  std::vector<rc::CsgScene> scenes;
   for (const SceneInfo& info : kScenes) {
-    scenes.push_back(rc::loadScene(dir + "/" + info.scene + ".yaml"));
+    scenes.push_back(rc::loadCsgScene(dir + "/" + info.scene + ".yaml"));
     const size_t ours = scenes.back().surfels.size();
     char ratio[32] = "-";
     if (info.thesis_surfels) std::snprintf(ratio, sizeof(ratio), "%.3g", double(ours) / info.thesis_surfels);
@@ -284,21 +284,21 @@ int main(int argc, char** argv) {
   std::vector<Dyn> dynamic_rows;
   for (size_t s = 0; s < scenes.size(); ++s) {
     const SceneInfo& info = kScenes[s];
-    const rc::Scene& scene = scenes[s];
-    rc::SceneRenderOptions options;
+    const rc::CsgScene& scene = scenes[s];
+    rc::CsgSceneRenderOptions options;
     options.clipper.method = clip_buffer ? rc::PartnerMethod::kClipBuffer : rc::PartnerMethod::kSpatialIndex;
     options.splat.outputs = rc::kOutputColor | rc::kOutputDepth | rc::kOutputWeight | rc::kOutputPatchId;
-    rc::SceneRenderOptions per_fragment = options;
+    rc::CsgSceneRenderOptions per_fragment = options;
     per_fragment.clipper.compiled_clipping = false;
-    for (const rc::SceneCamera& sc : scene.cameras) {
+    for (const rc::CsgSceneCamera& sc : scene.cameras) {
       const rc::Camera camera = at1280x720(sc.camera);
       rc::RenderImages images;
-      std::unique_ptr<rc::SceneRenderer> renderer;
+      std::unique_ptr<rc::CsgSceneRenderer> renderer;
       const FrameTimes compiled = measureScene(scene, camera, options, frames, false, &images, &renderer);
       const size_t shown = countShownEdgePixels(renderer->surfels(), *renderer->clipper(), camera, images);
       const FrameTimes reference =
           measureScene(scene, camera, per_fragment, reference_frames, false, &images);
-      const rc::SceneFrameStats& stats = compiled.stats;
+      const rc::CsgSceneFrameStats& stats = compiled.stats;
       std::printf(
           "| %s | %s | %s | %s | %s | %s | %s | %.1f | %.1f | %.1f (%.1f-%.1f) | %.1f | %.1f | %.1f | %s |\n",
           info.figure, info.scene, sc.name.c_str(), withCommas(stats.surfels).c_str(),
@@ -312,10 +312,10 @@ int main(int argc, char** argv) {
         continue;  // Table 1 already searches in every frame; Table 2 comes with the default run
       // The dynamic case: partners in every frame.
       Dyn d{info.scene, sc.name.c_str(), compiled.total.median, {}, {}, scene.isDynamic()};
-      rc::SceneRenderOptions per_frame_buffer = options;
+      rc::CsgSceneRenderOptions per_frame_buffer = options;
       per_frame_buffer.clipper.method = rc::PartnerMethod::kClipBuffer;
       d.clip_buffer = measureScene(scene, camera, per_frame_buffer, frames, false, &images);
-      rc::SceneRenderOptions spatial = options;
+      rc::CsgSceneRenderOptions spatial = options;
       spatial.clipper.method = rc::PartnerMethod::kSpatialIndex;
       d.reclassify = scene.isDynamic() ? measureScene(scene, camera, spatial, frames, true, &images)
                                        : measureReclassify(scene, camera, spatial, frames, &images);

@@ -8,8 +8,8 @@
 #include <limits>
 #include <stdexcept>
 
-#include "render/csg_clipper.h"
-#include "render/patch_clouds.h"
+#include "render/csg/csg_clipper.h"
+#include "render/csg/patch_clouds.h"
 #include "ros/csg_renderer_images.h"
 #include "ros/point_cloud2_converter.h"
 

@@ -37,10 +37,10 @@
 #include <vector>
 
 #include "core/surfel_cloud.h"
-#include "render/camera.h"
-#include "render/csg_tree.h"
-#include "render/patch_cloud_set.h"
-#include "render/surfel_renderer.h"
+#include "render/csg/csg_tree.h"
+#include "render/csg/patch_cloud_set.h"
+#include "render/splat/camera.h"
+#include "render/splat/surfel_renderer.h"
 
 namespace rc {
 

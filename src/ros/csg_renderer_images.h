@@ -9,8 +9,8 @@
 
 #include <cmath>
 
-#include "render/camera.h"
-#include "render/surfel_renderer.h"
+#include "render/splat/camera.h"
+#include "render/splat/surfel_renderer.h"
 
 namespace rc {
 

@@ -70,13 +70,13 @@ SurfelScenePublisherParams readSurfelScenePublisherParams(const ros::NodeHandle&
 
 SurfelScenePublisher::SurfelScenePublisher(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : nh_(nh), private_nh_(private_nh), params_(readSurfelScenePublisherParams(private_nh)) {
-  scene_ = loadScene(params_.scene);
+  scene_ = loadCsgScene(params_.scene);
   expression_ = patchIdExpression(scene_.csgTree());
   moving_ = scene_.surfels;
   moving_.frame_id = params_.frame_id;
   if (!params_.camera_frame.empty()) {
-    const SceneCamera* chosen = nullptr;
-    for (const SceneCamera& c : scene_.cameras)
+    const CsgSceneCamera* chosen = nullptr;
+    for (const CsgSceneCamera& c : scene_.cameras)
       if (params_.camera.empty() ? chosen == nullptr : c.name == params_.camera) chosen = &c;
     if (!params_.camera.empty() && !chosen)
       throw std::invalid_argument("surfel_scene_publisher: scene '" + scene_.name + "' has no camera '" +

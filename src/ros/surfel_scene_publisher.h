@@ -17,7 +17,7 @@
 
 #include <string>
 
-#include "render/scene.h"
+#include "render/scene/csg_scene.h"
 
 namespace rc {
 
@@ -45,7 +45,7 @@ class SurfelScenePublisher {
   /// Reads the parameters and loads the scene (throws std::invalid_argument / std::runtime_error).
   SurfelScenePublisher(ros::NodeHandle nh, ros::NodeHandle private_nh);
 
-  const Scene& scene() const { return scene_; }
+  const CsgScene& scene() const { return scene_; }
 
  private:
   void publishFrame(double t);
@@ -54,7 +54,7 @@ class SurfelScenePublisher {
 
   ros::NodeHandle nh_, private_nh_;
   SurfelScenePublisherParams params_;
-  Scene scene_;
+  CsgScene scene_;
   std::string expression_;  // over patch ids
   bool expression_sent_ = false;
   SurfelCloud moving_;  // the surfels at the current time (dynamic scenes)

@@ -11,17 +11,17 @@
 
 #include "core/surfel_attributes.h"
 #include "io/cloud_io.h"
-#include "render/framing_camera.h"
-#include "render/image_io.h"
-#include "render/scene_renderer.h"
+#include "render/scene/csg_scene_renderer.h"
+#include "render/scene/framing_camera.h"
+#include "render/splat/image_io.h"
 
 namespace {
 
 using rc::Vec3;
 
 /// A scene made of surfel files: patch i = file i, expression over indices.
-rc::Scene sceneFromSurfelFiles(const std::vector<std::string>& files, const std::string& csg) {
-  rc::Scene scene;
+rc::CsgScene sceneFromSurfelFiles(const std::vector<std::string>& files, const std::string& csg) {
+  rc::CsgScene scene;
   scene.name = std::filesystem::path(files.front()).stem().string();
   for (size_t k = 0; k < files.size(); ++k) {
     rc::SurfelCloud cloud = rc::readCloud(files[k]);
@@ -37,7 +37,7 @@ rc::Scene sceneFromSurfelFiles(const std::vector<std::string>& files, const std:
       for (size_t i = 0; i < cloud.size(); ++i)
         cloud.radii[i] = std::max(cloud.axes1[i].norm(), cloud.axes2[i].norm());
     }
-    rc::ScenePatch patch;
+    rc::CsgScenePatch patch;
     patch.name = "p" + std::to_string(k);
     patch.first_surfel = scene.surfels.size();
     patch.surfel_count = cloud.size();
@@ -51,7 +51,7 @@ rc::Scene sceneFromSurfelFiles(const std::vector<std::string>& files, const std:
   scene.csg_expression = scene.geometry_expression = csg;
   Vec3 lo, hi;
   scene.surfels.bounds(&lo, &hi);
-  scene.cameras.push_back(rc::SceneCamera{"fit", rc::framingCamera(lo, hi, 640, 480)});
+  scene.cameras.push_back(rc::CsgSceneCamera{"fit", rc::framingCamera(lo, hi, 640, 480)});
   return scene;
 }
 
@@ -95,24 +95,24 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    rc::Scene scene;
+    rc::CsgScene scene;
     if (!surfel_files.empty()) {
       if (!scene_path.empty()) throw std::runtime_error("give either a scene file or --surfels, not both");
       if (csg.empty()) throw std::runtime_error("--surfels needs --csg");
       scene = sceneFromSurfelFiles(surfel_files, csg);
     } else {
       if (scene_path.empty()) throw std::runtime_error("no scene file (or --surfels) given");
-      scene = rc::loadScene(scene_path);
+      scene = rc::loadCsgScene(scene_path);
     }
     if (camera_index >= int(scene.cameras.size()))
       throw std::runtime_error("--camera " + std::to_string(camera_index) + ": the scene has " +
                                std::to_string(scene.cameras.size()) + " cameras");
     std::filesystem::create_directories(out_dir);
-    rc::SceneRenderOptions options;
+    rc::CsgSceneRenderOptions options;
     options.csg = !no_csg;
     options.clipper.method =
         clip_method == "spatial" ? rc::PartnerMethod::kSpatialIndex : rc::PartnerMethod::kClipBuffer;
-    rc::SceneRenderer renderer(scene, options);
+    rc::CsgSceneRenderer renderer(scene, options);
     std::printf("%-24s %8s %8s %8s %8s %8s %8s %8s %8s %8s\n", "frame", "surfels", "edge_sf", "edge_px",
                 "partn_ms", "visib_ms", "accum_ms", "shade_ms", "total_ms", "fps");
     for (size_t c = 0; c < scene.cameras.size(); ++c) {
@@ -125,7 +125,7 @@ int main(int argc, char** argv) {
                                                        (width ? width : camera.width) / camera.width)));
       for (int f = 0; f < frames; ++f) {
         rc::RenderImages images;
-        rc::SceneFrameStats stats;
+        rc::CsgSceneFrameStats stats;
         renderer.render(camera, f * dt, &images, &stats);
         std::string prefix = out_dir + "/" + scene.name + "_" + scene.cameras[c].name;
         if (frames > 1) {

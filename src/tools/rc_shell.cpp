@@ -22,10 +22,10 @@
 #include <string>
 #include <vector>
 
-#include "render/discontinuity_clipper.h"
-#include "render/framing_camera.h"
-#include "render/image_io.h"
-#include "render/surfel_renderer.h"
+#include "render/csg/discontinuity_clipper.h"
+#include "render/scene/framing_camera.h"
+#include "render/splat/image_io.h"
+#include "render/splat/surfel_renderer.h"
 #include "shell/shell_scene_reader.h"
 #include "shell/shell_scene_run.h"
 

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-#include "render/camera.h"
+#include "render/splat/camera.h"
 
 namespace rc {
 

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "render/analytic_csg.h"
+#include "render/csg/analytic_csg.h"
 
 namespace rc {
 namespace {

@@ -6,8 +6,8 @@
 #include <random>
 #include <vector>
 
-#include "render/camera.h"
-#include "render/clip_partners.h"
+#include "render/csg/clip_partners.h"
+#include "render/splat/camera.h"
 
 namespace rc {
 namespace {

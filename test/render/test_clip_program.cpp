@@ -7,9 +7,9 @@
 #include <cmath>
 #include <string>
 
-#include "render/clip_inside_patch.h"
-#include "render/clip_program.h"
-#include "render/scene_renderer.h"
+#include "render/csg/clip_inside_patch.h"
+#include "render/csg/clip_program.h"
+#include "render/scene/csg_scene_renderer.h"
 #include "scene_test_support.h"
 
 namespace rc {
@@ -24,8 +24,8 @@ struct Agreement {
 /// Every clipped surfel of the scene seen by `camera`: compiled test vs keepFragment at every pixel of its
 /// box, and keepRow over whole rows vs keep() per pixel.
 Agreement compareScene(const std::string& name, int camera_index) {
-  const Scene scene = loadScene(kSceneDir + name + ".yaml");
-  SceneRenderer renderer(scene);
+  const CsgScene scene = loadCsgScene(kSceneDir + name + ".yaml");
+  CsgSceneRenderer renderer(scene);
   const Camera camera = resizedCamera(scene.cameras.at(camera_index).camera, 160, 120);
   RenderImages images;
   renderer.render(camera, 0, &images);  // finds the partners for this frame

@@ -7,7 +7,7 @@
 #include <map>
 #include <vector>
 
-#include "render/csg_clipper.h"
+#include "render/csg/csg_clipper.h"
 
 namespace rc {
 namespace {

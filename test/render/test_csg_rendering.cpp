@@ -7,7 +7,7 @@
 #include <cmath>
 #include <string>
 
-#include "render/scene_renderer.h"
+#include "render/scene/csg_scene_renderer.h"
 #include "scene_test_support.h"
 
 namespace rc {
@@ -107,13 +107,13 @@ struct MismatchBounds {
 
 void expectMatchesAnalytic(const std::string& scene_name, double t = 0, MismatchBounds bounds = {}) {
   SCOPED_TRACE(scene_name);
-  const Scene scene = loadScene(kSceneDir + scene_name + ".yaml");
-  SceneRenderOptions options;
+  const CsgScene scene = loadCsgScene(kSceneDir + scene_name + ".yaml");
+  CsgSceneRenderOptions options;
   options.splat.shading = false;
-  SceneRenderer renderer(scene, options);
+  CsgSceneRenderer renderer(scene, options);
   const Camera camera = smallCamera(scene.cameras[0].camera);
   RenderImages images;
-  SceneFrameStats stats;
+  CsgSceneFrameStats stats;
   renderer.render(camera, t, &images, &stats);
   const AnalyticImages reference = castImage(scene.analyticCaster(t), camera);
   const Comparison c = compare(images, reference);
@@ -153,11 +153,11 @@ TEST(CsgRendering, OrbitingSphereThroughABoxEveryFrame) {
 }
 
 TEST(CsgRendering, IcosahedronFromTwentySurfels) {
-  const Scene scene = loadScene(kSceneDir + "icosahedron.yaml");
-  SceneRenderOptions options;
+  const CsgScene scene = loadCsgScene(kSceneDir + "icosahedron.yaml");
+  CsgSceneRenderOptions options;
   options.splat.shading = false;
-  SceneRenderer renderer(scene, options);
-  for (const SceneCamera& sc : scene.cameras) {
+  CsgSceneRenderer renderer(scene, options);
+  for (const CsgSceneCamera& sc : scene.cameras) {
     SCOPED_TRACE(sc.name);
     const Camera camera = smallCamera(sc.camera);
     RenderImages images;
@@ -200,7 +200,7 @@ TEST(CsgRendering, IcosahedronFromTwentySurfels) {
 }
 
 TEST(CsgRendering, TextureSquareSharpColourSmoothNormals) {
-  const Scene scene = loadScene(kSceneDir + "texture_square.yaml");
+  const CsgScene scene = loadCsgScene(kSceneDir + "texture_square.yaml");
   const TextureSquare& square = scene.texture_squares.at(0);
   const Camera camera = smallCamera(scene.cameras[0].camera);
   const AnalyticImages reference = castImage(scene.analyticGeometryCaster(), camera);
@@ -230,10 +230,10 @@ TEST(CsgRendering, TextureSquareSharpColourSmoothNormals) {
   };
   auto colourStats = [&](bool csg, size_t* mixed, size_t* wrong_away, double* max_normal_deg_border,
                          size_t* border_pixels) {
-    SceneRenderOptions options;
+    CsgSceneRenderOptions options;
     options.csg = csg;
     options.splat.shading = false;
-    SceneRenderer renderer(scene, options);
+    CsgSceneRenderer renderer(scene, options);
     RenderImages images;
     renderer.render(camera, 0, &images);
     *mixed = *wrong_away = *border_pixels = 0;

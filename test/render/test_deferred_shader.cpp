@@ -1,11 +1,11 @@
-#include "render/deferred_shader.h"
+#include "render/splat/deferred_shader.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <random>
 
-#include "render/surfel_renderer.h"
+#include "render/splat/surfel_renderer.h"
 
 namespace rc {
 namespace {

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "render/camera.h"
-#include "render/discontinuity_clipper.h"
-#include "render/surfel_renderer.h"
+#include "render/csg/discontinuity_clipper.h"
+#include "render/splat/camera.h"
+#include "render/splat/surfel_renderer.h"
 
 using namespace rc;
 

@@ -1,4 +1,4 @@
-#include "render/image_io.h"
+#include "render/splat/image_io.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "render/surfel_renderer.h"
+#include "render/splat/surfel_renderer.h"
 
 namespace rc {
 namespace {

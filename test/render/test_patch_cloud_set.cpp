@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "core/surfel_attributes.h"
-#include "render/patch_cloud_set.h"
+#include "render/csg/patch_cloud_set.h"
 
 namespace rc {
 namespace {

@@ -1,4 +1,4 @@
-#include "render/surfel_renderer.h"
+#include "render/splat/surfel_renderer.h"
 
 #include <gtest/gtest.h>
 

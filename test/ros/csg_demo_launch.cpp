@@ -11,7 +11,7 @@
 #include <cstring>
 #include <mutex>
 
-#include "render/scene.h"
+#include "render/scene/csg_scene.h"
 #include "ros/surfel_scene_publisher.h"
 
 namespace {
@@ -23,7 +23,7 @@ TEST(CsgDemoLaunch, ImagesOfTheSceneArriveAndMove) {
   const YAML::Node config = YAML::LoadFile(std::string(RC_SOURCE_DIR) + "/config/csg_demo.yaml");
   const uint32_t width = config["csg_renderer"]["width"].as<uint32_t>();
   const uint32_t height = config["csg_renderer"]["height"].as<uint32_t>();
-  const rc::Scene scene = rc::loadScene(std::string(RC_SOURCE_DIR) + "/config/scenes/orbit.yaml");
+  const rc::CsgScene scene = rc::loadCsgScene(std::string(RC_SOURCE_DIR) + "/config/scenes/orbit.yaml");
   ASSERT_TRUE(scene.isDynamic());
   const std::string expression = rc::patchIdExpression(scene.csgTree());
 

@@ -19,8 +19,8 @@
 #include <limits>
 #include <mutex>
 
-#include "render/analytic_csg.h"
-#include "render/patch_sampling.h"
+#include "render/csg/analytic_csg.h"
+#include "render/csg/patch_sampling.h"
 #include "ros/point_cloud2_converter.h"
 
 namespace {

@@ -11,9 +11,9 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "render/framing_camera.h"
-#include "render/image_io.h"
-#include "render/surfel_renderer.h"
+#include "render/scene/framing_camera.h"
+#include "render/splat/image_io.h"
+#include "render/splat/surfel_renderer.h"
 #include "shell/shell_scene_reader.h"
 #include "shell/shell_simulation.h"
 

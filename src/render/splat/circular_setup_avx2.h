@@ -1,0 +1,19 @@
+// setupCircularEwaSplat for four surfels at a time (AVX2 in double precision, perspective cameras): the same
+// operations in the same order, so the records are bitwise those of the scalar set-up. Lanes outside the
+// common case (edge-on, the plane depth undefined over the box) are set up by setupCircularEwaSplat.
+#pragma once
+
+#include "render/splat/ewa_splat.h"
+
+namespace rc {
+
+/// True if this build has the four-wide set-up and the CPU executes AVX2.
+bool circularSetupAvx2Available();
+
+/// Sets up surfels k = 0..3 (centres, normals of any positive length, radii) as setupCircularEwaSplat
+/// would for a perspective camera: rasters[k], unit_normals[k] and results[k].
+void setupCircularEwaSplats4(const Vec3* centers, const Vec3* normals, const double* radii,
+                             const CameraFrame& camera, const EwaParams& params, SplatRaster rasters[4],
+                             float unit_normals[4][3], SplatSetup results[4]);
+
+}  // namespace rc

@@ -1,0 +1,115 @@
+// Rasterization of one EWA splat inside one screen tile (thesis 3.2): the pixels inside the cut-off ellipse
+// with their conic value r2 and the exact plane depth z, one pixel or four pixels (SSE2) at a time. Both
+// variants use the same arithmetic, so coverage and depth agree between the renderer's passes.
+#pragma once
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include <algorithm>
+#include <cmath>
+
+#include "render/splat/ewa_splat.h"
+
+namespace rc {
+namespace splat_tile {
+
+constexpr int kTileSize = 32;
+/// Splats whose box is at least this wide inside a tile solve each row's span; narrower ones test the
+/// conic at every pixel of their box (no square root or division per row).
+constexpr int kSpanMinWidth = 8;
+constexpr int kTileStride = kTileSize + 8;  ///< row stride of the tile buffers: room for an 8-wide overrun
+
+struct TileRect {
+  int x0, y0, x1, y1;  ///< inclusive pixel range
+};
+
+/// Narrows [*x_begin, *x_end] (the splat's box in the tile) to the pixels of row offset dv that can lie
+/// inside the cut-off: the roots of a du^2 + 2 b dv du + c dv^2 = 1, widened by a pixel (the r2 test
+/// decides). r2_row = c dv^2. False if the row misses the ellipse.
+inline bool rowSpan(const SplatRaster& s, float dv, float r2_row, int* x_begin, int* x_end) {
+  const float b_dv = s.conic_b * dv;
+  const float discriminant = b_dv * b_dv - s.conic_a * (r2_row - 1.0f);
+  if (!(discriminant >= 0)) return false;
+  const float root = std::sqrt(discriminant), inv_a = 1.0f / s.conic_a;
+  const float u_lo = s.center_u + (-b_dv - root) * inv_a, u_hi = s.center_u + (-b_dv + root) * inv_a;
+  const int xb = *x_begin, xe = *x_end;
+  *x_begin = std::max(xb, int(std::max(u_lo, float(xb))) - 1);
+  *x_end = std::min(xe, int(std::min(u_hi, float(xe))) + 1);
+  return true;
+}
+
+/// Calls visit(x, y, r2, z) for every pixel of the tile inside the cut-off ellipse of `s` (r2 <= 1), with
+/// the clamped plane depth z. Coverage depends only on the splat and the tile, so both passes agree.
+template <class Visit>
+inline void rasterizeSplat(const SplatRaster& s, const TileRect& tile, Visit&& visit) {
+  const int xb = std::max(int(s.x0), tile.x0), xe = std::min(int(s.x1), tile.x1);
+  const int yb = std::max(int(s.y0), tile.y0), ye = std::min(int(s.y1), tile.y1);
+  const float a = s.conic_a, b = s.conic_b, c = s.conic_c;
+  const float n1 = s.depth_num[1], d1 = s.depth_den[0];
+  const float z_lo = s.z_lo, z_hi = s.z_hi;
+  const bool solve_span = xe - xb + 1 >= kSpanMinWidth;
+  for (int y = yb; y <= ye; ++y) {
+    const float dv = float(y) - s.center_v;
+    const float r2_row = c * dv * dv, r2_cross = 2.0f * b * dv;
+    int x_begin = xb, x_end = xe;
+    if (solve_span && !rowSpan(s, dv, r2_row, &x_begin, &x_end)) continue;
+    const float num_row = s.depth_num[0] + s.depth_num[2] * dv;
+    const float den_row = 1.0f + s.depth_den[1] * dv;
+    for (int x = x_begin; x <= x_end; ++x) {
+      const float du = float(x) - s.center_u;
+      const float r2 = (a * du + r2_cross) * du + r2_row;
+      if (r2 > 1.0f) continue;
+      float z = (num_row + n1 * du) / (den_row + d1 * du);
+      z = z > z_lo ? z : z_lo;  // also maps +-inf and NaN into the range
+      z = z < z_hi ? z : z_hi;
+      visit(x, y, r2, z);
+    }
+  }
+}
+
+#if defined(__SSE2__)
+inline __m128 select(__m128 mask, __m128 if_true, __m128 if_false) {
+  return _mm_or_ps(_mm_and_ps(mask, if_true), _mm_andnot_ps(mask, if_false));
+}
+
+/// rasterizeSplat four pixels at a time: visit(index, x, y, r2, z, mask) for each group of four pixels
+/// (x..x+3, y) of a row with at least one inside the cut-off (mask), index = tile buffer index of pixel x.
+/// Same arithmetic as rasterizeSplat, so both give the same coverage, r2 and z.
+template <class Visit>
+inline void rasterizeSplat4(const SplatRaster& s, const TileRect& tile, Visit&& visit) {
+  const int xb = std::max(int(s.x0), tile.x0), xe = std::min(int(s.x1), tile.x1);
+  const int yb = std::max(int(s.y0), tile.y0), ye = std::min(int(s.y1), tile.y1);
+  const float b = s.conic_b, c = s.conic_c;
+  const __m128 lane = _mm_setr_ps(0, 1, 2, 3), one = _mm_set1_ps(1.0f);
+  const __m128 a = _mm_set1_ps(s.conic_a), center_u = _mm_set1_ps(s.center_u);
+  const __m128 n1 = _mm_set1_ps(s.depth_num[1]), d1 = _mm_set1_ps(s.depth_den[0]);
+  const __m128 z_lo = _mm_set1_ps(s.z_lo), z_hi = _mm_set1_ps(s.z_hi);
+  const bool solve_span = xe - xb + 1 >= kSpanMinWidth;
+  for (int y = yb; y <= ye; ++y) {
+    const float dv = float(y) - s.center_v;
+    const float r2_row = c * dv * dv, r2_cross = 2.0f * b * dv;
+    int x_begin = xb, x_end = xe;
+    if (solve_span && !rowSpan(s, dv, r2_row, &x_begin, &x_end)) continue;
+    const __m128 row = _mm_set1_ps(r2_row), cross = _mm_set1_ps(r2_cross);
+    const __m128 num_row = _mm_set1_ps(s.depth_num[0] + s.depth_num[2] * dv);
+    const __m128 den_row = _mm_set1_ps(1.0f + s.depth_den[1] * dv);
+    const __m128 last = _mm_set1_ps(float(x_end));
+    const int base = (y - tile.y0) * kTileStride - tile.x0;
+    for (int x = x_begin; x <= x_end; x += 4) {
+      const __m128 xs = _mm_add_ps(_mm_set1_ps(float(x)), lane);
+      const __m128 du = _mm_sub_ps(xs, center_u);
+      const __m128 r2 = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(a, du), cross), du), row);
+      const __m128 mask = _mm_and_ps(_mm_cmple_ps(r2, one), _mm_cmple_ps(xs, last));
+      if (!_mm_movemask_ps(mask)) continue;
+      __m128 z = _mm_div_ps(_mm_add_ps(num_row, _mm_mul_ps(n1, du)), _mm_add_ps(den_row, _mm_mul_ps(d1, du)));
+      z = _mm_min_ps(_mm_max_ps(z, z_lo), z_hi);  // max(NaN, lo) = lo
+      visit(base + x, x, y, r2, z, mask);
+    }
+  }
+}
+#endif
+
+}  // namespace splat_tile
+}  // namespace rc
