@@ -242,7 +242,7 @@ SurfelCloud readPcdCloud(const std::string& path, const ReadOptions& options) {
   const PcdHeader header = parseHeader(bytes, path);
   SurfelCloud cloud;
   std::vector<FieldBinding> bindings;
-  if (!bindFields(header.fields, header.points, path, "header", &cloud, &bindings))
+  if (!bindFields(header.fields, FieldNaming::kPcd, header.points, path, "header", &cloud, &bindings))
     throw IoError(path, "header", "missing x, y or z field");
   size_t stride = 0;
   for (const FieldSpec& f : header.fields) stride += f.count * scalarSize(f.type);

@@ -2,8 +2,9 @@
 // binary_compressed (LZF, field-major).
 //
 // Fields x y z, normal_x normal_y normal_z, rgb / rgba (packed 4 bytes -> colours; "rgb" gets alpha 255),
-// radius, axis1_x..axis2_z, confidence and curvature fill the SurfelCloud channels; every other field becomes
-// an attribute column (type and COUNT kept); padding fields "_" are skipped. Organised clouds (HEIGHT > 1)
+// radius, axis1_x..axis2_z, confidence and curvature (and the other names of io/surfel_fields.h) fill the
+// SurfelCloud channels; every other field becomes an attribute column (type and COUNT kept); padding fields
+// "_" are skipped. Organised clouds (HEIGHT > 1)
 // keep width/height and their NaN points unless ReadOptions::keep_invalid is false.
 #pragma once
 

@@ -264,7 +264,7 @@ class ElementReader {
     groupVertexProperties(element, &fields, &slots);
     std::vector<FieldBinding> bindings;
     const std::string where = "element '" + element.name + "'";
-    if (!bindFields(fields, element.count, file_, where, cloud, &bindings))
+    if (!bindFields(fields, FieldNaming::kPly, element.count, file_, where, cloud, &bindings))
       throw IoError(file_, where, "missing x, y or z property");
     uint8_t value[8];
     const auto& props = element.properties;

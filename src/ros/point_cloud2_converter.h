@@ -46,12 +46,14 @@ class PointCloud2Converter {
                                                PointCloud2Layout layout = PointCloud2Layout::kPointSurfel);
 
   /// Reads any little-endian PointCloud2 with float32/float64 x, y, z (plain xyz / xyzrgb scans, PointSurfel,
-  /// PointNormal, ...). Known fields: x y z, normal_x/y/z, rgba or rgb (alpha 255 for rgb), radius,
-  /// confidence, curvature, t1x..t2z. Every other field (except PCL's "_" padding) is kept bit-exactly as an
-  /// attribute column. Organised clouds (height > 1) keep width/height; NaN points are kept (use
-  /// SurfelCloud::removeNonFinite). Throws PointCloud2Error naming the field for: missing x/y/z, unsupported
-  /// datatype, field outside point_step, duplicate field, row_step < width * point_step, data size !=
-  /// row_step * height, big-endian data.
+  /// PointNormal, ...). Fields name channels as in PCD and PLY files (io/surfel_fields.h): x y z,
+  /// normal_x/y/z or nx/ny/nz, rgba or rgb (packed; alpha 255 for rgb) or uint8 red/green/blue(/alpha),
+  /// radius, confidence, curvature, t1x..t2z or axis1_x..axis2_z. Every other field (except the padding
+  /// fields named _) is kept bit-exactly as an attribute column. Organised clouds (height > 1) keep
+  /// width/height; NaN points are kept (use SurfelCloud::removeNonFinite). Throws PointCloud2Error naming the
+  /// field for: missing x/y/z, unsupported datatype, field outside point_step, duplicate field, row_step <
+  /// width * point_step, data size != row_step * height, big-endian data, and a channel field that cannot
+  /// fill its channel (not float32/float64, count other than 1, a member of its group missing).
   static void fromMessage(const sensor_msgs::PointCloud2& msg, SurfelCloud& cloud);
   static SurfelCloud fromMessage(const sensor_msgs::PointCloud2& msg);
 
