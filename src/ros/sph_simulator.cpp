@@ -13,7 +13,6 @@
 #include "ros/simulation_loop.h"
 #include "sph/sph_output.h"
 #include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
 #include "sph/sph_simulation.h"
 #include "sph/sph_surface.h"
 

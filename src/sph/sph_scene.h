@@ -1,6 +1,6 @@
 // An SPH scene (thesis 8): what config/sph/*.yaml describes. Solver parameters (8.1.4, appendix F.2),
-// particles of the fluid blocks and solids, fluid sources, boundary walls / boxes / cylinders / planes, moving
-// boundary boxes, frames, particle and surface outputs and the optional physics a scene switches on.
+// particles of the fluid blocks and solids, fluid sources, boundary walls / boxes / cylinders / planes,
+// moving boundary boxes, frames, particle and surface outputs and the optional physics a scene switches on.
 // sph_scene_reader reads it, SphSimulation (sph_simulation) steps it, runSphScene (sph_scene_run) runs its
 // frames. The schema is documented at the top of config/sph/dam_break_2d.yaml.
 #pragma once

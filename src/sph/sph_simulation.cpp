@@ -5,19 +5,20 @@
 namespace rc {
 
 SphSimulation::SphSimulation(const SphScene& scene)
-    : scene_(scene),
-      own_solver_(std::make_unique<SphFluidSolver>(makeSphSolver(scene))),
-      solver_(*own_solver_),
-      thermal_(makeSphThermal(scene, solver_)) {
-  for (const SphFluidSourceConfig& config : scene.sources)
-    sources_.emplace_back(config, solver_.kernels(), solver_.config().rest_density);
-}
+    : SphSimulation(scene, std::make_unique<SphFluidSolver>(makeSphSolver(scene)), nullptr, nullptr) {}
 
 SphSimulation::SphSimulation(const SphScene& scene, SphFluidSolver& solver,
                              std::shared_ptr<SphThermalModel> thermal)
-    : scene_(scene), solver_(solver), thermal_(thermal ? std::move(thermal) : makeSphThermal(scene, solver)) {
+    : SphSimulation(scene, nullptr, &solver, std::move(thermal)) {}
+
+SphSimulation::SphSimulation(const SphScene& scene, std::unique_ptr<SphFluidSolver> own_solver,
+                             SphFluidSolver* given_solver, std::shared_ptr<SphThermalModel> thermal)
+    : scene_(scene),
+      own_solver_(std::move(own_solver)),
+      solver_(given_solver ? *given_solver : *own_solver_),
+      thermal_(thermal ? std::move(thermal) : makeSphThermal(scene, solver_)) {
   for (const SphFluidSourceConfig& config : scene.sources)
-    sources_.emplace_back(config, solver.kernels(), solver.config().rest_density);
+    sources_.emplace_back(config, solver_.kernels(), solver_.config().rest_density);
 }
 
 void SphSimulation::emit(double time) {

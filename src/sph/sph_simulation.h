@@ -55,6 +55,10 @@ class SphSimulation {
   double particleSteps() const { return particle_steps_; }
 
  private:
+  /// own_solver (owned) or given_solver (borrowed): exactly one is set.
+  SphSimulation(const SphScene& scene, std::unique_ptr<SphFluidSolver> own_solver,
+                SphFluidSolver* given_solver, std::shared_ptr<SphThermalModel> thermal);
+
   const SphScene& scene_;                       // outlives the simulation
   std::unique_ptr<SphFluidSolver> own_solver_;  // null when stepping a given solver
   SphFluidSolver& solver_;
