@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <vector>
 
-#include "render/csg/clip_partners.h"
-#include "render/csg/csg_clipper.h"
-#include "render/splat/camera.h"
+#include "relaxed_connectivity/render/csg/clip_partners.h"
+#include "relaxed_connectivity/render/csg/csg_clipper.h"
+#include "relaxed_connectivity/render/splat/camera.h"
 
 using namespace rc;
 

@@ -27,7 +27,7 @@
 #include <thread>
 #include <vector>
 
-#include "render/scene/csg_scene_renderer.h"
+#include "relaxed_connectivity/render/scene/csg_scene_renderer.h"
 
 namespace {
 

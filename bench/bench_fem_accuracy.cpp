@@ -25,11 +25,11 @@
 #include <string>
 #include <vector>
 
-#include "fem/element_stiffness.h"
-#include "fem/linear_elasticity.h"
-#include "fem/mean_value_coordinates.h"
-#include "fem/polyhedral_mesh.h"
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/element_stiffness.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/mean_value_coordinates.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 namespace {
 

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "fem/convex_polyhedron.h"
-#include "fem/mean_value_coordinates.h"
+#include "relaxed_connectivity/fem/convex_polyhedron.h"
+#include "relaxed_connectivity/fem/mean_value_coordinates.h"
 
 namespace {
 

@@ -32,9 +32,9 @@
 #include <string>
 #include <vector>
 
-#include "fem/cholmod_solver.h"
-#include "fem/fem_scene_reader.h"
-#include "fem/fem_simulation.h"
+#include "relaxed_connectivity/fem/cholmod_solver.h"
+#include "relaxed_connectivity/fem/fem_scene_reader.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
 
 namespace {
 

@@ -15,10 +15,10 @@
 #include <string>
 #include <vector>
 
-#include "fem/cholmod_solver.h"
-#include "fem/linear_elasticity.h"
-#include "fem/polyhedral_mesh.h"
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/cholmod_solver.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 namespace {
 

@@ -22,11 +22,11 @@
 #include <string>
 #include <vector>
 
-#include "core/kd_tree.h"
-#include "io/cloud_io.h"
-#include "surface/analytic_shapes.h"
-#include "surface/mls_surface.h"
-#include "surface/normal_estimation.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/surface/analytic_shapes.h"
+#include "relaxed_connectivity/surface/mls_surface.h"
+#include "relaxed_connectivity/surface/normal_estimation.h"
 
 #ifdef RC_HAVE_PCL
 #include <pcl/point_types.h>

@@ -14,9 +14,9 @@
 #include <utility>
 #include <vector>
 
-#include "core/hash_grid.h"
-#include "core/kd_tree.h"
-#include "core/neighbor_lists.h"
+#include "relaxed_connectivity/core/hash_grid.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/core/neighbor_lists.h"
 
 #ifdef RC_HAVE_PCL
 #include <pcl/kdtree/kdtree_flann.h>

@@ -21,8 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "shell/shell_scene_reader.h"
-#include "shell/shell_simulation.h"
+#include "relaxed_connectivity/shell/shell_scene_reader.h"
+#include "relaxed_connectivity/shell/shell_simulation.h"
 
 namespace {
 

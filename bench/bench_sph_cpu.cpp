@@ -13,8 +13,8 @@
 #include <cstring>
 #include <string>
 
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 
 namespace {
 

@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "sph/sph_dam_break_surge.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene_builders.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
+#include "relaxed_connectivity/sph/sph_dam_break_surge.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 
 namespace {
 

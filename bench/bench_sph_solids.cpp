@@ -40,12 +40,12 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_object_penalty.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
-#include "sph/sph_thermal.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_object_penalty.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
+#include "relaxed_connectivity/sph/sph_thermal.h"
 
 namespace {
 

@@ -33,7 +33,7 @@
 #include <thread>
 #include <vector>
 
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 #if defined(RC_HAVE_PCL) && defined(__has_include)
 #if __has_include(<vtkPointGaussianMapper.h>) && __has_include(<vtkAutoInit.h>)

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Report include cycles between source units of src/ (a unit = foo.h + foo.cpp, named by its path without the
 extension). A unit depends on another when its header or source file includes the other's header with a quoted
-path relative to src/ ("module/name.h"). Exits 1 and prints each cycle when there is one.
+path under the package name ("relaxed_connectivity/module/name.h", i.e. relative to src/). Exits 1 and prints each cycle when there is one.
 
 Usage: /usr/bin/python3 scripts/check_include_cycles.py [SRC_DIR]
 """
@@ -9,7 +9,7 @@ import os
 import re
 import sys
 
-INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
+INCLUDE = re.compile(r'^\s*#\s*include\s+"(?:relaxed_connectivity/)?([^"]+)"', re.M)
 SOURCE_EXT = (".h", ".hpp", ".cpp", ".cu", ".cuh")
 
 

@@ -23,11 +23,11 @@
 #include <string>
 #include <vector>
 
-#include "sph/gpu/sph_gpu_host_solver.h"
-#include "sph/gpu/sph_gpu_scene.h"
-#include "sph/gpu/sph_gpu_setup.h"
-#include "sph/gpu/sph_gpu_solver.h"
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_host_solver.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_scene.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_setup.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_solver.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "core/attribute.h"
+#include "relaxed_connectivity/core/attribute.h"
 
 #include <algorithm>
 

@@ -4,8 +4,8 @@
 #include <memory>
 #include <vector>
 
-#include "core/neighbor.h"
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/neighbor.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/sorted_cell_grid.h"
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/sorted_cell_grid.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "core/sorted_cell_grid.h"
+#include "relaxed_connectivity/core/sorted_cell_grid.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 #include <stdexcept>
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/attribute.h"
+#include "relaxed_connectivity/core/attribute.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "core/weight_function.h"
+#include "relaxed_connectivity/core/weight_function.h"
 
 namespace rc {
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

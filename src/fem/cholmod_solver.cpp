@@ -1,4 +1,4 @@
-#include "fem/cholmod_solver.h"
+#include "relaxed_connectivity/fem/cholmod_solver.h"
 
 #include <algorithm>
 #include <chrono>

@@ -1,4 +1,4 @@
-#include "fem/convex_polyhedron.h"
+#include "relaxed_connectivity/fem/convex_polyhedron.h"
 
 #include <Eigen/Dense>
 

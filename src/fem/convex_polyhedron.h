@@ -6,7 +6,7 @@
 #include <array>
 #include <vector>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "fem/element_split.h"
+#include "relaxed_connectivity/fem/element_split.h"
 
 #include <algorithm>
 

@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 

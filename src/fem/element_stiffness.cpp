@@ -1,4 +1,4 @@
-#include "fem/element_stiffness.h"
+#include "relaxed_connectivity/fem/element_stiffness.h"
 
 #include <Eigen/Dense>
 
@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "fem/mean_value_coordinates.h"
+#include "relaxed_connectivity/fem/mean_value_coordinates.h"
 
 namespace rc {
 

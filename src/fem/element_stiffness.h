@@ -7,7 +7,7 @@
 
 #include <vector>
 
-#include "fem/convex_polyhedron.h"
+#include "relaxed_connectivity/fem/convex_polyhedron.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "fem/fem_cut_polygon.h"
+#include "relaxed_connectivity/fem/fem_cut_polygon.h"
 
 #include <Eigen/Geometry>
 
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "fem/polygon_geometry.h"
+#include "relaxed_connectivity/fem/polygon_geometry.h"
 
 namespace rc {
 

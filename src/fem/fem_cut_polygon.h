@@ -4,8 +4,8 @@
 
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "fem/fem_scene.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/fem/fem_scene.h"
 
 namespace rc {
 

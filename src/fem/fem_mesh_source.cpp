@@ -1,4 +1,4 @@
-#include "fem/fem_mesh_source.h"
+#include "relaxed_connectivity/fem/fem_mesh_source.h"
 
 #include <algorithm>
 #include <cctype>
@@ -9,14 +9,14 @@
 
 #include <Eigen/Geometry>
 
-#include "fem/convex_polyhedron.h"
-#include "fem/plane_cut.h"
-#include "fem/tetgen_mesh.h"
-#include "io/obj_io.h"
-#include "io/off_io.h"
-#include "io/ply_io.h"
-#include "mesh/surface_closing.h"
-#include "mesh/surface_decimation.h"
+#include "relaxed_connectivity/fem/convex_polyhedron.h"
+#include "relaxed_connectivity/fem/plane_cut.h"
+#include "relaxed_connectivity/fem/tetgen_mesh.h"
+#include "relaxed_connectivity/io/obj_io.h"
+#include "relaxed_connectivity/io/off_io.h"
+#include "relaxed_connectivity/io/ply_io.h"
+#include "relaxed_connectivity/mesh/surface_closing.h"
+#include "relaxed_connectivity/mesh/surface_decimation.h"
 
 namespace rc {
 

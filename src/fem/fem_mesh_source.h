@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 

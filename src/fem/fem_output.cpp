@@ -1,12 +1,12 @@
-#include "fem/fem_output.h"
+#include "relaxed_connectivity/fem/fem_output.h"
 
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
 
-#include "io/io_error.h"
-#include "io/vtk_xml_writer.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/vtk_xml_writer.h"
 
 namespace rc {
 

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 

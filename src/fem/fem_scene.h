@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "fem/fem_mesh_source.h"
-#include "fem/fem_output.h"
-#include "fem/plane_cut.h"
-#include "fem/polyhedral_mesh.h"
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/fem_mesh_source.h"
+#include "relaxed_connectivity/fem/fem_output.h"
+#include "relaxed_connectivity/fem/plane_cut.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "fem/fem_scene_reader.h"
+#include "relaxed_connectivity/fem/fem_scene_reader.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -8,9 +8,9 @@
 
 #include <Eigen/Geometry>
 
-#include "fem/fem_cut_polygon.h"
-#include "fem/fem_mesh_source.h"
-#include "io/yaml_reader.h"
+#include "relaxed_connectivity/fem/fem_cut_polygon.h"
+#include "relaxed_connectivity/fem/fem_mesh_source.h"
+#include "relaxed_connectivity/io/yaml_reader.h"
 
 namespace rc {
 

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "fem/fem_scene.h"
+#include "relaxed_connectivity/fem/fem_scene.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "fem/fem_scene_run.h"
+#include "relaxed_connectivity/fem/fem_scene_run.h"
 
 #include <chrono>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <sstream>
 
-#include "io/pvd_io.h"
+#include "relaxed_connectivity/io/pvd_io.h"
 
 namespace rc {
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "fem/fem_scene.h"
-#include "fem/fem_simulation.h"
+#include "relaxed_connectivity/fem/fem_scene.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "fem/fem_simulation.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
 
 #include <algorithm>
 #include <chrono>
@@ -8,7 +8,7 @@
 
 #include <Eigen/Geometry>
 
-#include "fem/polygon_cut.h"
+#include "relaxed_connectivity/fem/polygon_cut.h"
 
 namespace rc {
 

@@ -8,11 +8,11 @@
 
 #include <Eigen/Core>
 
-#include "fem/cholmod_solver.h"
-#include "fem/fem_output.h"
-#include "fem/fem_scene.h"
-#include "fem/linear_elasticity.h"
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/cholmod_solver.h"
+#include "relaxed_connectivity/fem/fem_output.h"
+#include "relaxed_connectivity/fem/fem_scene.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 namespace rc {
 

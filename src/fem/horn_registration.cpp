@@ -1,4 +1,4 @@
-#include "fem/horn_registration.h"
+#include "relaxed_connectivity/fem/horn_registration.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

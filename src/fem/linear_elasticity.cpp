@@ -1,4 +1,4 @@
-#include "fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
 
 #include <Eigen/Geometry>
 #include <Eigen/SparseCholesky>

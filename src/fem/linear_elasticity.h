@@ -12,8 +12,8 @@
 #include <memory>
 #include <vector>
 
-#include "fem/element_stiffness.h"
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/element_stiffness.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 

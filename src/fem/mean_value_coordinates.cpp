@@ -1,4 +1,4 @@
-#include "fem/mean_value_coordinates.h"
+#include "relaxed_connectivity/fem/mean_value_coordinates.h"
 
 #include <Eigen/Dense>
 

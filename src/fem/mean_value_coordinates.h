@@ -5,7 +5,7 @@
 
 #include <Eigen/Core>
 
-#include "fem/convex_polyhedron.h"
+#include "relaxed_connectivity/fem/convex_polyhedron.h"
 
 namespace rc {
 

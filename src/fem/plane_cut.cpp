@@ -1,4 +1,4 @@
-#include "fem/plane_cut.h"
+#include "relaxed_connectivity/fem/plane_cut.h"
 
 #include <Eigen/Geometry>
 
@@ -10,8 +10,8 @@
 #include <string>
 #include <utility>
 
-#include "fem/element_split.h"
-#include "fem/polygon_geometry.h"
+#include "relaxed_connectivity/fem/element_split.h"
+#include "relaxed_connectivity/fem/polygon_geometry.h"
 
 namespace rc {
 namespace {

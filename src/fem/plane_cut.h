@@ -4,8 +4,8 @@
 
 #include <vector>
 
-#include "fem/polyhedral_mesh.h"
-#include "fem/sliver_removal.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/sliver_removal.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "fem/polygon_cut.h"
+#include "relaxed_connectivity/fem/polygon_cut.h"
 
 #include <Eigen/Geometry>
 
@@ -14,8 +14,8 @@
 #include <tuple>
 #include <utility>
 
-#include "fem/element_split.h"
-#include "fem/polygon_geometry.h"
+#include "relaxed_connectivity/fem/element_split.h"
+#include "relaxed_connectivity/fem/polygon_geometry.h"
 
 namespace rc {
 namespace {

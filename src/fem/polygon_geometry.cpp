@@ -1,4 +1,4 @@
-#include "fem/polygon_geometry.h"
+#include "relaxed_connectivity/fem/polygon_geometry.h"
 
 #include <Eigen/Geometry>
 

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 #include <Eigen/Dense>
 
@@ -10,7 +10,7 @@
 #include <string>
 #include <utility>
 
-#include "fem/polygon_geometry.h"
+#include "relaxed_connectivity/fem/polygon_geometry.h"
 
 namespace rc {
 namespace {

@@ -7,8 +7,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "fem/convex_polyhedron.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/fem/convex_polyhedron.h"
 
 namespace rc {
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <utility>
 
-#include "fem/element_split.h"
-#include "fem/polygon_geometry.h"
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/element_split.h"
+#include "relaxed_connectivity/fem/polygon_geometry.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 namespace {

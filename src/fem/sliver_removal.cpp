@@ -1,4 +1,4 @@
-#include "fem/sliver_removal.h"
+#include "relaxed_connectivity/fem/sliver_removal.h"
 
 #include <Eigen/Eigenvalues>
 

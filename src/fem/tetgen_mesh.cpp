@@ -1,4 +1,4 @@
-#include "fem/tetgen_mesh.h"
+#include "relaxed_connectivity/fem/tetgen_mesh.h"
 
 #include <Eigen/Dense>
 
@@ -12,9 +12,9 @@
 #include <string_view>
 #include <utility>
 
-#include "io/file_bytes.h"
-#include "io/io_error.h"
-#include "io/text_lines.h"
+#include "relaxed_connectivity/io/file_bytes.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/text_lines.h"
 
 #if RC_HAVE_TETGEN
 #define TETLIBRARY

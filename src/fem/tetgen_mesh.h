@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "core/triangle_mesh.h"
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 

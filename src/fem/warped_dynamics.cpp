@@ -1,4 +1,4 @@
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 #include <Eigen/Geometry>
 #include <Eigen/OrderingMethods>
@@ -10,7 +10,7 @@
 #include <string>
 #include <utility>
 
-#include "fem/horn_registration.h"
+#include "relaxed_connectivity/fem/horn_registration.h"
 
 namespace rc {
 namespace {

@@ -27,8 +27,8 @@
 #include <memory>
 #include <vector>
 
-#include "fem/cholmod_solver.h"
-#include "fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/cholmod_solver.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
 
 namespace rc {
 

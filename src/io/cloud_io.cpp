@@ -1,12 +1,12 @@
-#include "io/cloud_io.h"
+#include "relaxed_connectivity/io/cloud_io.h"
 
-#include "io/file_bytes.h"
-#include "io/io_error.h"
-#include "io/obj_io.h"
-#include "io/off_io.h"
-#include "io/pcd_io.h"
-#include "io/ply_io.h"
-#include "io/xyz_io.h"
+#include "relaxed_connectivity/io/file_bytes.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/obj_io.h"
+#include "relaxed_connectivity/io/off_io.h"
+#include "relaxed_connectivity/io/pcd_io.h"
+#include "relaxed_connectivity/io/ply_io.h"
+#include "relaxed_connectivity/io/xyz_io.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "io/file_bytes.h"
+#include "relaxed_connectivity/io/file_bytes.h"
 
 #include <cctype>
 #include <cerrno>
@@ -6,7 +6,7 @@
 #include <cstring>
 #include <memory>
 
-#include "io/io_error.h"
+#include "relaxed_connectivity/io/io_error.h"
 
 namespace rc {
 

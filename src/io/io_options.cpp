@@ -1,4 +1,4 @@
-#include "io/io_options.h"
+#include "relaxed_connectivity/io/io_options.h"
 
 #include <cmath>
 #include <limits>

@@ -1,8 +1,8 @@
 // Options shared by every reader and writer of the I/O module.
 #pragma once
 
-#include "core/surfel_cloud.h"
-#include "core/triangle_mesh.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "io/lzf.h"
+#include "relaxed_connectivity/io/lzf.h"
 
 #include <algorithm>
 #include <cstring>

@@ -3,8 +3,8 @@
 
 #include <string>
 
-#include "core/triangle_mesh.h"
-#include "io/io_options.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+#include "relaxed_connectivity/io/io_options.h"
 
 namespace rc {
 

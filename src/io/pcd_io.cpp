@@ -1,13 +1,13 @@
-#include "io/pcd_io.h"
+#include "relaxed_connectivity/io/pcd_io.h"
 
 #include <string_view>
 
-#include "io/file_bytes.h"
-#include "io/io_error.h"
-#include "io/lzf.h"
-#include "io/scalar_codec.h"
-#include "io/surfel_fields.h"
-#include "io/text_lines.h"
+#include "relaxed_connectivity/io/file_bytes.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/lzf.h"
+#include "relaxed_connectivity/io/scalar_codec.h"
+#include "relaxed_connectivity/io/surfel_fields.h"
+#include "relaxed_connectivity/io/text_lines.h"
 
 namespace rc {
 

@@ -10,8 +10,8 @@
 
 #include <string>
 
-#include "core/surfel_cloud.h"
-#include "io/io_options.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/io/io_options.h"
 
 namespace rc {
 

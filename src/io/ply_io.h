@@ -10,9 +10,9 @@
 
 #include <string>
 
-#include "core/surfel_cloud.h"
-#include "core/triangle_mesh.h"
-#include "io/io_options.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+#include "relaxed_connectivity/io/io_options.h"
 
 namespace rc {
 

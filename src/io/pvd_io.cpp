@@ -1,9 +1,9 @@
-#include "io/pvd_io.h"
+#include "relaxed_connectivity/io/pvd_io.h"
 
 #include <cstdio>
 #include <fstream>
 
-#include "io/io_error.h"
+#include "relaxed_connectivity/io/io_error.h"
 
 namespace rc {
 

@@ -1,9 +1,9 @@
-#include "io/scalar_codec.h"
+#include "relaxed_connectivity/io/scalar_codec.h"
 
 #include <charconv>
 #include <cmath>
 
-#include "io/text_lines.h"
+#include "relaxed_connectivity/io/text_lines.h"
 
 namespace rc {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-#include "core/attribute.h"
+#include "relaxed_connectivity/core/attribute.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "io/surfel_fields.h"
+#include "relaxed_connectivity/io/surfel_fields.h"
 
 #include <algorithm>
 #include <cstring>
@@ -6,7 +6,7 @@
 #include <type_traits>
 #include <unordered_map>
 
-#include "io/io_error.h"
+#include "relaxed_connectivity/io/io_error.h"
 
 namespace rc {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "io/text_lines.h"
+#include "relaxed_connectivity/io/text_lines.h"
 
 #include <charconv>
 #include <cstring>

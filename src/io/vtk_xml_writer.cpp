@@ -1,10 +1,10 @@
-#include "io/vtk_xml_writer.h"
+#include "relaxed_connectivity/io/vtk_xml_writer.h"
 
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 
-#include "io/io_error.h"
+#include "relaxed_connectivity/io/io_error.h"
 
 namespace rc {
 

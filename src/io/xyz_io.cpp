@@ -1,11 +1,11 @@
-#include "io/xyz_io.h"
+#include "relaxed_connectivity/io/xyz_io.h"
 
 #include <string_view>
 
-#include "io/file_bytes.h"
-#include "io/io_error.h"
-#include "io/scalar_codec.h"
-#include "io/text_lines.h"
+#include "relaxed_connectivity/io/file_bytes.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/scalar_codec.h"
+#include "relaxed_connectivity/io/text_lines.h"
 
 namespace rc {
 

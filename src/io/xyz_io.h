@@ -3,8 +3,8 @@
 
 #include <string>
 
-#include "core/surfel_cloud.h"
-#include "io/io_options.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/io/io_options.h"
 
 namespace rc {
 

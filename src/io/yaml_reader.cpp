@@ -1,4 +1,4 @@
-#include "io/yaml_reader.h"
+#include "relaxed_connectivity/io/yaml_reader.h"
 
 #include <cmath>
 #include <fstream>

@@ -9,7 +9,7 @@
 #include <string>
 #include <utility>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "mesh/fast_winding_number.h"
+#include "relaxed_connectivity/mesh/fast_winding_number.h"
 
 #include <algorithm>
 #include <cmath>

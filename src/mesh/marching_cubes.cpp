@@ -1,4 +1,4 @@
-#include "mesh/marching_cubes.h"
+#include "relaxed_connectivity/mesh/marching_cubes.h"
 
 #include <omp.h>
 

@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "core/triangle_mesh.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "mesh/mesh_metrics.h"
+#include "relaxed_connectivity/mesh/mesh_metrics.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

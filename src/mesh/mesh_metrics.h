@@ -4,7 +4,7 @@
 
 #include <cstddef>
 
-#include "core/triangle_mesh.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
 

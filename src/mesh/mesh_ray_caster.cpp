@@ -1,4 +1,4 @@
-#include "mesh/mesh_ray_caster.h"
+#include "relaxed_connectivity/mesh/mesh_ray_caster.h"
 
 #include <algorithm>
 #include <cmath>

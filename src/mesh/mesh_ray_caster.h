@@ -7,7 +7,7 @@
 #include <limits>
 #include <vector>
 
-#include "core/triangle_mesh.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "mesh/surface_closing.h"
+#include "relaxed_connectivity/mesh/surface_closing.h"
 
 #include <Eigen/Geometry>
 

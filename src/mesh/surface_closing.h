@@ -8,7 +8,7 @@
 
 #include <vector>
 
-#include "core/triangle_mesh.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "mesh/surface_decimation.h"
+#include "relaxed_connectivity/mesh/surface_decimation.h"
 
 #include <Eigen/Dense>
 

@@ -4,7 +4,7 @@
 // triangle.
 #pragma once
 
-#include "core/triangle_mesh.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
 

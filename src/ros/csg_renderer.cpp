@@ -1,4 +1,4 @@
-#include "ros/csg_renderer.h"
+#include "relaxed_connectivity/ros/csg_renderer.h"
 
 #include <tf2_eigen/tf2_eigen.h>
 
@@ -8,10 +8,10 @@
 #include <limits>
 #include <stdexcept>
 
-#include "render/csg/csg_clipper.h"
-#include "render/csg/patch_clouds.h"
-#include "ros/csg_renderer_images.h"
-#include "ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/render/csg/csg_clipper.h"
+#include "relaxed_connectivity/render/csg/patch_clouds.h"
+#include "relaxed_connectivity/ros/csg_renderer_images.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace rc {
 namespace {

@@ -36,11 +36,11 @@
 #include <string>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "render/csg/csg_tree.h"
-#include "render/csg/patch_cloud_set.h"
-#include "render/splat/camera.h"
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/csg/csg_tree.h"
+#include "relaxed_connectivity/render/csg/patch_cloud_set.h"
+#include "relaxed_connectivity/render/splat/camera.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 namespace rc {
 

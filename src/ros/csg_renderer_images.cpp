@@ -1,4 +1,4 @@
-#include "ros/csg_renderer_images.h"
+#include "relaxed_connectivity/ros/csg_renderer_images.h"
 
 #include <sensor_msgs/image_encodings.h>
 #include <boost/make_shared.hpp>

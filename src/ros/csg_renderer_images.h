@@ -9,8 +9,8 @@
 
 #include <cmath>
 
-#include "render/splat/camera.h"
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/splat/camera.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 namespace rc {
 

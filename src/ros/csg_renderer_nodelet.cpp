@@ -5,7 +5,7 @@
 
 #include <memory>
 
-#include "ros/csg_renderer.h"
+#include "relaxed_connectivity/ros/csg_renderer.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "ros/fem_simulator.h"
+#include "relaxed_connectivity/ros/fem_simulator.h"
 
 #include <relaxed_connectivity/FemStats.h>
 #include <tf2_eigen/tf2_eigen.h>
@@ -11,9 +11,9 @@
 #include <limits>
 #include <stdexcept>
 
-#include "fem/fem_scene_reader.h"
-#include "ros/point_cloud2_converter.h"
-#include "ros/simulation_loop.h"
+#include "relaxed_connectivity/fem/fem_scene_reader.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/simulation_loop.h"
 
 namespace rc {
 

@@ -32,11 +32,11 @@
 #include <string>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "fem/fem_cut_polygon.h"
-#include "fem/fem_output.h"
-#include "fem/fem_simulation.h"
-#include "ros/simulation_loop.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/fem/fem_cut_polygon.h"
+#include "relaxed_connectivity/fem/fem_output.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
+#include "relaxed_connectivity/ros/simulation_loop.h"
 
 namespace rc {
 

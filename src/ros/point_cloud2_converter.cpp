@@ -1,4 +1,4 @@
-#include "ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 #include <sensor_msgs/PointField.h>
 
@@ -6,8 +6,8 @@
 #include <cstring>
 #include <set>
 
-#include "io/io_error.h"
-#include "io/surfel_fields.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/surfel_fields.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "ros/scanner_node.h"
+#include "relaxed_connectivity/ros/scanner_node.h"
 
 #include <geometry_msgs/TransformStamped.h>
 #include <tf2_eigen/tf2_eigen.h>
@@ -6,9 +6,9 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "io/cloud_io.h"
-#include "ros/point_cloud2_converter.h"
-#include "scan/procedural_models.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/scan/procedural_models.h"
 
 namespace rc {
 

@@ -18,11 +18,11 @@
 #include <string>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "core/triangle_mesh.h"
-#include "mesh/mesh_ray_caster.h"
-#include "scan/depth_sensor.h"
-#include "scan/sensor_trajectory.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+#include "relaxed_connectivity/mesh/mesh_ray_caster.h"
+#include "relaxed_connectivity/scan/depth_sensor.h"
+#include "relaxed_connectivity/scan/sensor_trajectory.h"
 
 namespace rc {
 

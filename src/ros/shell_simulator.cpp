@@ -1,4 +1,4 @@
-#include "ros/shell_simulator.h"
+#include "relaxed_connectivity/ros/shell_simulator.h"
 
 #include <relaxed_connectivity/ShellStats.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -7,9 +7,9 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "ros/point_cloud2_converter.h"
-#include "ros/simulation_loop.h"
-#include "shell/shell_scene_reader.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/simulation_loop.h"
+#include "relaxed_connectivity/shell/shell_scene_reader.h"
 
 namespace rc {
 

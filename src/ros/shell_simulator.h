@@ -30,9 +30,9 @@
 #include <string>
 #include <vector>
 
-#include "ros/simulation_loop.h"
-#include "shell/shell_applied_force.h"
-#include "shell/shell_simulation.h"
+#include "relaxed_connectivity/ros/simulation_loop.h"
+#include "relaxed_connectivity/shell/shell_applied_force.h"
+#include "relaxed_connectivity/shell/shell_simulation.h"
 
 namespace rc {
 

@@ -1,8 +1,8 @@
-#include "ros/simulation_loop.h"
+#include "relaxed_connectivity/ros/simulation_loop.h"
 
 #include <stdexcept>
 
-#include "ros/simulation_commands.h"
+#include "relaxed_connectivity/ros/simulation_commands.h"
 
 namespace rc {
 

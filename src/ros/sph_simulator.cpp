@@ -1,4 +1,4 @@
-#include "ros/sph_simulator.h"
+#include "relaxed_connectivity/ros/sph_simulator.h"
 
 #include <relaxed_connectivity/SphStats.h>
 #include <visualization_msgs/Marker.h>
@@ -9,12 +9,12 @@
 #include <limits>
 #include <stdexcept>
 
-#include "ros/point_cloud2_converter.h"
-#include "ros/simulation_loop.h"
-#include "sph/sph_output.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_simulation.h"
-#include "sph/sph_surface.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/simulation_loop.h"
+#include "relaxed_connectivity/sph/sph_output.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_simulation.h"
+#include "relaxed_connectivity/sph/sph_surface.h"
 
 namespace rc {
 

@@ -22,10 +22,10 @@
 #include <mutex>
 #include <string>
 
-#include "ros/simulation_loop.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene.h"
-#include "sph/sph_simulation.h"
+#include "relaxed_connectivity/ros/simulation_loop.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_scene.h"
+#include "relaxed_connectivity/sph/sph_simulation.h"
 
 namespace rc {
 

@@ -1,13 +1,13 @@
-#include "ros/surfel_estimator.h"
+#include "relaxed_connectivity/ros/surfel_estimator.h"
 
-#include "io/cloud_io.h"
+#include "relaxed_connectivity/io/cloud_io.h"
 
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <cmath>
 #include <stdexcept>
 
-#include "ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace rc {
 

@@ -23,8 +23,8 @@
 #include <mutex>
 #include <string>
 
-#include "scan/surfel_accumulator.h"
-#include "scan/surfel_estimation_pipeline.h"
+#include "relaxed_connectivity/scan/surfel_accumulator.h"
+#include "relaxed_connectivity/scan/surfel_estimation_pipeline.h"
 
 namespace rc {
 

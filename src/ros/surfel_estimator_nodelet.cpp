@@ -4,7 +4,7 @@
 
 #include <memory>
 
-#include "ros/surfel_estimator.h"
+#include "relaxed_connectivity/ros/surfel_estimator.h"
 
 namespace rc {
 

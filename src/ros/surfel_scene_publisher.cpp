@@ -1,4 +1,4 @@
-#include "ros/surfel_scene_publisher.h"
+#include "relaxed_connectivity/ros/surfel_scene_publisher.h"
 
 #include <relaxed_connectivity/SetCsgTree.h>
 #include <tf2_eigen/tf2_eigen.h>
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace rc {
 namespace {

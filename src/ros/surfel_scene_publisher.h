@@ -17,7 +17,7 @@
 
 #include <string>
 
-#include "render/scene/csg_scene.h"
+#include "relaxed_connectivity/render/scene/csg_scene.h"
 
 namespace rc {
 

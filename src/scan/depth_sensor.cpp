@@ -1,4 +1,4 @@
-#include "scan/depth_sensor.h"
+#include "relaxed_connectivity/scan/depth_sensor.h"
 
 #include <cmath>
 #include <limits>

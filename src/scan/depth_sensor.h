@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <string>
 
-#include "core/surfel_cloud.h"
-#include "mesh/mesh_ray_caster.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/mesh/mesh_ray_caster.h"
 
 namespace rc {
 

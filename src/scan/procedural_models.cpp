@@ -1,4 +1,4 @@
-#include "scan/procedural_models.h"
+#include "relaxed_connectivity/scan/procedural_models.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/triangle_mesh.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "scan/sensor_trajectory.h"
+#include "relaxed_connectivity/scan/sensor_trajectory.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -4,7 +4,7 @@
 
 #include <Eigen/Geometry>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

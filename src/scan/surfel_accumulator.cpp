@@ -1,4 +1,4 @@
-#include "scan/surfel_accumulator.h"
+#include "relaxed_connectivity/scan/surfel_accumulator.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "scan/surfel_estimation_pipeline.h"
+#include "relaxed_connectivity/scan/surfel_estimation_pipeline.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -6,10 +6,10 @@
 #include <Eigen/Geometry>
 #include <string>
 
-#include "core/surfel_cloud.h"
-#include "surface/mls_surface.h"
-#include "surface/normal_estimation.h"
-#include "surface/radius_estimation.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/surface/mls_surface.h"
+#include "relaxed_connectivity/surface/normal_estimation.h"
+#include "relaxed_connectivity/surface/radius_estimation.h"
 
 namespace rc {
 

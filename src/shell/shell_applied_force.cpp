@@ -1,4 +1,4 @@
-#include "shell/shell_applied_force.h"
+#include "relaxed_connectivity/shell/shell_applied_force.h"
 
 #include <cmath>
 #include <stdexcept>

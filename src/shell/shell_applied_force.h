@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "shell/shell_crack.h"
+#include "relaxed_connectivity/shell/shell_crack.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/kd_tree.h"
+#include "relaxed_connectivity/core/kd_tree.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "shell/shell_energy.h"
+#include "relaxed_connectivity/shell/shell_energy.h"
 
 #include <Eigen/Geometry>
 

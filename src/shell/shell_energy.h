@@ -25,8 +25,8 @@
 
 #include <vector>
 
-#include "shell/shell_fibers.h"
-#include "shell/shell_nodes.h"
+#include "relaxed_connectivity/shell/shell_fibers.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
 
 namespace rc {
 

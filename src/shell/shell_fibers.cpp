@@ -1,4 +1,4 @@
-#include "shell/shell_fibers.h"
+#include "relaxed_connectivity/shell/shell_fibers.h"
 
 #include <Eigen/Dense>
 #if defined(__SSE2__)

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "shell/shell_nodes.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
 
 namespace rc {
 

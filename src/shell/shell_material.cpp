@@ -1,4 +1,4 @@
-#include "shell/shell_material.h"
+#include "relaxed_connectivity/shell/shell_material.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

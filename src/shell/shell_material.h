@@ -23,10 +23,10 @@
 #include <utility>
 #include <vector>
 
-#include "shell/shell_crack.h"
-#include "shell/shell_fibers.h"
-#include "shell/shell_nodes.h"
-#include "shell/shell_solver.h"
+#include "relaxed_connectivity/shell/shell_crack.h"
+#include "relaxed_connectivity/shell/shell_fibers.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
+#include "relaxed_connectivity/shell/shell_solver.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "shell/shell_membrane_balance.h"
+#include "relaxed_connectivity/shell/shell_membrane_balance.h"
 
 #include <Eigen/Geometry>
 #include <Eigen/SparseCholesky>

@@ -18,8 +18,8 @@
 
 #include <cstddef>
 
-#include "shell/shell_fibers.h"
-#include "shell/shell_nodes.h"
+#include "relaxed_connectivity/shell/shell_fibers.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "shell/shell_nodes.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/hash_grid.h"
-#include "core/kd_tree.h"
+#include "relaxed_connectivity/core/hash_grid.h"
+#include "relaxed_connectivity/core/kd_tree.h"
 
 namespace rc {
 namespace {

@@ -1,4 +1,4 @@
-#include "shell/shell_scene.h"
+#include "relaxed_connectivity/shell/shell_scene.h"
 
 #include <cmath>
 

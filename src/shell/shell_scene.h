@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "shell/shell_material.h"
-#include "shell/shell_nodes.h"
-#include "shell/shell_solver.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/shell/shell_material.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
+#include "relaxed_connectivity/shell/shell_solver.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "shell/shell_scene_reader.h"
+#include "relaxed_connectivity/shell/shell_scene_reader.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -10,10 +10,10 @@
 #include <random>
 #include <sstream>
 
-#include "io/cloud_io.h"
-#include "io/yaml_reader.h"
-#include "surface/analytic_shapes.h"
-#include "surface/radius_estimation.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/io/yaml_reader.h"
+#include "relaxed_connectivity/surface/analytic_shapes.h"
+#include "relaxed_connectivity/surface/radius_estimation.h"
 
 namespace rc {
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "shell/shell_scene.h"
+#include "relaxed_connectivity/shell/shell_scene.h"
 
 namespace rc {
 

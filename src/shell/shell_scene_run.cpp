@@ -1,11 +1,11 @@
-#include "shell/shell_scene_run.h"
+#include "relaxed_connectivity/shell/shell_scene_run.h"
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 
-#include "io/cloud_io.h"
+#include "relaxed_connectivity/io/cloud_io.h"
 
 namespace rc {
 

@@ -5,7 +5,7 @@
 #include <functional>
 #include <string>
 
-#include "shell/shell_simulation.h"
+#include "relaxed_connectivity/shell/shell_simulation.h"
 
 namespace rc {
 

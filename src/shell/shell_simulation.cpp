@@ -1,4 +1,4 @@
-#include "shell/shell_simulation.h"
+#include "relaxed_connectivity/shell/shell_simulation.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

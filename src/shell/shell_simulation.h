@@ -5,12 +5,12 @@
 
 #include <memory>
 
-#include "core/surfel_cloud.h"
-#include "shell/shell_material.h"
-#include "shell/shell_membrane_balance.h"
-#include "shell/shell_scene.h"
-#include "shell/shell_skinning.h"
-#include "shell/shell_solver.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/shell/shell_material.h"
+#include "relaxed_connectivity/shell/shell_membrane_balance.h"
+#include "relaxed_connectivity/shell/shell_scene.h"
+#include "relaxed_connectivity/shell/shell_skinning.h"
+#include "relaxed_connectivity/shell/shell_solver.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "shell/shell_skinning.h"
+#include "relaxed_connectivity/shell/shell_skinning.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -7,8 +7,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/kd_tree.h"
-#include "core/surfel_attributes.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/core/surfel_attributes.h"
 
 namespace rc {
 namespace {

@@ -8,9 +8,9 @@
 #include <unordered_map>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "shell/shell_crack.h"
-#include "shell/shell_nodes.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/shell/shell_crack.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
 
 namespace rc {
 

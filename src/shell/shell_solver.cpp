@@ -1,4 +1,4 @@
-#include "shell/shell_solver.h"
+#include "relaxed_connectivity/shell/shell_solver.h"
 
 #include <algorithm>
 #include <cmath>

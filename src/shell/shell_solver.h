@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "shell/shell_energy.h"
-#include "shell/shell_fibers.h"
-#include "shell/shell_nodes.h"
+#include "relaxed_connectivity/shell/shell_energy.h"
+#include "relaxed_connectivity/shell/shell_fibers.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "sph/polar_decomposition.h"
+#include "relaxed_connectivity/sph/polar_decomposition.h"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "sph/sph_dam_break_surge.h"
+#include "relaxed_connectivity/sph/sph_dam_break_surge.h"
 
 #include <algorithm>
 #include <chrono>

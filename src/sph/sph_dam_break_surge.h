@@ -5,8 +5,8 @@
 
 #include <vector>
 
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
 
 namespace rc {
 

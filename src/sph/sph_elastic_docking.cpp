@@ -5,8 +5,8 @@
 
 #include <Eigen/Dense>
 
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_lattice_keys.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_lattice_keys.h"
 
 namespace rc {
 

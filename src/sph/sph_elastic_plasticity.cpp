@@ -5,7 +5,7 @@
 
 #include <Eigen/Dense>
 
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 #include <omp.h>
 
@@ -11,8 +11,8 @@
 #include <Eigen/Dense>
 #include <Eigen/SVD>
 
-#include "sph/polar_decomposition.h"
-#include "sph/sph_lattice_keys.h"
+#include "relaxed_connectivity/sph/polar_decomposition.h"
+#include "relaxed_connectivity/sph/sph_lattice_keys.h"
 
 namespace rc {
 

@@ -13,14 +13,14 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_force_term.h"
-#include "sph/sph_implicit_goal_solver.h"
-#include "sph/sph_kernels.h"
-#include "sph/sph_lattice.h"
-#include "sph/sph_lattice_keys.h"
-#include "sph/sph_particles.h"
-#include "sph/sph_sorted_grid.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_force_term.h"
+#include "relaxed_connectivity/sph/sph_implicit_goal_solver.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_lattice_keys.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
+#include "relaxed_connectivity/sph/sph_sorted_grid.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
 
 #include <omp.h>
 #ifdef __SSE2__

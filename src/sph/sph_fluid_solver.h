@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "sph/sph_force_term.h"
-#include "sph/sph_kernels.h"
-#include "sph/sph_particles.h"
-#include "sph/sph_sorted_grid.h"
+#include "relaxed_connectivity/sph/sph_force_term.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
+#include "relaxed_connectivity/sph/sph_sorted_grid.h"
 
 namespace rc {
 

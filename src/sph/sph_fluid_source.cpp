@@ -1,4 +1,4 @@
-#include "sph/sph_fluid_source.h"
+#include "relaxed_connectivity/sph/sph_fluid_source.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
 
 namespace rc {
 

@@ -6,8 +6,8 @@
 #include <limits>
 #include <vector>
 
-#include "sph/sph_kernels.h"
-#include "sph/sph_particles.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
 
 namespace rc {
 

@@ -5,8 +5,8 @@
 
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "sph/sph_particles.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "sph/sph_implicit_goal_solver.h"
+#include "relaxed_connectivity/sph/sph_implicit_goal_solver.h"
 
 #include <omp.h>
 

@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "sph/sph_particles.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
 
 namespace rc {
 

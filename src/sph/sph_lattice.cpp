@@ -1,6 +1,6 @@
-#include "sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
 
-#include "mesh/fast_winding_number.h"
+#include "relaxed_connectivity/mesh/fast_winding_number.h"
 
 #include <algorithm>
 #include <cmath>

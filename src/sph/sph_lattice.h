@@ -8,9 +8,9 @@
 
 #include <Eigen/Core>
 
-#include "core/surfel_cloud.h"
-#include "core/triangle_mesh.h"
-#include "sph/sph_kernels.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "sph/sph_object_penalty.h"
+#include "relaxed_connectivity/sph/sph_object_penalty.h"
 
 #include <omp.h>
 
@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
 
 namespace rc {
 

@@ -7,11 +7,11 @@
 #include <memory>
 #include <vector>
 
-#include "sph/sph_force_term.h"
-#include "sph/sph_implicit_goal_solver.h"
-#include "sph/sph_kernels.h"
-#include "sph/sph_particles.h"
-#include "sph/sph_sorted_grid.h"
+#include "relaxed_connectivity/sph/sph_force_term.h"
+#include "relaxed_connectivity/sph/sph_implicit_goal_solver.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
+#include "relaxed_connectivity/sph/sph_sorted_grid.h"
 
 namespace rc {
 

@@ -1,10 +1,10 @@
-#include "sph/sph_output.h"
+#include "relaxed_connectivity/sph/sph_output.h"
 
 #include <cstdint>
 #include <utility>
 
-#include "io/ply_io.h"
-#include "io/vtk_xml_writer.h"
+#include "relaxed_connectivity/io/ply_io.h"
+#include "relaxed_connectivity/io/vtk_xml_writer.h"
 
 namespace rc {
 

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

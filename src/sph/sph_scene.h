@@ -9,15 +9,15 @@
 #include <string>
 #include <vector>
 
-#include "core/triangle_mesh.h"
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_fluid_source.h"
-#include "sph/sph_object_penalty.h"
-#include "sph/sph_particles.h"
-#include "sph/sph_skinning.h"
-#include "sph/sph_surface.h"
-#include "sph/sph_thermal.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_fluid_source.h"
+#include "relaxed_connectivity/sph/sph_object_penalty.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
+#include "relaxed_connectivity/sph/sph_skinning.h"
+#include "relaxed_connectivity/sph/sph_surface.h"
+#include "relaxed_connectivity/sph/sph_thermal.h"
 
 namespace rc {
 

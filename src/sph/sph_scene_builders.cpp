@@ -1,4 +1,4 @@
-#include "sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,9 +4,9 @@
 
 #include <vector>
 
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_kernels.h"
-#include "sph/sph_particles.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
 
 namespace rc {
 

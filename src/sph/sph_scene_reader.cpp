@@ -1,6 +1,6 @@
-#include "sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
 
-#include "io/cloud_io.h"
+#include "relaxed_connectivity/io/cloud_io.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -16,11 +16,11 @@
 
 #include <Eigen/Geometry>
 
-#include "mesh/fast_winding_number.h"
-#include "sph/sph_kernels.h"
-#include "sph/sph_lattice.h"
-#include "sph/sph_scene_builders.h"
-#include "sph/sph_scene_reader_sections.h"
+#include "relaxed_connectivity/mesh/fast_winding_number.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_scene_reader_sections.h"
 
 namespace rc::sph_scene_reading {
 

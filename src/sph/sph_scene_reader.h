@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "sph/sph_scene.h"
+#include "relaxed_connectivity/sph/sph_scene.h"
 
 namespace rc {
 

@@ -12,9 +12,9 @@
 
 #include <Eigen/Core>
 
-#include "core/triangle_mesh.h"
-#include "io/yaml_reader.h"
-#include "sph/sph_scene.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+#include "relaxed_connectivity/io/yaml_reader.h"
+#include "relaxed_connectivity/sph/sph_scene.h"
 
 namespace rc::sph_scene_reading {
 

@@ -1,4 +1,4 @@
-#include "sph/sph_scene_run.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 
 #include <omp.h>
 
@@ -9,15 +9,15 @@
 #include <filesystem>
 #include <limits>
 
-#include "io/obj_io.h"
-#include "io/ply_io.h"
-#include "io/pvd_io.h"
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_fluid_source.h"
-#include "sph/sph_output.h"
-#include "sph/sph_simulation.h"
-#include "sph/sph_skinning.h"
-#include "sph/sph_surface.h"
+#include "relaxed_connectivity/io/obj_io.h"
+#include "relaxed_connectivity/io/ply_io.h"
+#include "relaxed_connectivity/io/pvd_io.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_fluid_source.h"
+#include "relaxed_connectivity/sph/sph_output.h"
+#include "relaxed_connectivity/sph/sph_simulation.h"
+#include "relaxed_connectivity/sph/sph_skinning.h"
+#include "relaxed_connectivity/sph/sph_surface.h"
 
 namespace rc {
 

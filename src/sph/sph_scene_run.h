@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene.h"
-#include "sph/sph_scene_setup.h"
-#include "sph/sph_simulation.h"
-#include "sph/sph_thermal.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_scene.h"
+#include "relaxed_connectivity/sph/sph_scene_setup.h"
+#include "relaxed_connectivity/sph/sph_simulation.h"
+#include "relaxed_connectivity/sph/sph_thermal.h"
 
 namespace rc {
 

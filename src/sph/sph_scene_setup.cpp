@@ -1,7 +1,7 @@
-#include "sph/sph_scene_setup.h"
+#include "relaxed_connectivity/sph/sph_scene_setup.h"
 
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_object_penalty.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_object_penalty.h"
 
 namespace rc {
 

@@ -6,9 +6,9 @@
 #include <memory>
 #include <vector>
 
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene.h"
-#include "sph/sph_thermal.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_scene.h"
+#include "relaxed_connectivity/sph/sph_thermal.h"
 
 namespace rc {
 

@@ -1,6 +1,6 @@
-#include "sph/sph_simulation.h"
+#include "relaxed_connectivity/sph/sph_simulation.h"
 
-#include "sph/sph_scene_setup.h"
+#include "relaxed_connectivity/sph/sph_scene_setup.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "sph/sph_skinning.h"
+#include "relaxed_connectivity/sph/sph_skinning.h"
 
 #include <algorithm>
 #include <array>
@@ -11,8 +11,8 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "core/kd_tree.h"
-#include "sph/sph_kernels.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
 
 namespace rc {
 namespace {

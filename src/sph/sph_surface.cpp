@@ -1,4 +1,4 @@
-#include "sph/sph_surface.h"
+#include "relaxed_connectivity/sph/sph_surface.h"
 
 #include <omp.h>
 
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
 
 namespace rc {
 

@@ -7,9 +7,9 @@
 #include <cstddef>
 #include <vector>
 
-#include "core/triangle_mesh.h"
-#include "mesh/marching_cubes.h"
-#include "sph/sph_particles.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+#include "relaxed_connectivity/mesh/marching_cubes.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
 
 namespace rc {
 

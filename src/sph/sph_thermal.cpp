@@ -1,4 +1,4 @@
-#include "sph/sph_thermal.h"
+#include "relaxed_connectivity/sph/sph_thermal.h"
 
 #include <omp.h>
 
@@ -9,7 +9,7 @@
 
 #include <Eigen/LU>
 
-#include "sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
 
 namespace rc {
 

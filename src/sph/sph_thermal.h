@@ -8,10 +8,10 @@
 #include <memory>
 #include <vector>
 
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_kernels.h"
-#include "sph/sph_particles.h"
-#include "sph/sph_sorted_grid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
+#include "relaxed_connectivity/sph/sph_sorted_grid.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "surface/analytic_shapes.h"
+#include "relaxed_connectivity/surface/analytic_shapes.h"
 
 #include <cmath>
 #include <numeric>

@@ -1,4 +1,4 @@
-#include "surface/inside_outside.h"
+#include "relaxed_connectivity/surface/inside_outside.h"
 
 #include <stdexcept>
 

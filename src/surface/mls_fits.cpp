@@ -1,4 +1,4 @@
-#include "surface/mls_fits.h"
+#include "relaxed_connectivity/surface/mls_fits.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>

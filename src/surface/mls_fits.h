@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "core/weight_function.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/core/weight_function.h"
 
 namespace rc {
 

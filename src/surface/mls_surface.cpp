@@ -1,4 +1,4 @@
-#include "surface/mls_surface.h"
+#include "relaxed_connectivity/surface/mls_surface.h"
 
 #include <algorithm>
 #include <atomic>
@@ -7,9 +7,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/neighbor_lists.h"
-#include "surface/mls_fits.h"
-#include "surface/normal_estimation.h"
+#include "relaxed_connectivity/core/neighbor_lists.h"
+#include "relaxed_connectivity/surface/mls_fits.h"
+#include "relaxed_connectivity/surface/normal_estimation.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "surface/normal_estimation.h"
+#include "relaxed_connectivity/surface/normal_estimation.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -6,8 +6,8 @@
 #include <queue>
 #include <stdexcept>
 
-#include "core/kd_tree.h"
-#include "surface/mls_fits.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/surface/mls_fits.h"
 
 namespace rc {
 

@@ -6,10 +6,10 @@
 #include <optional>
 #include <vector>
 
-#include "core/kd_tree.h"
-#include "core/neighbor_lists.h"
-#include "core/surfel_cloud.h"
-#include "core/weight_function.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/core/neighbor_lists.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/core/weight_function.h"
 
 namespace rc {
 

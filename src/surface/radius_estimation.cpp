@@ -1,4 +1,4 @@
-#include "surface/radius_estimation.h"
+#include "relaxed_connectivity/surface/radius_estimation.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -6,7 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "core/kd_tree.h"
+#include "relaxed_connectivity/core/kd_tree.h"
 
 namespace rc {
 

@@ -1,7 +1,7 @@
 // Surfel radii that guarantee a hole-free surface (coverage, thesis 3.3).
 #pragma once
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

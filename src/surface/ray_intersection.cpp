@@ -1,4 +1,4 @@
-#include "surface/ray_intersection.h"
+#include "relaxed_connectivity/surface/ray_intersection.h"
 
 #include <algorithm>
 #include <cmath>

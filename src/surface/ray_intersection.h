@@ -4,7 +4,7 @@
 
 #include <limits>
 
-#include "surface/mls_surface.h"
+#include "relaxed_connectivity/surface/mls_surface.h"
 
 namespace rc {
 

@@ -8,8 +8,8 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
-#include "fem/fem_scene_reader.h"
-#include "fem/fem_scene_run.h"
+#include "relaxed_connectivity/fem/fem_scene_reader.h"
+#include "relaxed_connectivity/fem/fem_scene_run.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"rc_fem: finite elements on convex polyhedra with cutting (thesis chapter 9)"};

@@ -9,11 +9,11 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "core/surfel_attributes.h"
-#include "io/cloud_io.h"
-#include "render/scene/csg_scene_renderer.h"
-#include "render/scene/framing_camera.h"
-#include "render/splat/image_io.h"
+#include "relaxed_connectivity/core/surfel_attributes.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/render/scene/csg_scene_renderer.h"
+#include "relaxed_connectivity/render/scene/framing_camera.h"
+#include "relaxed_connectivity/render/splat/image_io.h"
 
 namespace {
 

@@ -22,12 +22,12 @@
 #include <string>
 #include <vector>
 
-#include "render/csg/discontinuity_clipper.h"
-#include "render/scene/framing_camera.h"
-#include "render/splat/image_io.h"
-#include "render/splat/surfel_renderer.h"
-#include "shell/shell_scene_reader.h"
-#include "shell/shell_scene_run.h"
+#include "relaxed_connectivity/render/csg/discontinuity_clipper.h"
+#include "relaxed_connectivity/render/scene/framing_camera.h"
+#include "relaxed_connectivity/render/splat/image_io.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/shell/shell_scene_reader.h"
+#include "relaxed_connectivity/shell/shell_scene_run.h"
 
 namespace {
 

@@ -8,8 +8,8 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"rc_sph: weakly compressible SPH scenes: fluids (thesis 8.1), elastic solids (8.2)"};

@@ -9,11 +9,11 @@
 #include <cstdio>
 #include <random>
 
-#include "core/kd_tree.h"
-#include "io/cloud_io.h"
-#include "surface/mls_surface.h"
-#include "surface/normal_estimation.h"
-#include "surface/radius_estimation.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/surface/mls_surface.h"
+#include "relaxed_connectivity/surface/normal_estimation.h"
+#include "relaxed_connectivity/surface/radius_estimation.h"
 
 namespace {
 

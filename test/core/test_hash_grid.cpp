@@ -1,4 +1,4 @@
-#include "core/hash_grid.h"
+#include "relaxed_connectivity/core/hash_grid.h"
 
 #include <gtest/gtest.h>
 

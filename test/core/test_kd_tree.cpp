@@ -1,4 +1,4 @@
-#include "core/kd_tree.h"
+#include "relaxed_connectivity/core/kd_tree.h"
 
 #include <gtest/gtest.h>
 

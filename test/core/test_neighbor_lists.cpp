@@ -1,4 +1,4 @@
-#include "core/neighbor_lists.h"
+#include "relaxed_connectivity/core/neighbor_lists.h"
 
 #include <gtest/gtest.h>
 

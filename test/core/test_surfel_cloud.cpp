@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 namespace {

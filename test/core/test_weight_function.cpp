@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "core/weight_function.h"
+#include "relaxed_connectivity/core/weight_function.h"
 
 namespace rc {
 namespace {

@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
 
 namespace rc {
 

@@ -12,13 +12,13 @@
 #include <filesystem>
 #include <map>
 
-#include "fem/cholmod_solver.h"
-#include "fem/fem_scene_reader.h"
-#include "fem/fem_simulation.h"
-#include "fem/tetgen_mesh.h"
-#include "io/ply_io.h"
-#include "mesh/surface_closing.h"
-#include "mesh/surface_decimation.h"
+#include "relaxed_connectivity/fem/cholmod_solver.h"
+#include "relaxed_connectivity/fem/fem_scene_reader.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
+#include "relaxed_connectivity/fem/tetgen_mesh.h"
+#include "relaxed_connectivity/io/ply_io.h"
+#include "relaxed_connectivity/mesh/surface_closing.h"
+#include "relaxed_connectivity/mesh/surface_decimation.h"
 
 namespace rc {
 namespace {

@@ -11,13 +11,13 @@
 #include <vector>
 
 #include "cut_test_support.h"
-#include "fem/cholmod_solver.h"
-#include "fem/convex_polyhedron.h"
-#include "fem/linear_elasticity.h"
-#include "fem/plane_cut.h"
-#include "fem/polyhedral_mesh.h"
-#include "fem/warped_dynamics.h"
 #include "random_hull_support.h"
+#include "relaxed_connectivity/fem/cholmod_solver.h"
+#include "relaxed_connectivity/fem/convex_polyhedron.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/plane_cut.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 namespace rc {
 namespace {

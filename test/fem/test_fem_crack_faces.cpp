@@ -15,10 +15,10 @@
 #include <vector>
 
 #include "cut_test_support.h"
-#include "fem/linear_elasticity.h"
-#include "fem/polygon_cut.h"
-#include "fem/polyhedral_mesh.h"
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/polygon_cut.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 namespace rc {
 namespace {

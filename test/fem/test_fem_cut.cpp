@@ -13,10 +13,10 @@
 #include <utility>
 #include <vector>
 
-#include "fem/linear_elasticity.h"
-#include "fem/plane_cut.h"
-#include "fem/polyhedral_mesh.h"
 #include "patch_test_support.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/plane_cut.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 namespace {

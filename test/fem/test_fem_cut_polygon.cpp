@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "fem/fem_cut_polygon.h"
+#include "relaxed_connectivity/fem/fem_cut_polygon.h"
 
 namespace rc {
 namespace {

@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "fem/element_stiffness.h"
-#include "fem/linear_elasticity.h"
-#include "fem/polyhedral_mesh.h"
 #include "patch_test_support.h"
 #include "random_hull_support.h"
+#include "relaxed_connectivity/fem/element_stiffness.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 namespace {

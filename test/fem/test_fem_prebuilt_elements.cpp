@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "cut_test_support.h"
-#include "fem/polygon_cut.h"
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/polygon_cut.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 namespace {

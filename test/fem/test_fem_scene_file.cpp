@@ -13,13 +13,13 @@
 #include <sstream>
 
 #include "../shared_data.h"
-#include "fem/fem_mesh_source.h"
-#include "fem/fem_output.h"
-#include "fem/fem_scene_reader.h"
-#include "fem/fem_scene_run.h"
-#include "fem/fem_simulation.h"
-#include "fem/plane_cut.h"
-#include "fem/tetgen_mesh.h"
+#include "relaxed_connectivity/fem/fem_mesh_source.h"
+#include "relaxed_connectivity/fem/fem_output.h"
+#include "relaxed_connectivity/fem/fem_scene_reader.h"
+#include "relaxed_connectivity/fem/fem_scene_run.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
+#include "relaxed_connectivity/fem/plane_cut.h"
+#include "relaxed_connectivity/fem/tetgen_mesh.h"
 
 namespace rc {
 namespace {

@@ -13,12 +13,12 @@
 #include <stdexcept>
 #include <vector>
 
-#include "fem/linear_elasticity.h"
-#include "fem/plane_cut.h"
-#include "fem/polygon_cut.h"
-#include "fem/polyhedral_mesh.h"
-#include "fem/sliver_removal.h"
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/plane_cut.h"
+#include "relaxed_connectivity/fem/polygon_cut.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/sliver_removal.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 namespace rc {
 namespace {

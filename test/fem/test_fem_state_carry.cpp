@@ -11,9 +11,9 @@
 #include <memory>
 #include <tuple>
 
-#include "fem/cholmod_solver.h"
-#include "fem/fem_simulation.h"
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/cholmod_solver.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 namespace rc {
 namespace {

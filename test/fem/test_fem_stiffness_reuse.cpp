@@ -9,9 +9,9 @@
 #include <set>
 #include <vector>
 
-#include "fem/fem_simulation.h"
-#include "fem/linear_elasticity.h"
-#include "fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
 
 namespace rc {
 namespace {

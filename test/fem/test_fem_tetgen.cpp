@@ -14,13 +14,13 @@
 #include <utility>
 #include <vector>
 
-#include "fem/cholmod_solver.h"
-#include "fem/linear_elasticity.h"
-#include "fem/polyhedral_mesh.h"
-#include "fem/tetgen_mesh.h"
-#include "fem/warped_dynamics.h"
-#include "io/io_error.h"
-#include "io/off_io.h"
+#include "relaxed_connectivity/fem/cholmod_solver.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/tetgen_mesh.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/off_io.h"
 
 namespace rc {
 namespace {

@@ -17,10 +17,10 @@
 #include <omp.h>
 #endif
 
-#include "fem/horn_registration.h"
-#include "fem/linear_elasticity.h"
-#include "fem/polyhedral_mesh.h"
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/horn_registration.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/polyhedral_mesh.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 #include "warped_test_support.h"
 
 namespace rc {

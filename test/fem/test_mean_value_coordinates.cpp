@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "fem/convex_polyhedron.h"
-#include "fem/mean_value_coordinates.h"
 #include "random_hull_support.h"
+#include "relaxed_connectivity/fem/convex_polyhedron.h"
+#include "relaxed_connectivity/fem/mean_value_coordinates.h"
 
 #if defined(RC_HAVE_VTK)
 #include <vtkIdList.h>

@@ -10,8 +10,8 @@
 #include <random>
 #include <vector>
 
-#include "fem/linear_elasticity.h"
-#include "fem/warped_dynamics.h"
+#include "relaxed_connectivity/fem/linear_elasticity.h"
+#include "relaxed_connectivity/fem/warped_dynamics.h"
 
 namespace rc {
 

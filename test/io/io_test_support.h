@@ -11,8 +11,8 @@
 #include <random>
 #include <string>
 
-#include "core/surfel_cloud.h"
-#include "core/triangle_mesh.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
 namespace test {

@@ -1,13 +1,13 @@
 // Bad input gives an IoError that names the file, the place and the problem.
 #include <gtest/gtest.h>
 
-#include "io/cloud_io.h"
-#include "io/file_bytes.h"
-#include "io/io_error.h"
-#include "io/off_io.h"
-#include "io/pcd_io.h"
-#include "io/ply_io.h"
 #include "io_test_support.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/io/file_bytes.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/off_io.h"
+#include "relaxed_connectivity/io/pcd_io.h"
+#include "relaxed_connectivity/io/ply_io.h"
 
 namespace rc {
 namespace {

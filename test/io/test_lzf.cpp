@@ -2,7 +2,7 @@
 
 #include <random>
 
-#include "io/lzf.h"
+#include "relaxed_connectivity/io/lzf.h"
 
 namespace rc {
 namespace {

@@ -1,8 +1,8 @@
 #include <gtest/gtest.h>
 
-#include "io/io_error.h"
-#include "io/ply_io.h"
 #include "io_test_support.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/ply_io.h"
 
 namespace rc {
 namespace {

@@ -4,9 +4,9 @@
 
 #include <unordered_set>
 
-#include "io/cloud_io.h"
-#include "io/file_bytes.h"
 #include "io_test_support.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/io/file_bytes.h"
 
 namespace rc {
 namespace {

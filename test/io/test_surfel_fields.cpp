@@ -4,8 +4,8 @@
 
 #include <cstring>
 
-#include "io/io_error.h"
-#include "io/surfel_fields.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/surfel_fields.h"
 
 namespace rc {
 namespace {

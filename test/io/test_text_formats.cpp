@@ -1,11 +1,11 @@
 // OFF, OBJ and XYZ readers and writers.
 #include <gtest/gtest.h>
 
-#include "io/io_error.h"
-#include "io/obj_io.h"
-#include "io/off_io.h"
-#include "io/xyz_io.h"
 #include "io_test_support.h"
+#include "relaxed_connectivity/io/io_error.h"
+#include "relaxed_connectivity/io/obj_io.h"
+#include "relaxed_connectivity/io/off_io.h"
+#include "relaxed_connectivity/io/xyz_io.h"
 
 namespace rc {
 namespace {

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-#include "render/splat/camera.h"
+#include "relaxed_connectivity/render/splat/camera.h"
 
 namespace rc {
 

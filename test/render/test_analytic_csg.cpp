@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "render/csg/analytic_csg.h"
+#include "relaxed_connectivity/render/csg/analytic_csg.h"
 
 namespace rc {
 namespace {

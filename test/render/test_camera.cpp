@@ -1,4 +1,4 @@
-#include "render/splat/camera.h"
+#include "relaxed_connectivity/render/splat/camera.h"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "render/csg/clip_inside_patch.h"
+#include "relaxed_connectivity/render/csg/clip_inside_patch.h"
 
 namespace rc {
 namespace {

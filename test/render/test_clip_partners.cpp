@@ -6,8 +6,8 @@
 #include <random>
 #include <vector>
 
-#include "render/csg/clip_partners.h"
-#include "render/splat/camera.h"
+#include "relaxed_connectivity/render/csg/clip_partners.h"
+#include "relaxed_connectivity/render/splat/camera.h"
 
 namespace rc {
 namespace {

@@ -7,9 +7,9 @@
 #include <cmath>
 #include <string>
 
-#include "render/csg/clip_inside_patch.h"
-#include "render/csg/clip_program.h"
-#include "render/scene/csg_scene_renderer.h"
+#include "relaxed_connectivity/render/csg/clip_inside_patch.h"
+#include "relaxed_connectivity/render/csg/clip_program.h"
+#include "relaxed_connectivity/render/scene/csg_scene_renderer.h"
 #include "scene_test_support.h"
 
 namespace rc {

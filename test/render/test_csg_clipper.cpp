@@ -7,7 +7,7 @@
 #include <map>
 #include <vector>
 
-#include "render/csg/csg_clipper.h"
+#include "relaxed_connectivity/render/csg/csg_clipper.h"
 
 namespace rc {
 namespace {

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <string>
 
-#include "render/scene/csg_scene_renderer.h"
+#include "relaxed_connectivity/render/scene/csg_scene_renderer.h"
 #include "scene_test_support.h"
 
 namespace rc {

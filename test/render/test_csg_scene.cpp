@@ -5,8 +5,8 @@
 #include <random>
 #include <string>
 
-#include "render/csg/patch_sampling.h"
-#include "render/scene/csg_scene.h"
+#include "relaxed_connectivity/render/csg/patch_sampling.h"
+#include "relaxed_connectivity/render/scene/csg_scene.h"
 #include "scene_test_support.h"
 
 namespace rc {

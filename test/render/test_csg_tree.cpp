@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "render/csg/csg_tree.h"
+#include "relaxed_connectivity/render/csg/csg_tree.h"
 
 namespace rc {
 namespace {

@@ -1,11 +1,11 @@
-#include "render/splat/deferred_shader.h"
+#include "relaxed_connectivity/render/splat/deferred_shader.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <random>
 
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 namespace rc {
 namespace {

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "render/csg/discontinuity_clipper.h"
-#include "render/splat/camera.h"
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/csg/discontinuity_clipper.h"
+#include "relaxed_connectivity/render/splat/camera.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 using namespace rc;
 

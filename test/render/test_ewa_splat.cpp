@@ -7,8 +7,8 @@
 
 #include <cstring>
 
-#include "render/splat/circular_setup_avx2.h"
-#include "render/splat/ewa_splat.h"
+#include "relaxed_connectivity/render/splat/circular_setup_avx2.h"
+#include "relaxed_connectivity/render/splat/ewa_splat.h"
 
 namespace rc {
 namespace {

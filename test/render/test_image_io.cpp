@@ -1,4 +1,4 @@
-#include "render/splat/image_io.h"
+#include "relaxed_connectivity/render/splat/image_io.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 namespace rc {
 namespace {

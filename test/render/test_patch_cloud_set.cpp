@@ -4,8 +4,8 @@
 
 #include <stdexcept>
 
-#include "core/surfel_attributes.h"
-#include "render/csg/patch_cloud_set.h"
+#include "relaxed_connectivity/core/surfel_attributes.h"
+#include "relaxed_connectivity/render/csg/patch_cloud_set.h"
 
 namespace rc {
 namespace {

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "render/csg/patch_clouds.h"
+#include "relaxed_connectivity/render/csg/patch_clouds.h"
 
 namespace rc {
 namespace {

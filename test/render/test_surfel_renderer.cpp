@@ -1,4 +1,4 @@
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 #include <gtest/gtest.h>
 

@@ -11,8 +11,8 @@
 #include <cstring>
 #include <mutex>
 
-#include "render/scene/csg_scene.h"
-#include "ros/surfel_scene_publisher.h"
+#include "relaxed_connectivity/render/scene/csg_scene.h"
+#include "relaxed_connectivity/ros/surfel_scene_publisher.h"
 
 namespace {
 

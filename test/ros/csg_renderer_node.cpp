@@ -19,9 +19,9 @@
 #include <limits>
 #include <mutex>
 
-#include "render/csg/analytic_csg.h"
-#include "render/csg/patch_sampling.h"
-#include "ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/render/csg/analytic_csg.h"
+#include "relaxed_connectivity/render/csg/patch_sampling.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace {
 

@@ -23,10 +23,10 @@
 #include <string>
 #include <vector>
 
-#include "fem/fem_scene_reader.h"
-#include "fem/fem_simulation.h"
 #include "launch_test_support.h"
-#include "ros/fem_simulator.h"
+#include "relaxed_connectivity/fem/fem_scene_reader.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
+#include "relaxed_connectivity/ros/fem_simulator.h"
 
 namespace {
 

@@ -11,7 +11,7 @@
 #include <limits>
 #include <random>
 
-#include "ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace rc {
 namespace {

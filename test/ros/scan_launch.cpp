@@ -14,8 +14,8 @@
 #include <cstdio>
 #include <mutex>
 
-#include "io/cloud_io.h"
-#include "ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace {
 

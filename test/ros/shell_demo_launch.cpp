@@ -22,8 +22,8 @@
 #include <vector>
 
 #include "launch_test_support.h"
-#include "ros/shell_simulator.h"
-#include "shell/shell_scene_reader.h"
+#include "relaxed_connectivity/ros/shell_simulator.h"
+#include "relaxed_connectivity/shell/shell_scene_reader.h"
 
 namespace {
 

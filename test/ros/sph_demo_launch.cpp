@@ -18,7 +18,7 @@
 #include <string>
 
 #include "launch_test_support.h"
-#include "sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
 
 namespace {
 

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <limits>
 
-#include "ros/scanner_node.h"
-#include "ros/surfel_estimator.h"
-#include "scan/surfel_accumulator.h"
-#include "scan/surfel_estimation_pipeline.h"
+#include "relaxed_connectivity/ros/scanner_node.h"
+#include "relaxed_connectivity/ros/surfel_estimator.h"
+#include "relaxed_connectivity/scan/surfel_accumulator.h"
+#include "relaxed_connectivity/scan/surfel_estimation_pipeline.h"
 
 namespace rc {
 namespace {

@@ -13,7 +13,7 @@
 #include <limits>
 #include <mutex>
 
-#include "ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace {
 

@@ -12,7 +12,7 @@
 #include <mutex>
 #include <set>
 
-#include "ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace {
 

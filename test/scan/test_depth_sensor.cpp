@@ -5,9 +5,9 @@
 #include <cmath>
 #include <cstring>
 
-#include "scan/depth_sensor.h"
-#include "scan/procedural_models.h"
-#include "scan/sensor_trajectory.h"
+#include "relaxed_connectivity/scan/depth_sensor.h"
+#include "relaxed_connectivity/scan/procedural_models.h"
+#include "relaxed_connectivity/scan/sensor_trajectory.h"
 
 namespace rc {
 namespace {

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <random>
 
-#include "mesh/mesh_ray_caster.h"
-#include "scan/procedural_models.h"
+#include "relaxed_connectivity/mesh/mesh_ray_caster.h"
+#include "relaxed_connectivity/scan/procedural_models.h"
 
 namespace rc {
 namespace {

@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "mesh/mesh_metrics.h"
-#include "scan/procedural_models.h"
+#include "relaxed_connectivity/mesh/mesh_metrics.h"
+#include "relaxed_connectivity/scan/procedural_models.h"
 
 namespace rc {
 namespace {

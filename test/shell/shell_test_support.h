@@ -6,9 +6,9 @@
 #include <random>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "shell/shell_energy.h"
-#include "shell/shell_nodes.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/shell/shell_energy.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
 
 namespace rc::shell_test {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "shell/shell_applied_force.h"
+#include "relaxed_connectivity/shell/shell_applied_force.h"
 
 namespace rc {
 namespace {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "shell/shell_energy.h"
+#include "relaxed_connectivity/shell/shell_energy.h"
 #include "shell_test_support.h"
 
 namespace rc {

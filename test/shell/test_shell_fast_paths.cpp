@@ -9,10 +9,10 @@
 #include <cstdio>
 #include <random>
 
-#include "shell/shell_crack.h"
-#include "shell/shell_energy.h"
-#include "shell/shell_material.h"
-#include "shell/shell_solver.h"
+#include "relaxed_connectivity/shell/shell_crack.h"
+#include "relaxed_connectivity/shell/shell_energy.h"
+#include "relaxed_connectivity/shell/shell_material.h"
+#include "relaxed_connectivity/shell/shell_solver.h"
 #include "shell_test_support.h"
 
 namespace rc {

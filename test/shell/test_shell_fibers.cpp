@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "shell/shell_fibers.h"
+#include "relaxed_connectivity/shell/shell_fibers.h"
 #include "shell_test_support.h"
 
 namespace rc {

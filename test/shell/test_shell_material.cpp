@@ -8,9 +8,9 @@
 #include <limits>
 #include <numeric>
 
-#include "shell/shell_material.h"
-#include "shell/shell_skinning.h"
-#include "shell/shell_solver.h"
+#include "relaxed_connectivity/shell/shell_material.h"
+#include "relaxed_connectivity/shell/shell_skinning.h"
+#include "relaxed_connectivity/shell/shell_solver.h"
 #include "shell_test_support.h"
 
 namespace rc {

@@ -9,10 +9,10 @@
 #include <stdexcept>
 #include <vector>
 
-#include "shell/shell_energy.h"
-#include "shell/shell_material.h"
-#include "shell/shell_membrane_balance.h"
-#include "shell/shell_solver.h"
+#include "relaxed_connectivity/shell/shell_energy.h"
+#include "relaxed_connectivity/shell/shell_material.h"
+#include "relaxed_connectivity/shell/shell_membrane_balance.h"
+#include "relaxed_connectivity/shell/shell_solver.h"
 #include "shell_test_support.h"
 
 using namespace rc;

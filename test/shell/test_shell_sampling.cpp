@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "shell/shell_nodes.h"
+#include "relaxed_connectivity/shell/shell_nodes.h"
 #include "shell_test_support.h"
 
 namespace rc {

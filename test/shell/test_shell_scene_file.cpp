@@ -13,9 +13,9 @@
 #include <sstream>
 #include <string>
 
-#include "core/kd_tree.h"
-#include "shell/shell_scene_reader.h"
-#include "shell/shell_scene_run.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/shell/shell_scene_reader.h"
+#include "relaxed_connectivity/shell/shell_scene_run.h"
 
 using namespace rc;
 

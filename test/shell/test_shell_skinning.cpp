@@ -7,8 +7,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "shell/shell_crack.h"
-#include "shell/shell_skinning.h"
+#include "relaxed_connectivity/shell/shell_crack.h"
+#include "relaxed_connectivity/shell/shell_skinning.h"
 #include "shell_test_support.h"
 
 namespace rc {

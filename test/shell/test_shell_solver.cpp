@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <random>
 
-#include "shell/shell_solver.h"
+#include "relaxed_connectivity/shell/shell_solver.h"
 #include "shell_test_support.h"
 
 namespace rc {

@@ -3,7 +3,7 @@
 
 #include <algorithm>
 
-#include "sph/sph_particles.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
 
 namespace rc {
 

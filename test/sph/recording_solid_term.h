@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 namespace rc {
 

@@ -8,8 +8,8 @@
 #include <string>
 #include <utility>
 
-#include "core/triangle_mesh.h"
-#include "sph/sph_scene_reader.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
 
 namespace rc {
 

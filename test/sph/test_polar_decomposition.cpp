@@ -1,4 +1,4 @@
-#include "sph/polar_decomposition.h"
+#include "relaxed_connectivity/sph/polar_decomposition.h"
 
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 
 #include <Eigen/Geometry>
 
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 namespace rc {
 namespace {

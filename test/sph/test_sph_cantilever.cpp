@@ -8,9 +8,9 @@
 #include <memory>
 #include <vector>
 
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
 
 namespace rc {
 namespace {

@@ -1,5 +1,5 @@
 #include "momentum_test_support.h"
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -14,9 +14,9 @@
 
 #include <Eigen/Geometry>
 
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_lattice.h"
-#include "sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
 
 namespace rc {
 namespace {

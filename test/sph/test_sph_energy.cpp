@@ -11,9 +11,9 @@
 #include <random>
 #include <vector>
 
-#include "sph/sph_dam_break_surge.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_dam_break_surge.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
 
 namespace rc {
 namespace {

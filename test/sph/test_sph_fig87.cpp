@@ -18,12 +18,12 @@
 #include <sstream>
 #include <vector>
 
-#include "io/cloud_io.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_output.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_output.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
 
 namespace rc {
 namespace {

@@ -1,4 +1,4 @@
-#include "sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
 
 namespace rc {
 namespace {

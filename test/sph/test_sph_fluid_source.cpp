@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
+#include "relaxed_connectivity/sph/sph_fluid_source.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_fluid_source.h"
-#include "sph/sph_scene_builders.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
 
 namespace rc {
 namespace {

@@ -1,6 +1,6 @@
 // Fracture and healing through per-lattice-point docking (thesis 8.2.5), plastic flow of the rest lattice,
 // and anchoring to boundary particles, on 2D hexagonal-lattice bodies.
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -14,8 +14,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
 
 namespace rc {
 namespace {

@@ -1,7 +1,7 @@
 // The host driver of the GPU path's shared per-particle functions against the CPU solver (SphFluidSolver with
 // SphElasticSolid, explicit goal-position model): one force evaluation and short trajectories, in double
 // (agreement to rounding) and float (the GPU's precision).
-#include "sph/gpu/sph_gpu_host_solver.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_host_solver.h"
 
 #include <gtest/gtest.h>
 
@@ -10,10 +10,10 @@
 #include <memory>
 #include <stdexcept>
 
-#include "sph/gpu/sph_gpu_scene.h"
-#include "sph/gpu/sph_gpu_setup.h"
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_scene.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_setup.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
 
 namespace rc {
 namespace {

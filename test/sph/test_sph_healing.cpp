@@ -1,7 +1,7 @@
 // Healing of fractured elastic solids through docking (thesis 8.2.5): the docking rates are per unit time
 // (the docking process does not depend on the step), and pieces that are put back together dock again
 // and regain the stiffness of the unbroken solid.
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 #include <gtest/gtest.h>
 
@@ -12,8 +12,8 @@
 #include <memory>
 #include <vector>
 
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
 
 namespace rc {
 namespace {

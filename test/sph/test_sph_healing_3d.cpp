@@ -3,7 +3,7 @@
 // (fracture_strain, fracture_rate (8.34)); its piece is pushed back and held, the docking rates re-dock the
 // lattice points across the crack, and the healed bar is as stiff as an unbroken one. Without docking
 // rates it stays broken.
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 #include <gtest/gtest.h>
 
@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "recording_solid_term.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
 
 namespace rc {
 namespace {

@@ -16,14 +16,14 @@
 #include <Eigen/Geometry>
 
 #include "momentum_test_support.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_implicit_goal_solver.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_object_penalty.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_implicit_goal_solver.h"
-#include "sph/sph_lattice.h"
-#include "sph/sph_object_penalty.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
 
 namespace rc {
 namespace {

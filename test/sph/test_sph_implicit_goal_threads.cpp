@@ -6,7 +6,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "sph/sph_implicit_goal_solver.h"
+#include "relaxed_connectivity/sph/sph_implicit_goal_solver.h"
 
 namespace rc {
 namespace {

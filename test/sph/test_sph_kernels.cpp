@@ -1,4 +1,4 @@
-#include "sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
 
 #include <gtest/gtest.h>
 

@@ -15,7 +15,7 @@
 
 #include <Eigen/Geometry>
 
-#include "sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
 
 namespace rc {
 namespace {

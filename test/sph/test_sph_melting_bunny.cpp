@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "../shared_data.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
 
 namespace rc {
 namespace {

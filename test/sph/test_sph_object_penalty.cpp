@@ -1,5 +1,5 @@
 // Penalty collision handling between objects (thesis 8.2.6, (8.37)).
-#include "sph/sph_object_penalty.h"
+#include "relaxed_connectivity/sph/sph_object_penalty.h"
 
 #include <gtest/gtest.h>
 
@@ -13,9 +13,9 @@
 
 #include <Eigen/Geometry>
 
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
 
 namespace rc {
 namespace {

@@ -1,6 +1,6 @@
 // SPH scene files (config/sph), the scene runner of rc_sph and the particle outputs (PLY, VTK .vtp).
-#include "sph/sph_dam_break_surge.h"
-#include "sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_dam_break_surge.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
 
 #include <gtest/gtest.h>
 
@@ -16,13 +16,13 @@
 #include <sstream>
 
 #include "../shared_data.h"
-#include "io/cloud_io.h"
-#include "io/obj_io.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/io/obj_io.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_output.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_lattice.h"
-#include "sph/sph_output.h"
-#include "sph/sph_scene_builders.h"
-#include "sph/sph_scene_run.h"
 
 namespace rc {
 namespace {

@@ -14,13 +14,13 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "io/cloud_io.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_kernels.h"
-#include "sph/sph_lattice.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
 
 namespace rc {
 namespace {

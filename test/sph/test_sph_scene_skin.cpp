@@ -13,13 +13,13 @@
 
 #include <Eigen/Geometry>
 
-#include "core/kd_tree.h"
-#include "io/obj_io.h"
-#include "io/ply_io.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/io/obj_io.h"
+#include "relaxed_connectivity/io/ply_io.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
+#include "relaxed_connectivity/sph/sph_skinning.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
-#include "sph/sph_skinning.h"
 
 namespace rc {
 namespace {

@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_scene_reader.h"
+#include "relaxed_connectivity/sph/sph_scene_run.h"
+#include "relaxed_connectivity/sph/sph_thermal.h"
 #include "scene_file_test_support.h"
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_scene_reader.h"
-#include "sph/sph_scene_run.h"
-#include "sph/sph_thermal.h"
 
 namespace rc {
 namespace {

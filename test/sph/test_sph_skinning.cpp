@@ -1,4 +1,4 @@
-#include "sph/sph_skinning.h"
+#include "relaxed_connectivity/sph/sph_skinning.h"
 
 #include <gtest/gtest.h>
 
@@ -12,9 +12,9 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_kernels.h"
-#include "sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
 
 namespace rc {
 namespace {

@@ -1,4 +1,4 @@
-#include "sph/sph_surface.h"
+#include "relaxed_connectivity/sph/sph_surface.h"
 
 #include <gtest/gtest.h>
 

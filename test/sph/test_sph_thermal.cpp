@@ -1,4 +1,4 @@
-#include "sph/sph_thermal.h"
+#include "relaxed_connectivity/sph/sph_thermal.h"
 
 #include <gtest/gtest.h>
 
@@ -14,10 +14,10 @@
 
 #include <Eigen/Geometry>
 
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_lattice.h"
-#include "sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
 
 namespace rc {
 namespace {

@@ -6,9 +6,9 @@
 #include <random>
 #include <vector>
 
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_scene_builders.h"
-#include "sph/sph_thermal.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_thermal.h"
 
 namespace rc {
 namespace {

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "sph/sph_dam_break_surge.h"
+#include "relaxed_connectivity/sph/sph_dam_break_surge.h"
 
 namespace rc {
 namespace {

@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <random>
 
-#include "surface/analytic_shapes.h"
-#include "surface/mls_surface.h"
+#include "relaxed_connectivity/surface/analytic_shapes.h"
+#include "relaxed_connectivity/surface/mls_surface.h"
 
 namespace rc {
 namespace {

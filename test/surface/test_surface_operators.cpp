@@ -4,15 +4,15 @@
 #include <cmath>
 #include <random>
 
-#include "core/kd_tree.h"
-#include "core/neighbor_lists.h"
-#include "surface/analytic_shapes.h"
-#include "surface/inside_outside.h"
-#include "surface/mls_fits.h"
-#include "surface/mls_surface.h"
-#include "surface/normal_estimation.h"
-#include "surface/radius_estimation.h"
-#include "surface/ray_intersection.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/core/neighbor_lists.h"
+#include "relaxed_connectivity/surface/analytic_shapes.h"
+#include "relaxed_connectivity/surface/inside_outside.h"
+#include "relaxed_connectivity/surface/mls_fits.h"
+#include "relaxed_connectivity/surface/mls_surface.h"
+#include "relaxed_connectivity/surface/normal_estimation.h"
+#include "relaxed_connectivity/surface/radius_estimation.h"
+#include "relaxed_connectivity/surface/ray_intersection.h"
 
 namespace rc {
 namespace {

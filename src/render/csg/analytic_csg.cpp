@@ -1,4 +1,4 @@
-#include "render/csg/analytic_csg.h"
+#include "relaxed_connectivity/render/csg/analytic_csg.h"
 
 #include <algorithm>
 #include <cmath>

@@ -8,9 +8,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "render/csg/csg_tree.h"
-#include "render/splat/camera.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/csg/csg_tree.h"
+#include "relaxed_connectivity/render/splat/camera.h"
 
 namespace rc {
 

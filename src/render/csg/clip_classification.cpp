@@ -1,11 +1,11 @@
-#include "render/csg/clip_classification.h"
+#include "relaxed_connectivity/render/csg/clip_classification.h"
 
 #include <algorithm>
 #include <memory>
 #include <stdexcept>
 
-#include "core/kd_tree.h"
-#include "render/csg/clip_inside_patch.h"
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/render/csg/clip_inside_patch.h"
 
 namespace rc {
 

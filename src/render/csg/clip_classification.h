@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "render/csg/clip_partners.h"
-#include "render/csg/clip_surfel_discs.h"
-#include "render/csg/csg_tree.h"
+#include "relaxed_connectivity/render/csg/clip_partners.h"
+#include "relaxed_connectivity/render/csg/clip_surfel_discs.h"
+#include "relaxed_connectivity/render/csg/csg_tree.h"
 
 namespace rc {
 

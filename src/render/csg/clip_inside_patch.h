@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <limits>
 
-#include "core/surfel_cloud.h"
-#include "render/csg/csg_tri_logic.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/csg/csg_tri_logic.h"
 
 namespace rc {
 

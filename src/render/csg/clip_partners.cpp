@@ -1,4 +1,4 @@
-#include "render/csg/clip_partners.h"
+#include "relaxed_connectivity/render/csg/clip_partners.h"
 
 #include <omp.h>
 #include <Eigen/Core>
@@ -8,7 +8,7 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "core/kd_tree.h"
+#include "relaxed_connectivity/core/kd_tree.h"
 
 namespace rc {
 

@@ -10,8 +10,8 @@
 #include <memory>
 #include <vector>
 
-#include "render/csg/clip_surfel_discs.h"
-#include "render/splat/camera.h"
+#include "relaxed_connectivity/render/csg/clip_surfel_discs.h"
+#include "relaxed_connectivity/render/splat/camera.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "render/csg/clip_program.h"
+#include "relaxed_connectivity/render/csg/clip_program.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <limits>
 
-#include "render/csg/clip_inside_patch.h"
+#include "relaxed_connectivity/render/csg/clip_inside_patch.h"
 
 namespace rc {
 

@@ -13,8 +13,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "render/splat/ewa_splat.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/splat/ewa_splat.h"
 
 namespace rc {
 

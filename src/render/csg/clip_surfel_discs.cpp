@@ -1,4 +1,4 @@
-#include "render/csg/clip_surfel_discs.h"
+#include "relaxed_connectivity/render/csg/clip_surfel_discs.h"
 
 #include <algorithm>
 #include <cmath>

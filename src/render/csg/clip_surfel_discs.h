@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/surfel_attributes.h"
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_attributes.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

@@ -1,10 +1,10 @@
-#include "render/csg/csg_clipper.h"
+#include "relaxed_connectivity/render/csg/csg_clipper.h"
 
 #include <algorithm>
 #include <cstring>
 #include <stdexcept>
 
-#include "render/csg/clip_inside_patch.h"
+#include "relaxed_connectivity/render/csg/clip_inside_patch.h"
 
 namespace rc {
 

@@ -7,13 +7,13 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "render/csg/clip_classification.h"
-#include "render/csg/clip_partners.h"
-#include "render/csg/clip_surfel_discs.h"
-#include "render/csg/csg_tree.h"
-#include "render/splat/camera.h"
-#include "render/splat/fragment_clipper.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/csg/clip_classification.h"
+#include "relaxed_connectivity/render/csg/clip_partners.h"
+#include "relaxed_connectivity/render/csg/clip_surfel_discs.h"
+#include "relaxed_connectivity/render/csg/csg_tree.h"
+#include "relaxed_connectivity/render/splat/camera.h"
+#include "relaxed_connectivity/render/splat/fragment_clipper.h"
 
 namespace rc {
 

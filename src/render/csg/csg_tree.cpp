@@ -1,4 +1,4 @@
-#include "render/csg/csg_tree.h"
+#include "relaxed_connectivity/render/csg/csg_tree.h"
 
 #include <algorithm>
 #include <cctype>

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "render/csg/csg_tri_logic.h"
+#include "relaxed_connectivity/render/csg/csg_tri_logic.h"
 
 namespace rc {
 

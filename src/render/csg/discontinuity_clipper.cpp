@@ -1,11 +1,11 @@
-#include "render/csg/discontinuity_clipper.h"
+#include "relaxed_connectivity/render/csg/discontinuity_clipper.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-#include "core/kd_tree.h"
+#include "relaxed_connectivity/core/kd_tree.h"
 
 namespace rc {
 namespace {

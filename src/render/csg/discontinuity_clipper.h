@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "render/splat/fragment_clipper.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/splat/fragment_clipper.h"
 
 namespace rc {
 

@@ -1,8 +1,8 @@
-#include "render/csg/patch_cloud_set.h"
+#include "relaxed_connectivity/render/csg/patch_cloud_set.h"
 
 #include <algorithm>
 
-#include "core/surfel_attributes.h"
+#include "relaxed_connectivity/core/surfel_attributes.h"
 
 namespace rc {
 

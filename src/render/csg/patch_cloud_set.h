@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "render/csg/csg_clipper.h"
-#include "render/csg/csg_tree.h"
-#include "render/csg/patch_clouds.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/csg/csg_clipper.h"
+#include "relaxed_connectivity/render/csg/csg_tree.h"
+#include "relaxed_connectivity/render/csg/patch_clouds.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "render/csg/patch_clouds.h"
+#include "relaxed_connectivity/render/csg/patch_clouds.h"
 
 #include <algorithm>
 #include <cmath>

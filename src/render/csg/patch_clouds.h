@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "core/surfel_attributes.h"
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_attributes.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "render/csg/patch_sampling.h"
+#include "relaxed_connectivity/render/csg/patch_sampling.h"
 
 #include <Eigen/SVD>
 #include <cmath>

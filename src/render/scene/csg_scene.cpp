@@ -1,5 +1,5 @@
-#include "render/scene/csg_scene.h"
-#include "io/yaml_reader.h"
+#include "relaxed_connectivity/render/scene/csg_scene.h"
+#include "relaxed_connectivity/io/yaml_reader.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -10,7 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "render/csg/patch_sampling.h"
+#include "relaxed_connectivity/render/csg/patch_sampling.h"
 
 namespace rc {
 

@@ -62,11 +62,11 @@
 #include <string>
 #include <vector>
 
-#include "core/surfel_attributes.h"
-#include "core/surfel_cloud.h"
-#include "render/csg/analytic_csg.h"
-#include "render/csg/csg_tree.h"
-#include "render/splat/camera.h"
+#include "relaxed_connectivity/core/surfel_attributes.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/csg/analytic_csg.h"
+#include "relaxed_connectivity/render/csg/csg_tree.h"
+#include "relaxed_connectivity/render/splat/camera.h"
 
 namespace rc {
 

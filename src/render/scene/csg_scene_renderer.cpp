@@ -1,4 +1,4 @@
-#include "render/scene/csg_scene_renderer.h"
+#include "relaxed_connectivity/render/scene/csg_scene_renderer.h"
 
 #include <chrono>
 #include <cmath>

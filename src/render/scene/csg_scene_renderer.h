@@ -5,9 +5,9 @@
 
 #include <memory>
 
-#include "render/csg/csg_clipper.h"
-#include "render/scene/csg_scene.h"
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/csg/csg_clipper.h"
+#include "relaxed_connectivity/render/scene/csg_scene.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "render/scene/framing_camera.h"
+#include "relaxed_connectivity/render/scene/framing_camera.h"
 
 #include <stdexcept>
 

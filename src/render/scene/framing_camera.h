@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "render/splat/camera.h"
+#include "relaxed_connectivity/render/splat/camera.h"
 
 namespace rc {
 

@@ -6,7 +6,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
-#include "core/surfel_cloud.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
 

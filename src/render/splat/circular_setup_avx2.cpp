@@ -1,11 +1,11 @@
-#include "render/splat/circular_setup_avx2.h"
+#include "relaxed_connectivity/render/splat/circular_setup_avx2.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
 
-#include "render/splat/tile_passes_avx2.h"
+#include "relaxed_connectivity/render/splat/tile_passes_avx2.h"
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define RC_AVX2_SETUP 1

@@ -3,7 +3,7 @@
 // common case (edge-on, the plane depth undefined over the box) are set up by setupCircularEwaSplat.
 #pragma once
 
-#include "render/splat/ewa_splat.h"
+#include "relaxed_connectivity/render/splat/ewa_splat.h"
 
 namespace rc {
 

@@ -1,4 +1,4 @@
-#include "render/splat/deferred_shader.h"
+#include "relaxed_connectivity/render/splat/deferred_shader.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -10,7 +10,7 @@
 #include <cstring>
 #include <limits>
 
-#include "render/splat/tile_passes_avx2.h"
+#include "relaxed_connectivity/render/splat/tile_passes_avx2.h"
 
 namespace rc {
 

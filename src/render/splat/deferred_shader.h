@@ -8,9 +8,9 @@
 #include <array>
 #include <cstdint>
 
-#include "core/surfel_cloud.h"
-#include "render/splat/ewa_splat.h"
-#include "render/splat/splat_config.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/splat/ewa_splat.h"
+#include "relaxed_connectivity/render/splat/splat_config.h"
 
 namespace rc {
 

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <stdexcept>
 
-#include "render/splat/deferred_shader.h"
+#include "relaxed_connectivity/render/splat/deferred_shader.h"
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define RC_AVX2_SHADING 1

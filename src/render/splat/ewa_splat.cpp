@@ -1,4 +1,4 @@
-#include "render/splat/ewa_splat.h"
+#include "relaxed_connectivity/render/splat/ewa_splat.h"
 
 #include <algorithm>
 #include <cmath>

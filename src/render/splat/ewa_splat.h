@@ -8,8 +8,8 @@
 #include <Eigen/Core>
 #include <cstdint>
 
-#include "core/surfel_cloud.h"
-#include "render/splat/camera.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/splat/camera.h"
 
 namespace rc {
 

@@ -4,8 +4,8 @@
 
 #include <cstdint>
 
-#include "core/surfel_cloud.h"
-#include "render/csg/clip_program.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/csg/clip_program.h"
 
 namespace rc {
 

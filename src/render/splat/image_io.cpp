@@ -1,4 +1,4 @@
-#include "render/splat/image_io.h"
+#include "relaxed_connectivity/render/splat/image_io.h"
 
 #include <array>
 #include <cstdio>
@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 // stb with internal linkage, so other translation units may include their own copies.
 #define STB_IMAGE_WRITE_STATIC

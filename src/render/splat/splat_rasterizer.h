@@ -10,7 +10,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "render/splat/ewa_splat.h"
+#include "relaxed_connectivity/render/splat/ewa_splat.h"
 
 namespace rc {
 namespace splat_tile {

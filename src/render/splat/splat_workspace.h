@@ -9,8 +9,8 @@
 #include <type_traits>
 #include <vector>
 
-#include "render/csg/clip_program.h"
-#include "render/splat/ewa_splat.h"
+#include "relaxed_connectivity/render/csg/clip_program.h"
+#include "relaxed_connectivity/render/splat/ewa_splat.h"
 
 namespace rc {
 

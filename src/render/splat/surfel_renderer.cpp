@@ -1,4 +1,4 @@
-#include "render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/splat/surfel_renderer.h"
 
 #include <omp.h>
 #if defined(__SSE2__)
@@ -15,12 +15,12 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/surfel_attributes.h"
-#include "render/splat/circular_setup_avx2.h"
-#include "render/splat/deferred_shader.h"
-#include "render/splat/ewa_splat.h"
-#include "render/splat/splat_rasterizer.h"
-#include "render/splat/tile_passes_avx2.h"
+#include "relaxed_connectivity/core/surfel_attributes.h"
+#include "relaxed_connectivity/render/splat/circular_setup_avx2.h"
+#include "relaxed_connectivity/render/splat/deferred_shader.h"
+#include "relaxed_connectivity/render/splat/ewa_splat.h"
+#include "relaxed_connectivity/render/splat/splat_rasterizer.h"
+#include "relaxed_connectivity/render/splat/tile_passes_avx2.h"
 
 namespace rc {
 

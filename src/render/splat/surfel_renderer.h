@@ -8,11 +8,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/surfel_cloud.h"
-#include "render/splat/camera.h"
-#include "render/splat/fragment_clipper.h"
-#include "render/splat/splat_config.h"
-#include "render/splat/splat_workspace.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/render/splat/camera.h"
+#include "relaxed_connectivity/render/splat/fragment_clipper.h"
+#include "relaxed_connectivity/render/splat/splat_config.h"
+#include "relaxed_connectivity/render/splat/splat_workspace.h"
 
 namespace rc {
 

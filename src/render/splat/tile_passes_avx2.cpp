@@ -1,4 +1,4 @@
-#include "render/splat/tile_passes_avx2.h"
+#include "relaxed_connectivity/render/splat/tile_passes_avx2.h"
 
 #include <algorithm>
 #include <stdexcept>

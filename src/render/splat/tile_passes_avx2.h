@@ -7,8 +7,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "render/splat/ewa_splat.h"
-#include "render/splat/splat_rasterizer.h"
+#include "relaxed_connectivity/render/splat/ewa_splat.h"
+#include "relaxed_connectivity/render/splat/splat_rasterizer.h"
 
 namespace rc {
 namespace splat_tile {

@@ -2,7 +2,7 @@
 // src/ros/csg_renderer.h).
 #include <ros/ros.h>
 
-#include "ros/csg_renderer.h"
+#include "relaxed_connectivity/ros/csg_renderer.h"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "csg_renderer");

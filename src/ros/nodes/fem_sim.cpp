@@ -2,7 +2,7 @@
 // (see src/ros/fem_simulator.h).
 #include <ros/ros.h>
 
-#include "ros/fem_simulator.h"
+#include "relaxed_connectivity/ros/fem_simulator.h"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "fem_sim");

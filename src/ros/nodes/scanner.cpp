@@ -1,7 +1,7 @@
 // scanner node: simulated or file-based point cloud source (see src/ros/scanner_node.h).
 #include <ros/ros.h>
 
-#include "ros/scanner_node.h"
+#include "relaxed_connectivity/ros/scanner_node.h"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "scanner");

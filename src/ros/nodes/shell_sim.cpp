@@ -2,7 +2,7 @@
 // forces on nodes by service (see src/ros/shell_simulator.h).
 #include <ros/ros.h>
 
-#include "ros/shell_simulator.h"
+#include "relaxed_connectivity/ros/shell_simulator.h"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "shell_sim");

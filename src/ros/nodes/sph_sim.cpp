@@ -1,7 +1,7 @@
 // sph_sim node: an SPH scene in real time, particles as PointCloud2 (see src/ros/sph_simulator.h).
 #include <ros/ros.h>
 
-#include "ros/sph_simulator.h"
+#include "relaxed_connectivity/ros/sph_simulator.h"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "sph_sim");

@@ -1,7 +1,7 @@
 // surfel_estimator node: point clouds in, surfels out (see src/ros/surfel_estimator.h).
 #include <ros/ros.h>
 
-#include "ros/surfel_estimator.h"
+#include "relaxed_connectivity/ros/surfel_estimator.h"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "surfel_estimator");

@@ -2,7 +2,7 @@
 // src/ros/surfel_scene_publisher.h).
 #include <ros/ros.h>
 
-#include "ros/surfel_scene_publisher.h"
+#include "relaxed_connectivity/ros/surfel_scene_publisher.h"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "surfel_scene_publisher");

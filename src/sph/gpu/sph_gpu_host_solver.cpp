@@ -1,4 +1,4 @@
-#include "sph/gpu/sph_gpu_host_solver.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_host_solver.h"
 
 #include <omp.h>
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "sph/gpu/sph_gpu_system.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_system.h"
 
 namespace rc {
 

@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include "sph/gpu/sph_gpu_math.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_math.h"
 
 namespace rc {
 

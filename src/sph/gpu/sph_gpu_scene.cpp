@@ -1,12 +1,12 @@
-#include "sph/gpu/sph_gpu_scene.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_scene.h"
 
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-#include "sph/sph_kernels.h"
-#include "sph/sph_lattice.h"
-#include "sph/sph_scene_builders.h"
+#include "relaxed_connectivity/sph/sph_kernels.h"
+#include "relaxed_connectivity/sph/sph_lattice.h"
+#include "relaxed_connectivity/sph/sph_scene_builders.h"
 
 namespace rc {
 

@@ -4,9 +4,9 @@
 
 #include <vector>
 
-#include "sph/gpu/sph_gpu_setup.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_particles.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_setup.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
 
 namespace rc {
 

@@ -7,10 +7,10 @@
 
 #include <Eigen/Core>
 
-#include "sph/gpu/sph_gpu_system.h"
-#include "sph/sph_elastic_solid.h"
-#include "sph/sph_fluid_solver.h"
-#include "sph/sph_particles.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_system.h"
+#include "relaxed_connectivity/sph/sph_elastic_solid.h"
+#include "relaxed_connectivity/sph/sph_fluid_solver.h"
+#include "relaxed_connectivity/sph/sph_particles.h"
 
 namespace rc {
 

@@ -11,8 +11,8 @@
 #include <memory>
 #include <string>
 
-#include "sph/gpu/sph_gpu_host_solver.h"
-#include "sph/gpu/sph_gpu_system.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_host_solver.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_system.h"
 
 namespace rc {
 

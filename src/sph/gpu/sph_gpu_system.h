@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "sph/gpu/sph_gpu_kernels.h"
+#include "relaxed_connectivity/sph/gpu/sph_gpu_kernels.h"
 
 namespace rc {
 
