@@ -1,0 +1,81 @@
+// The brush skeleton of thesis 5.4: linear springs (5.1) between handle points, which follow the device
+// rigidly, and active masses integrated with Verlet.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "relaxed_connectivity/paint/brush_preset.h"
+
+namespace rc {
+
+struct BrushSpring {
+  int a, b;  ///< node indices (handle points first, then active masses)
+  double rest_length;
+  double stiffness;  ///< K_s [N/m]
+  double damping;    ///< [N s/m]
+};
+
+/// Thrown when the skeleton blows up (non-finite or runaway positions): names the step and the cause.
+class BrushInstability : public std::runtime_error {
+ public:
+  explicit BrushInstability(const std::string& message) : std::runtime_error(message) {}
+};
+
+/// Skeleton state. Node i < handleCount() is a handle point, the rest are active masses. Rest positions are
+/// in the brush frame (see BrushPreset), current positions in the world frame.
+class BrushSkeleton {
+ public:
+  explicit BrushSkeleton(const BrushPreset& preset);
+
+  int handleCount() const { return handle_count_; }
+  int nodeCount() const { return int(rest_.size()); }
+  int activeCount() const { return nodeCount() - handle_count_; }
+  bool isHandle(int node) const { return node < handle_count_; }
+  const std::vector<Vec3>& restPositions() const { return rest_; }
+  const std::vector<Vec3>& positions() const { return x_; }
+  const std::vector<BrushSpring>& springs() const { return springs_; }
+  /// Handle points in the brush frame (the contract with the haptic driver: handle point i of a preset).
+  std::vector<Vec3> handleOffsets() const;
+  const Eigen::Isometry3d& handlePose() const { return pose_; }
+  double mass() const { return mass_; }
+
+  /// Places the brush at `world_T_brush` in its rest shape, at rest (no velocity).
+  void reset(const Eigen::Isometry3d& world_T_brush);
+  /// One Verlet step of length dt: the handle points jump rigidly to `world_T_brush` (the caller interpolates
+  /// the device pose over substeps), the active masses integrate spring (5.1), damping and gravity forces.
+  /// Throws BrushInstability on non-finite or runaway positions (farther than 10 bristle lengths from the
+  /// handle), naming the step and the likely cause.
+  void step(double dt, const Eigen::Isometry3d& world_T_brush);
+  /// Overwrites the position of an active mass (collision projection (5.5)); its velocity keeps the
+  /// tangential part and loses the part along `normal` that points into the surface.
+  void projectActive(int node, const Vec3& position, const Vec3& normal);
+  /// Current velocity of a node (from the last step).
+  Vec3 velocity(int node) const;
+  /// Sum of the spring forces the active masses exert on the handle points [N], world frame.
+  Vec3 bristleForce() const;
+  /// Kinetic energy of the active masses [J].
+  double kineticEnergy() const;
+  long steps() const { return steps_; }
+
+  /// Largest stable step of the undamped explicit (Verlet) integration at the rest shape: 2 / omega_max with
+  /// omega_max^2 the largest eigenvalue of M^-1 K (handle points fixed), reduced for the dashpots (the
+  /// damped oscillator limit 2 / omega (sqrt(1 + zeta^2) - zeta)).
+  double stepLimit() const;
+
+ private:
+  Vec3 springForce(const BrushSpring& s, const std::vector<Vec3>& x, const std::vector<Vec3>& v) const;
+
+  BrushPreset preset_;
+  int handle_count_ = 0;
+  double mass_ = 0;
+  std::vector<Vec3> rest_;
+  std::vector<BrushSpring> springs_;
+  std::vector<Vec3> x_, x_prev_, v_;
+  Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
+  double last_dt_ = 0;
+  long steps_ = 0;
+};
+
+}  // namespace rc
