@@ -1,0 +1,93 @@
+// The simulated brush of thesis 5.4: skeleton dynamics, collision of the spring end points with the painted
+// object (5.4.1), the skinned brush surface, and splitting (5.4.3). Advanced once per main-loop event with
+// the device pose; hands the contact parameters of its handle points to the haptic force loop (5.4.2).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "relaxed_connectivity/paint/brush_skin.h"
+#include "relaxed_connectivity/paint/brush_split.h"
+#include "relaxed_connectivity/paint/force_shading.h"
+
+namespace rc {
+
+/// Contact of one handle point: what the force loop needs to evaluate K_p d N - eta d v_t.
+struct HandlePointContact {
+  int index = 0;                 ///< handle point of the preset
+  double depth = 0;              ///< d (5.2) [m] > 0
+  Vec3 normal = Vec3::UnitZ();   ///< N (5.3), unit
+  Vec3 position = Vec3::Zero();  ///< where d was evaluated (world)
+};
+
+struct BrushOptions {
+  /// Exact collision passes (kd-tree query + force shading, (5.2)-(5.5)) over the active masses per event;
+  /// the last one is at the end of the event. Each costs one query per active mass near the surface.
+  int collision_passes = 1;
+  /// Between exact passes, every substep also projects each active mass onto the tangent plane of its last
+  /// exact contact (one dot product), so bristles slide on the surface instead of sinking into it until the
+  /// next pass. Used within `proxy_reach` (a fraction of the bristle length) of that contact, measured along
+  /// the plane.
+  bool plane_proxy = true;
+  double proxy_reach = 0.25;
+  bool update_skin = true;  ///< deform the skin after each event (off: skeleton only)
+};
+
+struct BrushEventStats {
+  int substeps = 0;
+  int queries = 0;     ///< kd-tree queries
+  int projected = 0;   ///< active-mass projections (5.5)
+  double deepest = 0;  ///< deepest active mass before its projection [m]
+};
+
+class Brush {
+ public:
+  explicit Brush(const BrushPreset& preset, BrushOptions options = {});
+
+  const BrushPreset& preset() const { return preset_; }
+  const BrushSkeleton& skeleton() const { return skeleton_; }
+  const BrushSkin& skin() const { return skin_; }
+  BrushSkin& skin() { return skin_; }
+
+  /// Places the brush at rest at `world_T_brush`.
+  void reset(const Eigen::Isometry3d& world_T_brush);
+  /// One main-loop event: the device moved from the last pose to `world_T_brush` over dt seconds. Steps the
+  /// skeleton in preset time steps (the handle follows the interpolated pose), projects colliding active
+  /// masses onto the surface (5.5) in `collision_passes` passes, evaluates the handle contacts at the new
+  /// pose, splits (5.4.3) and skins. `surface` may be null (free space). Throws BrushInstability.
+  BrushEventStats advance(double dt, const Eigen::Isometry3d& world_T_brush, const PaintSurface* surface);
+
+  /// Handle points inside the object after the last event.
+  const std::vector<HandlePointContact>& handleContacts() const { return handle_contacts_; }
+  /// Contacts of the active masses (index = active mass) from the last collision pass.
+  const std::vector<SurfaceContact>& activeContacts() const { return active_contacts_; }
+  /// The split state of the last event (tips hold active-mass indices).
+  const BrushSplit& split() const { return split_; }
+
+ private:
+  /// What the last exact query of a node proved: outside with no original surfel within `clearance` of
+  /// `from` (so it stays outside while it moves less than clearance - margin), and the tangent plane there.
+  struct NodeCache {
+    bool outside = false;
+    Vec3 from = Vec3::Zero();
+    double clearance = 0;
+    bool has_plane = false;
+    Vec3 plane_point = Vec3::Zero(), plane_normal = Vec3::UnitZ();
+  };
+  /// Force shading at node's position, or none when its cache proves it outside.
+  SurfaceContact contactOf(int node, const PaintSurface& surface, BrushEventStats* stats);
+  void collideActives(const PaintSurface& surface, BrushEventStats* stats);
+  void collideWithPlanes();
+  void collideHandles(const PaintSurface& surface, BrushEventStats* stats);
+
+  BrushPreset preset_;
+  BrushOptions options_;
+  BrushSkeleton skeleton_;
+  BrushSkin skin_;
+  std::vector<HandlePointContact> handle_contacts_;
+  std::vector<SurfaceContact> active_contacts_;
+  BrushSplit split_;
+  std::vector<NodeCache> cache_;
+};
+
+}  // namespace rc

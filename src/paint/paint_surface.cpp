@@ -1,0 +1,106 @@
+#include "relaxed_connectivity/paint/paint_surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rc {
+
+PaintSurface::PaintSurface(SurfelCloud originals) : originals_(std::move(originals)) {
+  originals_.validate();
+  if (originals_.empty()) throw std::invalid_argument("PaintSurface: the object has no surfels");
+  if (!originals_.hasNormals())
+    throw std::invalid_argument("PaintSurface: the object's surfels need normals");
+  for (size_t i = 0; i < originals_.size(); ++i)
+    if (!originals_.positions[i].allFinite() || !originals_.normals[i].allFinite() ||
+        originals_.normals[i].norm() == 0)
+      throw std::invalid_argument("PaintSurface: surfel " + std::to_string(i) +
+                                  " has a non-finite position or normal, or a zero normal");
+  for (Vec3& n : originals_.normals) n.normalize();
+  tree_ = std::make_unique<KdTree>(originals_.positions);
+  enabled_.assign(originals_.size(), 1);
+  children_.resize(originals_.size());
+  enabled_count_ = originals_.size();
+  std::vector<double> scale;
+  const size_t stride = std::max<size_t>(1, originals_.size() / 1000);
+  for (size_t i = 0; i < originals_.size(); i += stride) {
+    if (originals_.hasRadii()) {
+      scale.push_back(originals_.radii[i]);
+    } else {
+      Neighbor n[2];
+      if (tree_->knn(originals_.positions[i], 2, n) == 2) scale.push_back(std::sqrt(n[1].sq_dist));
+    }
+  }
+  if (!scale.empty()) {
+    std::nth_element(scale.begin(), scale.begin() + scale.size() / 2, scale.end());
+    typical_radius_ = scale[scale.size() / 2];
+  }
+}
+
+uint32_t PaintSurface::closestOriginal(const Vec3& x) const {
+  Neighbor n;
+  tree_->knn(x, 1, &n);
+  return n.index;
+}
+
+void PaintSurface::setEnabled(size_t original, bool enabled) {
+  if (enabled_[original] == uint8_t(enabled)) return;
+  enabled_[original] = enabled;
+  enabled ? ++enabled_count_ : --enabled_count_;
+}
+
+uint32_t PaintSurface::addChild(const ChildSurfel& child) {
+  const uint32_t father = closestOriginal(child.position);
+  addChild(father, child);
+  return father;
+}
+
+void PaintSurface::addChild(uint32_t father, const ChildSurfel& child) {
+  children_.at(father).push_back(child);
+  ++child_count_;
+  setEnabled(father, false);
+}
+
+void PaintSurface::clearChildren(size_t original) {
+  child_count_ -= children_.at(original).size();
+  children_[original].clear();
+  children_[original].shrink_to_fit();
+  setEnabled(original, true);
+}
+
+SurfelCloud PaintSurface::activeCloud() const {
+  SurfelCloud out;
+  const size_t n = activeCount();
+  out.positions.reserve(n);
+  out.normals.reserve(n);
+  out.radii.reserve(n);
+  out.colors.reserve(n);
+  Attribute& father = out.attributes.add("father", ScalarType::kUInt32, 1, 0);
+  father.bytes.reserve(n * 4);
+  const auto to_byte = [](double c) { return uint8_t(std::lround(255.0 * std::clamp(c, 0.0, 1.0))); };
+  const auto push_father = [&](uint32_t i) {
+    const auto* b = reinterpret_cast<const uint8_t*>(&i);
+    father.bytes.insert(father.bytes.end(), b, b + 4);
+  };
+  for (size_t i = 0; i < originals_.size(); ++i) {
+    if (enabled_[i]) {
+      out.positions.push_back(originals_.positions[i]);
+      out.normals.push_back(originals_.normals[i]);
+      out.radii.push_back(originals_.hasRadii() ? originals_.radii[i] : 0.0);
+      out.colors.push_back(originals_.hasColors() ? originals_.colors[i] : Rgba{255, 255, 255, 255});
+      push_father(uint32_t(i));
+    }
+    for (const ChildSurfel& c : children_[i]) {
+      out.positions.push_back(c.position);
+      out.normals.push_back(c.normal);
+      out.radii.push_back(c.radius);
+      out.colors.push_back({to_byte(c.colour[0]), to_byte(c.colour[1]), to_byte(c.colour[2]), 255});
+      push_father(uint32_t(i));
+    }
+  }
+  if (!originals_.hasRadii() && child_count_ == 0) out.radii.clear();
+  return out;
+}
+
+}  // namespace rc

@@ -1,0 +1,71 @@
+// The object being painted (thesis 5.3, Fig. 5.2): the original surfels in a static kd-tree, each with a list
+// of child surfels that replace it after resampling. Originals are never deleted (collision uses only them);
+// a replaced original is disabled for rendering and paint transfer, children are removed and added freely.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "relaxed_connectivity/core/kd_tree.h"
+#include "relaxed_connectivity/core/neighbor.h"
+#include "relaxed_connectivity/core/surfel_cloud.h"
+
+namespace rc {
+
+/// A surfel that replaced (part of) an original after resampling (5.5): its geometry and colour. The paint
+/// model adds its paint attributes alongside.
+struct ChildSurfel {
+  Vec3 position;
+  Vec3 normal;
+  double radius = 0;
+  Vec3 colour = Vec3::Zero();  ///< linear RGB, 0..1
+};
+
+class PaintSurface {
+ public:
+  /// Takes the original surfels (positions and unit normals required, radii optional) and builds the kd-tree
+  /// once. Throws std::invalid_argument for an empty cloud, missing normals or non-finite positions/normals.
+  explicit PaintSurface(SurfelCloud originals);
+
+  const SurfelCloud& originals() const { return originals_; }
+  size_t originalCount() const { return originals_.size(); }
+  const KdTree& tree() const { return *tree_; }
+  /// The median surfel radius (without radii: the median distance to the nearest other original, over a
+  /// sample): the sampling scale collision margins use.
+  double typicalRadius() const { return typical_radius_; }
+
+  /// The k original surfels nearest to x, sorted by distance (squared distances); returns how many.
+  size_t nearestOriginals(const Vec3& x, size_t k, Neighbor* out) const { return tree_->knn(x, k, out); }
+  /// The original surfel closest to x: the father a new child surfel is assigned to (5.5).
+  uint32_t closestOriginal(const Vec3& x) const;
+
+  /// Whether original i is rendered and painted (false once children replace it).
+  bool enabled(size_t original) const { return enabled_[original] != 0; }
+  void setEnabled(size_t original, bool enabled);
+  const std::vector<ChildSurfel>& children(size_t original) const { return children_[original]; }
+  /// Appends a child to its father (the closest original, or `father` when given) and disables the father.
+  /// Returns the father.
+  uint32_t addChild(const ChildSurfel& child);
+  void addChild(uint32_t father, const ChildSurfel& child);
+  /// Removes every child of `original` (deleted children are dropped, 5.5) and re-enables it (downsampling,
+  /// 5.5.2).
+  void clearChildren(size_t original);
+
+  size_t childCount() const { return child_count_; }
+  /// Surfels shown and painted: enabled originals plus all children.
+  size_t activeCount() const { return enabled_count_ + child_count_; }
+  /// The active surfels as one cloud (positions, normals, radii, colours) for rendering and export; the
+  /// uint32 attribute `father` names each surfel's original.
+  SurfelCloud activeCloud() const;
+
+ private:
+  SurfelCloud originals_;
+  std::unique_ptr<KdTree> tree_;
+  std::vector<uint8_t> enabled_;
+  std::vector<std::vector<ChildSurfel>> children_;
+  size_t enabled_count_ = 0;
+  size_t child_count_ = 0;
+  double typical_radius_ = 0;
+};
+
+}  // namespace rc
