@@ -26,6 +26,7 @@ Layout roundLayout(const BrushPreset& p) {
     const double a = 2 * kPi * i / p.handle_ring;
     l.handles.push_back(Vec3(p.radius * std::cos(a), p.radius * std::sin(a), 0));
   }
+  l.handles.push_back(Vec3(0, 0, 0.5 * p.bristle_length));  // apex inside the handle (see flatLayout)
   std::vector<int> all_handles(l.handles.size());
   for (size_t i = 0; i < all_handles.size(); ++i) all_handles[i] = int(i);
   for (int c = 0; c < p.chains; ++c) {
@@ -49,8 +50,12 @@ Layout flatLayout(const BrushPreset& p) {
   const auto across = [&](int c) {
     return p.chains == 1 ? 0.0 : p.radius * (2.0 * c / (p.chains - 1) - 1.0);
   };
-  for (int c = 0; c < p.chains; ++c)
+  // Per chain: front and back on the ferrule plane, and an apex inside the handle. Without points off the
+  // ferrule plane a bristle mirrored through it would have the same spring lengths: the brush could flip.
+  for (int c = 0; c < p.chains; ++c) {
     for (double y : {-0.5 * p.thickness, 0.5 * p.thickness}) l.handles.push_back(Vec3(across(c), y, 0));
+    l.handles.push_back(Vec3(across(c), 0, 0.5 * p.bristle_length));
+  }
   for (int c = 0; c < p.chains; ++c) {
     std::vector<int> chain, hangs;
     for (int k = 1; k <= p.segments; ++k) {
@@ -58,7 +63,7 @@ Layout flatLayout(const BrushPreset& p) {
       l.actives.push_back(Vec3(across(c), 0, -p.bristle_length * double(k) / p.segments));
     }
     for (int d = std::max(0, c - 1); d <= std::min(p.chains - 1, c + 1); ++d)
-      for (int r = 0; r < 2; ++r) hangs.push_back(2 * d + r);
+      for (int r = 0; r < 3; ++r) hangs.push_back(3 * d + r);
     l.chains.push_back(chain);
     l.chain_handles.push_back(hangs);
   }

@@ -19,10 +19,10 @@ Eigen::Isometry3d somePose() {
 
 TEST(BrushSkeleton, LayoutsMatchFigure53) {
   const BrushSkeleton round{BrushPreset()};
-  EXPECT_EQ(round.handleCount(), 7);  // axis + ring of 6
+  EXPECT_EQ(round.handleCount(), 8);  // axis + ring of 6 + apex
   EXPECT_EQ(round.activeCount(), 3);
   const BrushSkeleton flat(paint_test::flatPreset());
-  EXPECT_EQ(flat.handleCount(), 8);  // front and back per chain
+  EXPECT_EQ(flat.handleCount(), 12);  // front, back and apex per chain
   EXPECT_EQ(flat.activeCount(), 12);
   for (const BrushSpring& s : flat.springs()) {
     EXPECT_GT(s.rest_length, 0);
@@ -83,10 +83,13 @@ TEST(BrushSkeleton, StepLimitSeparatesStableFromUnstableSteps) {
       const double early = peakEnergyAfterKick(p, 0.95 * limit, 0, 200);
       EXPECT_GT(early, 0);
       EXPECT_LE(peakEnergyAfterKick(p, 0.95 * limit, 4800, 5000), 1.01 * early) << "damping " << damping;
-      // Above it the brush blows up, and says so with the step and the limit.
+      // Above it the brush blows up, and says so with the step and the limit. Undamped the limit is sharp
+      // (within 1 %: measured blow-up from 0.993x, the stretched springs stiffen); with dashpots it is
+      // conservative (measured blow-up from 1.10x-1.24x for damping 0.01-0.03).
+      const double above = damping == 0 ? 1.05 : 1.3;
       try {
-        peakEnergyAfterKick(p, 1.1 * limit, 0, 5000);
-        ADD_FAILURE() << "no instability reported at 1.1x the step limit, damping " << damping;
+        peakEnergyAfterKick(p, above * limit, 0, 5000);
+        ADD_FAILURE() << "no instability reported at " << above << "x the step limit, damping " << damping;
       } catch (const BrushInstability& e) {
         const std::string what = e.what();
         EXPECT_NE(what.find("at step"), std::string::npos) << what;
