@@ -20,7 +20,17 @@ void Brush::reset(const Eigen::Isometry3d& world_T_brush) {
   active_contacts_.assign(skeleton_.activeCount(), SurfaceContact());
   split_ = BrushSplit();
   cache_.assign(skeleton_.nodeCount(), NodeCache());
-  skin_.update(skeleton_);
+  skin_stale_ = true;
+}
+
+const BrushSkin& Brush::skin() const {
+  if (skin_stale_) skin_.update(skeleton_), skin_stale_ = false;
+  return skin_;
+}
+
+BrushSkin& Brush::skin() {
+  static_cast<const Brush*>(this)->skin();
+  return skin_;
 }
 
 BrushEventStats Brush::advance(double dt, const Eigen::Isometry3d& world_T_brush,
@@ -58,7 +68,7 @@ BrushEventStats Brush::advance(double dt, const Eigen::Isometry3d& world_T_brush
   for (int a = 0; a < skeleton_.activeCount(); ++a)
     if (active_contacts_[a].inside) colliding.push_back(a), normals.push_back(active_contacts_[a].normal);
   split_ = splitBrush(colliding, normals, preset_.split_angle_deg);
-  if (options_.update_skin) skin_.update(skeleton_);
+  skin_stale_ = true;
   return stats;
 }
 

@@ -30,7 +30,6 @@ struct BrushOptions {
   /// the plane.
   bool plane_proxy = true;
   double proxy_reach = 0.25;
-  bool update_skin = true;  ///< deform the skin after each event (off: skeleton only)
 };
 
 struct BrushEventStats {
@@ -46,8 +45,10 @@ class Brush {
 
   const BrushPreset& preset() const { return preset_; }
   const BrushSkeleton& skeleton() const { return skeleton_; }
-  const BrushSkin& skin() const { return skin_; }
-  BrushSkin& skin() { return skin_; }
+  /// The skin deformed to the current skeleton; skinned on first access after an event (an event whose skin
+  /// nobody reads costs no skinning).
+  const BrushSkin& skin() const;
+  BrushSkin& skin();
 
   /// Places the brush at rest at `world_T_brush`.
   void reset(const Eigen::Isometry3d& world_T_brush);
@@ -83,7 +84,8 @@ class Brush {
   BrushPreset preset_;
   BrushOptions options_;
   BrushSkeleton skeleton_;
-  BrushSkin skin_;
+  mutable BrushSkin skin_;
+  mutable bool skin_stale_ = false;
   std::vector<HandlePointContact> handle_contacts_;
   std::vector<SurfaceContact> active_contacts_;
   BrushSplit split_;

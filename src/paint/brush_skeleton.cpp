@@ -128,7 +128,8 @@ Vec3 BrushSkeleton::springForce(const BrushSpring& s, const std::vector<Vec3>& x
 }
 
 void BrushSkeleton::step(double dt, const Eigen::Isometry3d& world_T_brush) {
-  std::vector<Vec3> force(x_.size(), Vec3::Zero());
+  std::vector<Vec3>& force = force_;
+  force.assign(x_.size(), Vec3::Zero());
   for (const BrushSpring& s : springs_) {
     const Vec3 f = springForce(s, x_, v_);
     force[s.a] += f;

@@ -74,6 +74,7 @@ class BrushSkeleton {
   std::vector<Vec3> rest_;
   std::vector<BrushSpring> springs_;
   std::vector<Vec3> x_, x_prev_, v_;
+  std::vector<Vec3> force_;  // scratch of step()
   Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
   double last_dt_ = 0;
   long steps_ = 0;
