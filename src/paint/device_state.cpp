@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/paint/device_state.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace rc {
@@ -25,31 +26,31 @@ PoseProblem checkDevicePose(const Vec3& position, const Eigen::Quaterniond& orie
 
 DeviceState DeviceVelocityEstimator::update(double t, const Vec3& position,
                                             const Eigen::Quaterniond& orientation) {
-  if (has_previous_ && !(t > t_prev_)) has_previous_ = false;  // restarted stream
-  if (!has_previous_) {
-    v_.setZero();
-    w_.setZero();
-  } else if (t - t_prev_ >= min_interval_) {
-    const double dt = t - t_prev_;
-    v_ = (position - p_prev_) / dt;
-    // Rotation from the previous orientation to this one, in the base frame: q = dq * q_prev.
-    Eigen::AngleAxisd dq(orientation * q_prev_.conjugate());
-    double angle = dq.angle();
-    if (angle > M_PI) angle -= 2 * M_PI;  // the short way round
-    w_ = dq.axis() * (angle / dt);
-  }
-  if (!has_previous_ || t - t_prev_ >= min_interval_) {
-    t_prev_ = t;
-    p_prev_ = position;
-    q_prev_ = orientation;
-    has_previous_ = true;
-  }
+  if (count_ > 0 && !(t > kept_[newest_].t)) count_ = 0;  // restarted stream
+  newest_ = (newest_ + 1) % kKept;
+  kept_[newest_] = {t, position, orientation};
+  count_ = std::min(count_ + 1, kKept);
   DeviceState state;
-  state.pose = Eigen::Isometry3d::Identity();
   state.pose.linear() = orientation.toRotationMatrix();
   state.pose.translation() = position;
-  state.linear_velocity = v_;
-  state.angular_velocity = w_;
+  if (count_ < 2) return state;
+  // The newest pose at least `baseline_` older, else the oldest kept.
+  int reference = (newest_ - count_ + 1 + kKept) % kKept;
+  for (int back = 1; back < count_; ++back) {
+    const int i = (newest_ - back + kKept) % kKept;
+    if (t - kept_[i].t >= baseline_) {
+      reference = i;
+      break;
+    }
+  }
+  const Stamped& r = kept_[reference];
+  const double dt = t - r.t;
+  state.linear_velocity = (position - r.position) / dt;
+  // Rotation from the reference orientation to this one, in the base frame: q = dq * q_ref.
+  const Eigen::AngleAxisd dq(orientation * r.orientation.conjugate());
+  double angle = dq.angle();
+  if (angle > M_PI) angle -= 2 * M_PI;  // the short way round
+  state.angular_velocity = dq.axis() * (angle / dt);
   return state;
 }
 
