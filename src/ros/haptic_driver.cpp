@@ -53,6 +53,8 @@ void HapticDriverParams::validate() const {
   if (!(filter_window > 0) || !std::isfinite(filter_window))
     fail("filter_window must be > 0 s (got " + std::to_string(filter_window) + ")");
   if (!(stats_period > 0)) fail("stats_period must be > 0 s");
+  if (!(start_delay >= 0) || !std::isfinite(start_delay))
+    fail("start_delay must be >= 0 s (got " + std::to_string(start_delay) + ")");
   if (base_frame.empty() || world_frame.empty() || base_frame == world_frame)
     fail("base_frame and world_frame must be two different non-empty frames");
   if (base_pose.size() != 6) fail("base_pose must be [x, y, z, roll, pitch, yaw]");
@@ -83,6 +85,7 @@ HapticDriverParams readHapticDriverParams(const ros::NodeHandle& pnh) {
   pnh.param("base_pose", p.base_pose, p.base_pose);
   pnh.param("realtime_priority", p.realtime_priority, p.realtime_priority);
   pnh.param("stats_period", p.stats_period, p.stats_period);
+  pnh.param("start_delay", p.start_delay, p.start_delay);
   p.validate();
   return p;
 }
@@ -107,10 +110,12 @@ HapticDriver::HapticDriver(ros::NodeHandle nh, ros::NodeHandle private_nh, Hapti
   if (params_.device == "topic") held_device_ = static_cast<HeldPoseDevice*>(device_.get());
   const std::string& d = params_.device_name;
   const ros::TransportHints no_delay = ros::TransportHints().tcpNoDelay();
-  force_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>(d + "/force_feedback", 100);
+  // An unpaced replay publishes its ticks in a burst: an unbounded outgoing queue (0) keeps every one.
+  const uint32_t queue = device_->paced() ? 100 : 0;
+  force_pub_ = nh_.advertise<geometry_msgs::WrenchStamped>(d + "/force_feedback", queue);
   stats_pub_ = nh_.advertise<relaxed_connectivity::HapticLoopStats>(d + "/stats", 10);
   if (device_->publishesPose()) {
-    pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>(d + "/pose", 100);
+    pose_pub_ = nh_.advertise<geometry_msgs::PoseStamped>(d + "/pose", queue);
     button_pub_ = nh_.advertise<relaxed_connectivity::HapticButtons>(d + "/button", 10, /*latch=*/true);
   } else {
     pose_sub_ = nh_.subscribe(d + "/pose", 100, &HapticDriver::poseCallback, this, no_delay);
@@ -134,9 +139,12 @@ HapticDriver::HapticDriver(ros::NodeHandle nh, ros::NodeHandle private_nh, Hapti
   base.transform.rotation.w = q.w();
   static_tf_.sendTransform(base);
 
-  start_stamp_ = ros::Time::now();
   publisher_ = std::thread([this] { publishLoop(); });
-  loop_.start([this](uint64_t k, double t) { return tick(k, t); });
+  if (params_.start_delay > 0)
+    start_timer_ = nh_.createWallTimer(
+        ros::WallDuration(params_.start_delay), [this](const ros::WallTimerEvent&) { startLoop(); }, true);
+  else
+    startLoop();
   ROS_INFO_STREAM("haptic_driver: device "
                   << params_.device << " ('" << d << "'), brush " << brush.name << " (" << law_.handleCount()
                   << " handle points), " << params_.rate << " Hz force loop"
@@ -153,6 +161,11 @@ HapticDriver::~HapticDriver() {
   loop_.stop();
   ring_not_empty_.notify_all();
   if (publisher_.joinable()) publisher_.join();
+}
+
+void HapticDriver::startLoop() {
+  start_stamp_ = ros::Time::now();  // read by the publisher thread only after the first tick (ring mutex)
+  loop_.start([this](uint64_t k, double t) { return tick(k, t); });
 }
 
 void HapticDriver::poseCallback(const geometry_msgs::PoseStampedConstPtr& msg) {

@@ -11,7 +11,7 @@
 // Parameters  (private) device (replay | marker | topic), device_name, brush (preset file, required), stroke
 //             (replay), real_time (replay), rate, filter_window, depth_mode (plane | constant),
 //             stale_timeout, fade_time, add_bristle_force, base_frame, world_frame, base_pose ([x, y, z,
-//             roll, pitch, yaw]), realtime_priority, stats_period. See docs/haptic_driver.md.
+//             roll, pitch, yaw]), realtime_priority, stats_period, start_delay. See docs/haptic_driver.md.
 #pragma once
 
 #include <geometry_msgs/PoseStamped.h>
@@ -49,6 +49,8 @@ struct HapticDriverParams {
   std::vector<double> base_pose = {0, 0, 0, 0, 0, 0};  ///< world -> base: x y z [m], roll pitch yaw [rad]
   int realtime_priority = 0;
   double stats_period = 1.0;
+  double start_delay =
+      0;  ///< [s] before the loop starts (lets subscribers connect, e.g. to an unpaced replay)
 
   /// Throws std::invalid_argument naming the parameter and the bad value.
   void validate() const;
@@ -82,6 +84,7 @@ class HapticDriver {
     double fade = 0;
   };
 
+  void startLoop();
   bool tick(uint64_t k, double t);
   void publishLoop();
   void publishStats(const TickOutput& last);
@@ -91,6 +94,7 @@ class HapticDriver {
   std::unique_ptr<HapticDevice> device_;
   HeldPoseDevice* held_device_ = nullptr;  // device_ when poses come from the pose topic
   ros::Subscriber pose_sub_, contact_sub_;
+  ros::WallTimer start_timer_;
   ros::Publisher force_pub_, pose_pub_, button_pub_, stats_pub_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   ros::Time start_stamp_;
