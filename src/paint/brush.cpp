@@ -7,6 +7,10 @@
 
 namespace rc {
 
+namespace {
+constexpr int kProjectionIterations = 4;  // projections (5.5) per collision of an active mass
+}  // namespace
+
 Brush::Brush(const BrushPreset& preset, BrushOptions options)
     : preset_(preset), options_(options), skeleton_(preset), skin_(preset, skeleton_) {
   if (options_.collision_passes < 1) throw std::invalid_argument("Brush: collision_passes must be >= 1");
@@ -78,8 +82,9 @@ SurfaceContact Brush::contactOf(int node, const PaintSurface& surface, BrushEven
   // Conservative advancement: outside, and no surfel within reach of where it was proven outside.
   if (cache.outside && (x - cache.from).norm() < cache.clearance - 2 * surface.typicalRadius())
     return SurfaceContact();
-  std::array<Neighbor, 64> found;
-  const size_t count = surface.nearestOriginals(x, size_t(preset_.collision_neighbors), found.data());
+  std::array<Neighbor, 64>& found = neighbours_;
+  const size_t count = neighbour_count_ =
+      surface.nearestOriginals(x, size_t(preset_.collision_neighbors), found.data());
   ++stats->queries;
   const SurfaceContact c = forceShade(surface.originals(), x, found.data(), count);
   cache.outside = !c.inside;
@@ -98,7 +103,16 @@ void Brush::collideActives(const PaintSurface& surface, BrushEventStats* stats) 
     const SurfaceContact c = contactOf(node, surface, stats);
     if (c.inside) {
       stats->deepest = std::max(stats->deepest, c.depth);
-      skeleton_.projectActive(node, x + c.depth * c.normal, c.normal);  // (5.5)
+      // (5.5); near an edge the blended normal leaves the mass inside after one projection (by up to 0.3 d at
+      // a right angle), so it is repeated with the same neighbours while the mass is inside.
+      Vec3 y = x + c.depth * c.normal;
+      for (int k = 1; k < kProjectionIterations; ++k) {
+        const SurfaceContact again = forceShade(surface.originals(), y, neighbours_.data(), neighbour_count_);
+        if (!again.inside) break;
+        y += again.depth * again.normal;
+      }
+      skeleton_.projectActive(node, y, c.normal);
+      cache_[node].plane_point = y;
       ++stats->projected;
     }
     active_contacts_[a] = c;  // the pre-projection contact: which masses touch and the surface normal there

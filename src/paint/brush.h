@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <array>
 #include <vector>
 
 #include "relaxed_connectivity/paint/brush_skin.h"
@@ -90,6 +91,8 @@ class Brush {
   std::vector<SurfaceContact> active_contacts_;
   BrushSplit split_;
   std::vector<NodeCache> cache_;
+  std::array<Neighbor, 64> neighbours_;  // of the last query (contactOf)
+  size_t neighbour_count_ = 0;
 };
 
 }  // namespace rc

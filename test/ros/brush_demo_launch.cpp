@@ -1,0 +1,64 @@
+// launch/brush_demo.launch end to end: stroke replay -> paint_model brush on the board -> haptic_driver
+// force.
+#include <geometry_msgs/WrenchStamped.h>
+#include <gtest/gtest.h>
+#include <relaxed_connectivity/BrushContact.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <algorithm>
+#include <mutex>
+
+TEST(BrushDemoLaunch, TheStrokeBendsTheBristlesAndTheDeviceFeelsIt) {
+  ros::NodeHandle nh;
+  std::mutex mutex;
+  double largest_bristle_force = 0, largest_device_force = 0;
+  size_t contacts = 0, forces = 0, skins = 0, skeletons = 0;
+  auto contact_sub =
+      nh.subscribe<relaxed_connectivity::BrushContact>("brush_contact", 100, [&](const auto& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++contacts;
+        largest_bristle_force = std::max(largest_bristle_force, m->bristle_force.z);
+      });
+  auto force_sub =
+      nh.subscribe<geometry_msgs::WrenchStamped>("haptic/force_feedback", 2000, [&](const auto& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++forces;
+        largest_device_force = std::max(largest_device_force, m->wrench.force.z);
+      });
+  auto skin_sub = nh.subscribe<sensor_msgs::PointCloud2>("brush/skin", 5, [&](const auto& m) {
+    std::lock_guard<std::mutex> lock(mutex);
+    skins += m->width * m->height > 1000;
+  });
+  auto skeleton_sub = nh.subscribe<visualization_msgs::MarkerArray>("brush/skeleton", 5, [&](const auto& m) {
+    std::lock_guard<std::mutex> lock(mutex);
+    skeletons += m->markers.size() == 3;
+  });
+  // The straight stroke takes 4 s after the driver's start delay; wait until the bristles have pressed.
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(45.0);
+  while (ros::WallTime::now() < end) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (largest_bristle_force > 0.05 && largest_device_force > 0.05 && skins > 0 && skeletons > 0) break;
+    }
+    ros::WallDuration(0.1).sleep();
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  EXPECT_GT(contacts, 10u);
+  EXPECT_GT(forces, 500u);
+  // The bent bristles push the stylus up (newtons), and the force loop passes that on to the device.
+  EXPECT_GT(largest_bristle_force, 0.05);
+  EXPECT_GT(largest_device_force, 0.05);
+  EXPECT_GT(skins, 0u);
+  EXPECT_GT(skeletons, 0u);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "brush_demo_launch_test");
+  ros::NodeHandle nh;
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  return RUN_ALL_TESTS();
+}
