@@ -77,7 +77,7 @@ TEST(HapticDriverBadInput, DropsCountsFadesAndKeepsPublishing) {
   // Bad input, each kind once: dropped, counted; the force does not change.
   pose_pub.publish(pose(NAN, 1));
   pose_pub.publish(pose(0.01, 1.2));
-  contact_pub.publish(axisContact(7, kDepth));  // the round brush has handle points 0..6
+  contact_pub.publish(axisContact(8, kDepth));  // the round brush has handle points 0..7
   contact_pub.publish(axisContact(0, NAN));
   const size_t stats_before = stats.size();
   ASSERT_TRUE(waitFor([&] { return stats.size() > stats_before + 1; }, 5.0));
