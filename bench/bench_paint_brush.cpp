@@ -13,6 +13,7 @@
 
 #include "relaxed_connectivity/paint/brush.h"
 #include "relaxed_connectivity/paint/brush_preset_reader.h"
+#include "relaxed_connectivity/surface/analytic_shapes.h"
 
 #ifdef RC_HAVE_PCL
 #include <pcl/kdtree/kdtree_flann.h>
@@ -28,16 +29,9 @@ constexpr double kRadius = 0.1;      // object: a sphere of 10 cm radius
 constexpr double kEvent = 1.0 / 30;  // the thesis' main-loop period
 constexpr double kSpeed = 0.1;       // stroke speed [m/s]
 
+/// The object: a Fibonacci-sampled sphere with exact normals and radii covering the sampling.
 rc::SurfelCloud sphere(size_t count) {
-  rc::SurfelCloud c;
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (size_t i = 0; i < count; ++i) {
-    const double z = 1.0 - (2.0 * i + 1.0) / count;
-    const double s = std::sqrt(1.0 - z * z);
-    const Vec3 n(s * std::cos(golden * i), s * std::sin(golden * i), z);
-    c.positions.push_back(kRadius * n);
-    c.normals.push_back(n);
-  }
+  rc::SurfelCloud c = rc::AnalyticSphere(Vec3::Zero(), kRadius).sample(count);
   c.radii.assign(count, kRadius * std::sqrt(4.0 / count));
   return c;
 }

@@ -87,9 +87,13 @@ def core_tally(ctest_junit, gtest_dir):
 
 def ros_tally(result_dir):
     tally = Tally("rostest (catkin package)")
-    wrappers = sorted(glob.glob(os.path.join(result_dir, "**", "rostest-*.xml"), recursive=True))
+    # catkin writes MISSING-rostest-<name>.xml (one failed case) for a rostest that produced no results, e.g.
+    # a launch file that does not parse: it counts as failed, never as absent.
+    wrappers = sorted(glob.glob(os.path.join(result_dir, "**", "rostest-*.xml"), recursive=True) +
+                      glob.glob(os.path.join(result_dir, "**", "MISSING-rostest-*.xml"), recursive=True))
     for wrapper in wrappers:
-        base = os.path.basename(wrapper)[len("rostest-"):-len(".xml")]  # test_ros_<name>
+        base = os.path.basename(wrapper)
+        base = base[base.index("rostest-") + len("rostest-"):-len(".xml")]  # test_ros_<name>
         name = base[len("test_ros_"):] if base.startswith("test_ros_") else base
         unit = os.path.join(os.path.dirname(wrapper), "rosunit-%s.xml" % name)
         cases = gtest_cases(unit) if os.path.exists(unit) else []

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace rc {
 
@@ -11,9 +12,17 @@ namespace {
 constexpr int kProjectionIterations = 4;  // projections (5.5) per collision of an active mass
 }  // namespace
 
+void BrushOptions::validate() const {
+  if (collision_passes < 1)
+    throw std::invalid_argument("collision_passes must be >= 1 (got " + std::to_string(collision_passes) +
+                                ")");
+  if (!(proxy_reach > 0) || !std::isfinite(proxy_reach))
+    throw std::invalid_argument("proxy_reach must be positive (got " + std::to_string(proxy_reach) + ")");
+}
+
 Brush::Brush(const BrushPreset& preset, BrushOptions options)
     : preset_(preset), options_(options), skeleton_(preset), skin_(preset, skeleton_) {
-  if (options_.collision_passes < 1) throw std::invalid_argument("Brush: collision_passes must be >= 1");
+  options_.validate();
   active_contacts_.resize(skeleton_.activeCount());
   cache_.resize(skeleton_.nodeCount());
 }

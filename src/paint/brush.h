@@ -31,6 +31,9 @@ struct BrushOptions {
   /// the plane.
   bool plane_proxy = true;
   double proxy_reach = 0.25;
+
+  /// Throws std::invalid_argument naming the bad option.
+  void validate() const;
 };
 
 struct BrushEventStats {

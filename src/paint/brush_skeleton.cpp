@@ -174,10 +174,6 @@ void BrushSkeleton::projectActive(int node, const Vec3& position, const Vec3& no
   v_[node] = v;
 }
 
-Vec3 BrushSkeleton::velocity(int node) const {
-  return v_[node];
-}
-
 Vec3 BrushSkeleton::bristleForce() const {
   Vec3 total = Vec3::Zero();
   for (const BrushSpring& s : springs_) {

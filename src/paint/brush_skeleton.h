@@ -39,7 +39,6 @@ class BrushSkeleton {
   /// Handle points in the brush frame (the contract with the haptic driver: handle point i of a preset).
   std::vector<Vec3> handleOffsets() const;
   const Eigen::Isometry3d& handlePose() const { return pose_; }
-  double mass() const { return mass_; }
 
   /// Places the brush at `world_T_brush` in its rest shape, at rest (no velocity).
   void reset(const Eigen::Isometry3d& world_T_brush);
@@ -51,13 +50,10 @@ class BrushSkeleton {
   /// Overwrites the position of an active mass (collision projection (5.5)); its velocity keeps the
   /// tangential part and loses the part along `normal` that points into the surface.
   void projectActive(int node, const Vec3& position, const Vec3& normal);
-  /// Current velocity of a node (from the last step).
-  Vec3 velocity(int node) const;
   /// Sum of the spring forces the active masses exert on the handle points [N], world frame.
   Vec3 bristleForce() const;
   /// Kinetic energy of the active masses [J].
   double kineticEnergy() const;
-  long steps() const { return steps_; }
 
   /// Largest stable step of the explicit (Verlet) integration at the rest shape: 2 / omega_max with
   /// omega_max^2 the largest eigenvalue of M^-1 K (handle points fixed), reduced for the dashpots by the

@@ -29,7 +29,6 @@ class PaintSurface {
 
   const SurfelCloud& originals() const { return originals_; }
   size_t originalCount() const { return originals_.size(); }
-  const KdTree& tree() const { return *tree_; }
   /// The median surfel radius (without radii: the median distance to the nearest other original, over a
   /// sample): the sampling scale collision margins use.
   double typicalRadius() const { return typical_radius_; }

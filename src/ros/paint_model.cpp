@@ -18,10 +18,11 @@ void PaintModelParams::validate() const {
   if (world_frame.empty() || world_frame[0] == '/')
     fail("world_frame '" + world_frame + "' is not a frame name");
   if (!(rate > 0) || !std::isfinite(rate)) fail("rate must be positive (got " + std::to_string(rate) + ")");
-  if (brush_options.collision_passes < 1)
-    fail("collision_passes must be >= 1 (got " + std::to_string(brush_options.collision_passes) + ")");
-  if (!(brush_options.proxy_reach > 0)) fail("proxy_reach must be positive");
-  if (!(pose_timeout > 0) || !std::isfinite(pose_timeout)) fail("pose_timeout must be positive");
+  try {
+    brush_options.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
   if (!(skin_rate >= 0) || !std::isfinite(skin_rate)) fail("skin_rate must be >= 0");
 }
 
@@ -34,7 +35,6 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
   pnh.param("collision_passes", p.brush_options.collision_passes, p.brush_options.collision_passes);
   pnh.param("plane_proxy", p.brush_options.plane_proxy, p.brush_options.plane_proxy);
   pnh.param("proxy_reach", p.brush_options.proxy_reach, p.brush_options.proxy_reach);
-  pnh.param("pose_timeout", p.pose_timeout, p.pose_timeout);
   pnh.param("skin_rate", p.skin_rate, p.skin_rate);
   p.validate();
   return p;

@@ -9,8 +9,9 @@
 // Publishes   brush_contact (relaxed_connectivity/BrushContact, in the pose frame, every main-loop tick)
 //             brush/skeleton (visualization_msgs/MarkerArray), brush/skin (PointCloud2), both in world_frame
 // Parameters  (private) brush (preset file, required), device ("haptic"), world_frame ("world"), rate (main
-//             loop [Hz], 60), collision_passes (1), plane_proxy (true), pose_timeout ([s], 0.5: older poses
-//             hold the brush still), skin_rate ([Hz], 30; 0: off); see config/paint/brush_demo.yaml.
+//             loop [Hz], 60; the brush holds still at the latest pose until a new one arrives),
+//             collision_passes (1), plane_proxy (true), proxy_reach (0.25), skin_rate ([Hz], 30; 0: off); see
+//             config/paint/brush_demo.yaml.
 #pragma once
 
 #include <geometry_msgs/PoseStamped.h>
@@ -33,7 +34,6 @@ struct PaintModelParams {
   std::string world_frame = "world";
   double rate = 60.0;
   BrushOptions brush_options;
-  double pose_timeout = 0.5;
   double skin_rate = 30.0;
 
   /// Throws std::invalid_argument naming the parameter and the bad value.
