@@ -92,4 +92,26 @@ int SortedCellGrid::neighborRuns(uint32_t c, Run runs[9]) const {
   return num_runs;
 }
 
+int SortedCellGrid::runsAround(const Vec3& q, Run runs[9]) const {
+  if (order_.empty()) return 0;
+  long lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    // The cell index unclamped (in double, so that a far query cannot overflow), then the block clipped.
+    const double c = std::floor((q[a] - origin_[a]) * inv_cell_);
+    const double last = double(dims_[a] - 1);
+    lo[a] = long(std::max(c - 1.0, 0.0));
+    hi[a] = long(std::min(c + 1.0, last));
+    if (c + 1.0 < 0.0 || c - 1.0 > last) return 0;
+  }
+  const size_t nx = dims_[0], ny = dims_[1];
+  int num_runs = 0;
+  for (long z = lo[2]; z <= hi[2]; ++z)
+    for (long y = lo[1]; y <= hi[1]; ++y) {
+      const size_t row = nx * (size_t(y) + ny * size_t(z));
+      const uint32_t b = cell_start_[row + size_t(lo[0])], e = cell_start_[row + size_t(hi[0]) + 1];
+      if (b != e) runs[num_runs++] = {b, e};
+    }
+  return num_runs;
+}
+
 }  // namespace rc

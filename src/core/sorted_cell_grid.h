@@ -34,6 +34,12 @@ class SortedCellGrid {
   uint32_t cellOfSorted(size_t s) const { return sorted_cell_[s]; }
   /// The runs of sorted positions in the (up to) 27 cells around `cell`; returns their number (<= 9).
   int neighborRuns(uint32_t cell, Run runs[9]) const;
+  /// Width of a cell: the cell size given to build(), or coarser.
+  double cellWidth() const { return 1.0 / inv_cell_; }
+  /// The runs of sorted positions in the cells within one cell of the one containing `q` along each axis
+  /// (q may lie outside the grid); returns their number (<= 9). Every point outside them is at least
+  /// cellWidth() from q. Requires a finite q.
+  int runsAround(const Vec3& q, Run runs[9]) const;
 
  private:
   double origin_[3] = {0, 0, 0};

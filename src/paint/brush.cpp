@@ -10,6 +10,8 @@ namespace rc {
 
 namespace {
 constexpr int kProjectionIterations = 4;  // projections (5.5) per collision of an active mass
+constexpr double kNearSurfaceRadii =
+    4;  // farther than this (in surfel radii) only the closest surfel is read
 }  // namespace
 
 void BrushOptions::validate() const {
@@ -25,6 +27,9 @@ Brush::Brush(const BrushPreset& preset, BrushOptions options)
   options_.validate();
   active_contacts_.resize(skeleton_.activeCount());
   cache_.resize(skeleton_.nodeCount());
+  const std::vector<Vec3> handles = skeleton_.handleOffsets();
+  for (const Vec3& h : handles) handle_centre_ += h / double(handles.size());
+  for (const Vec3& h : handles) handle_radius_ = std::max(handle_radius_, (h - handle_centre_).norm());
 }
 
 void Brush::reset(const Eigen::Isometry3d& world_T_brush) {
@@ -33,6 +38,7 @@ void Brush::reset(const Eigen::Isometry3d& world_T_brush) {
   active_contacts_.assign(skeleton_.activeCount(), SurfaceContact());
   split_ = BrushSplit();
   cache_.assign(skeleton_.nodeCount(), NodeCache());
+  handle_cache_ = NodeCache();
   skin_stale_ = true;
 }
 
@@ -91,14 +97,49 @@ SurfaceContact Brush::contactOf(int node, const PaintSurface& surface, BrushEven
   // Conservative advancement: outside, and no surfel within reach of where it was proven outside.
   if (cache.outside && (x - cache.from).norm() < cache.clearance - 2 * surface.typicalRadius())
     return SurfaceContact();
+  // Outside by the closest surfel (3.9) and clear of the surface: the closest surfel alone proves it (a
+  // cheap query), and its tangent plane is the proxy. Near or below the surface: force shading over n. A
+  // node that was near at its last query goes straight to force shading.
+  const SurfelCloud& originals = surface.originals();
+  const double near = kNearSurfaceRadii * surface.typicalRadius();
+  if (cache.outside && cache.clearance > near) {
+    Neighbor closest;
+    surface.nearestOriginals(x, 1, &closest);
+    ++stats->queries;
+    const Vec3& p = originals.positions[closest.index];
+    const Vec3& n = originals.normals[closest.index];
+    const double distance = std::sqrt(closest.sq_dist);
+    if ((x - p).dot(n) >= 0 && distance > near) {
+      cache.from = x;
+      cache.clearance = distance;
+      cache.has_plane = true;
+      cache.plane_point = p;
+      cache.plane_normal = n;
+      return SurfaceContact();
+    }
+  }
+  // Below its last tangent plane (a long step pushed it in), the neighbours are looked up at its projection
+  // onto that plane: the same n surfels on a plane, near the surface (cheap) instead of deep inside.
+  Vec3 query = x;
+  if (options_.plane_proxy && cache.has_plane) {
+    const double below = cache.plane_normal.dot(cache.plane_point - x);
+    if (below > 0) query = x + below * cache.plane_normal;
+  }
   std::array<Neighbor, 64>& found = neighbours_;
   const size_t count = neighbour_count_ =
-      surface.nearestOriginals(x, size_t(preset_.collision_neighbors), found.data());
+      surface.nearestOriginals(query, size_t(preset_.collision_neighbors), found.data());
   ++stats->queries;
-  const SurfaceContact c = forceShade(surface.originals(), x, found.data(), count);
+  if (query != x) {  // distances from x for the weights (5.4), nearest first
+    for (size_t i = 0; i < count; ++i)
+      found[i].sq_dist = (originals.positions[found[i].index] - x).squaredNorm();
+    std::sort(found.begin(), found.begin() + count,
+              [](const Neighbor& a, const Neighbor& b) { return a.sq_dist < b.sq_dist; });
+  }
+  const SurfaceContact c = forceShade(originals, x, found.data(), count);
   cache.outside = !c.inside;
   cache.from = x;
-  cache.clearance = count > 0 ? std::sqrt(found[0].sq_dist) : 0.0;
+  // Clearance from x is proven only by a query at x (one at its projection may miss nearer surfels).
+  cache.clearance = count > 0 && query == x ? std::sqrt(found[0].sq_dist) : 0.0;
   cache.has_plane = count > 0;
   cache.plane_point = x + c.depth * c.normal;
   cache.plane_normal = c.normal;
@@ -141,6 +182,20 @@ void Brush::collideWithPlanes() {
 }
 
 void Brush::collideHandles(const PaintSurface& surface, BrushEventStats* stats) {
+  const Vec3 centre = skeleton_.handlePose() * handle_centre_;
+  const double margin = handle_radius_ + 2 * surface.typicalRadius();
+  NodeCache& cache = handle_cache_;
+  if (!cache.outside || (centre - cache.from).norm() >= cache.clearance - margin) {
+    Neighbor closest;
+    surface.nearestOriginals(centre, 1, &closest);
+    ++stats->queries;
+    const SurfelCloud& originals = surface.originals();
+    // Outside by the closest surfel (3.9); inside, the per-point test below decides.
+    cache.outside = (centre - originals.positions[closest.index]).dot(originals.normals[closest.index]) >= 0;
+    cache.from = centre;
+    cache.clearance = std::sqrt(closest.sq_dist);
+  }
+  if (cache.outside && (centre - cache.from).norm() < cache.clearance - margin) return;
   for (int i = 0; i < skeleton_.handleCount(); ++i) {
     const SurfaceContact c = contactOf(i, surface, stats);
     if (c.inside) handle_contacts_.push_back({i, c.depth, c.normal, skeleton_.positions()[i]});

@@ -38,7 +38,7 @@ struct BrushOptions {
 
 struct BrushEventStats {
   int substeps = 0;
-  int queries = 0;     ///< kd-tree queries
+  int queries = 0;     ///< kd-tree queries (handle points: one for all while the handle is clear)
   int projected = 0;   ///< active-mass projections (5.5)
   double deepest = 0;  ///< deepest active mass before its projection [m]
 };
@@ -94,6 +94,11 @@ class Brush {
   std::vector<SurfaceContact> active_contacts_;
   BrushSplit split_;
   std::vector<NodeCache> cache_;
+  // The handle is rigid: one query at the centre of its points proves them all outside while the centre
+  // stays within clearance - handle_radius_ of where that query was made.
+  NodeCache handle_cache_;
+  Vec3 handle_centre_ = Vec3::Zero();  // brush frame
+  double handle_radius_ = 0;
   std::array<Neighbor, 64> neighbours_;  // of the last query (contactOf)
   size_t neighbour_count_ = 0;
 };

@@ -9,6 +9,13 @@
 
 namespace rc {
 
+/// How the skeleton's active masses are integrated.
+enum class BrushIntegrator {
+  kVerlet,         ///< explicit Verlet (the thesis); time_step must stay below the explicit step limit
+  kImplicitEuler,  ///< linearised backward Euler (one dense solve per step): stable at any time_step, damps
+                   ///< the bristles' oscillation; one step per main-loop event is the fast setting
+};
+
 enum class BrushShape {
   kRound,  ///< bristle chains around the axis, a conical skin (Fig. 5.3 a, b)
   kFlat,   ///< a row of bristle chains across the width, a flat skin (Fig. 5.3 c, d)
@@ -32,10 +39,11 @@ struct BrushPreset {
   double surfel_spacing = 5e-4;    ///< skin sampling
   double friction = 2.0;           ///< eta (5.7) [N s/m^2]
   double penalty_stiffness = 400;  ///< K_p (5.6) [N/m]
-  double time_step = 2e-4;         ///< Verlet step of the skeleton; must be below the explicit step limit
-  Vec3 gravity = Vec3::Zero();     ///< [m/s^2], in the world frame
-  int collision_neighbors = 10;    ///< n of (5.2)-(5.4)
-  double split_angle_deg = 60;     ///< brush splitting threshold (5.4.3)
+  BrushIntegrator integrator = BrushIntegrator::kVerlet;
+  double time_step = 2e-4;       ///< skeleton step; for Verlet it must be below the explicit step limit
+  Vec3 gravity = Vec3::Zero();   ///< [m/s^2], in the world frame
+  int collision_neighbors = 10;  ///< n of (5.2)-(5.4)
+  double split_angle_deg = 60;   ///< brush splitting threshold (5.4.3)
   Vec3 paint_colour = Vec3(0.8, 0.1, 0.1);  ///< wet paint the brush starts with (linear RGB, 0..1)
   double paint_volume = 1.0;                ///< wet paint volume per skin surfel (the paint model's unit)
 };

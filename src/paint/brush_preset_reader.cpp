@@ -34,6 +34,7 @@ BrushPreset parseBrushPreset(const std::string& yaml_text, const std::string& so
                  "surfel_spacing",
                  "friction",
                  "penalty_stiffness",
+                 "integrator",
                  "time_step",
                  "gravity",
                  "collision_neighbors",
@@ -67,6 +68,10 @@ BrushPreset parseBrushPreset(const std::string& yaml_text, const std::string& so
   positive("surfel_spacing", &p.surfel_spacing);
   non_negative("friction", &p.friction);
   non_negative("penalty_stiffness", &p.penalty_stiffness);
+  if (root["integrator"])
+    p.integrator = src.choice<BrushIntegrator>(
+        root["integrator"], "integrator",
+        {{"verlet", BrushIntegrator::kVerlet}, {"implicit_euler", BrushIntegrator::kImplicitEuler}});
   positive("time_step", &p.time_step);
   if (root["gravity"]) p.gravity = src.vec3(root["gravity"], "gravity");
   integer("collision_neighbors", &p.collision_neighbors, 2, 64);
@@ -87,11 +92,11 @@ BrushPreset parseBrushPreset(const std::string& yaml_text, const std::string& so
              "surfel_spacing must not exceed bristle_length");
   // The explicit step limit of this skeleton (stability at the extreme: a stiff preset is refused, not run).
   const double limit = BrushSkeleton(p).stepLimit();
-  if (p.time_step > limit) {
+  if (p.integrator == BrushIntegrator::kVerlet && p.time_step > limit) {
     std::ostringstream why;
     why << "time_step " << p.time_step << " s exceeds the skeleton's explicit step limit " << limit
         << " s (spring_stiffness " << p.spring_stiffness << " N/m, mass " << p.mass
-        << " kg): lower time_step or stiffness, or raise mass";
+        << " kg): lower time_step or stiffness, raise mass, or use integrator: implicit_euler";
     src.fail(root["time_step"] ? root["time_step"] : root, why.str());
   }
   return p;

@@ -128,6 +128,32 @@ Vec3 BrushSkeleton::springForce(const BrushSpring& s, const std::vector<Vec3>& x
 }
 
 void BrushSkeleton::step(double dt, const Eigen::Isometry3d& world_T_brush) {
+  if (preset_.integrator == BrushIntegrator::kImplicitEuler)
+    stepImplicitEuler(dt, world_T_brush);
+  else
+    stepVerlet(dt, world_T_brush);
+  pose_ = world_T_brush;
+  last_dt_ = dt;
+  ++steps_;
+}
+
+void BrushSkeleton::checkActive(int node, double dt, const Eigen::Isometry3d& world_T_brush) const {
+  const double max_distance = 10 * preset_.bristle_length;
+  const Vec3& x = x_[node];
+  if (x.allFinite() && (x - world_T_brush.translation()).squaredNorm() <= max_distance * max_distance) return;
+  std::ostringstream why;
+  why << "brush skeleton unstable at step " << steps_ + 1 << ": active mass " << node - handle_count_
+      << (x.allFinite() ? " ran away (farther than 10 bristle lengths from the handle)" : " is not finite");
+  if (preset_.integrator == BrushIntegrator::kVerlet)
+    why << "; time step " << dt << " s against the explicit limit " << stepLimit() << " s, or";
+  else
+    why << "; implicit Euler step " << dt << " s:";
+  why << " the device jumped by " << (world_T_brush.translation() - pose_.translation()).norm()
+      << " m in one step";
+  throw BrushInstability(why.str());
+}
+
+void BrushSkeleton::stepVerlet(double dt, const Eigen::Isometry3d& world_T_brush) {
   std::vector<Vec3>& force = force_;
   force.assign(x_.size(), Vec3::Zero());
   for (const BrushSpring& s : springs_) {
@@ -135,7 +161,6 @@ void BrushSkeleton::step(double dt, const Eigen::Isometry3d& world_T_brush) {
     force[s.a] += f;
     force[s.b] -= f;
   }
-  const double max_distance = 10 * preset_.bristle_length;
   for (int i = 0; i < nodeCount(); ++i) {
     const Vec3 old = x_[i];
     if (isHandle(i)) {
@@ -143,23 +168,92 @@ void BrushSkeleton::step(double dt, const Eigen::Isometry3d& world_T_brush) {
     } else {
       // Verlet: x' = 2x - x_prev + a dt^2.
       x_[i] = 2 * x_[i] - x_prev_[i] + (force[i] / mass_ + preset_.gravity) * dt * dt;
-      if (!x_[i].allFinite() || (x_[i] - world_T_brush.translation()).norm() > max_distance) {
-        std::ostringstream why;
-        why << "brush skeleton unstable at step " << steps_ + 1 << ": active mass " << i - handle_count_
-            << (x_[i].allFinite() ? " ran away (farther than 10 bristle lengths from the handle)"
-                                  : " is not finite")
-            << "; time step " << dt << " s against the explicit limit " << stepLimit()
-            << " s, or the device jumped by " << (world_T_brush.translation() - pose_.translation()).norm()
-            << " m in one step";
-        throw BrushInstability(why.str());
-      }
+      checkActive(i, dt, world_T_brush);
     }
     x_prev_[i] = old;
     v_[i] = (x_[i] - old) / dt;
   }
-  pose_ = world_T_brush;
-  last_dt_ = dt;
-  ++steps_;
+}
+
+void BrushSkeleton::stepImplicitEuler(double h, const Eigen::Isometry3d& world_T_brush) {
+  // Linearised backward Euler (Baraff and Witkin 1998) over the active masses, with the handle points
+  // already at their new positions: (M - h C - h^2 K) dv = h (f + h K v), x' = x + h (v + dv), where
+  // K = df/dx, C = df/dv of the springs (5.1) and dashpots.
+  for (int i = 0; i < handle_count_; ++i) {
+    const Vec3 next = world_T_brush * rest_[i];
+    v_[i] = (next - x_[i]) / h;
+    x_prev_[i] = x_[i];
+    x_[i] = next;
+  }
+  const int n = activeCount();
+  // Per spring: the block B = h c e e^T + h^2 K with K = k (1 - g) e e^T + k g I (g = max(0, 1 - l0/l), the
+  // geometric part dropped for compressed springs so that the system stays positive definite). B adds to
+  // the diagonal blocks of its active ends and is subtracted from the off-diagonal block between them.
+  diagonal_.assign(n, Eigen::Matrix3d::Identity() * mass_);
+  coupling_.clear();
+  rhs_.resize(3 * n);
+  for (int a = 0; a < n; ++a) rhs_.segment<3>(3 * a) = h * mass_ * preset_.gravity;
+  const double h2 = h * h;
+  for (const BrushSpring& s : springs_) {
+    const Vec3 d = x_[s.b] - x_[s.a];
+    const double l = d.norm();
+    if (l <= 0) continue;
+    const Vec3 e = d / l;
+    const Vec3 dv = v_[s.b] - v_[s.a];
+    const Vec3 f = (s.stiffness * (l - s.rest_length) + s.damping * e.dot(dv)) * e;  // on a
+    const double g = std::max(0.0, 1.0 - s.rest_length / l);
+    const double along = h * s.damping + h2 * s.stiffness * (1.0 - g), across = h2 * s.stiffness * g;
+    Eigen::Matrix3d block = along * (e * e.transpose());
+    block.diagonal().array() += across;
+    const int a = s.a - handle_count_, b = s.b - handle_count_;
+    // h^2 K v: only the active masses move with their velocity inside the step (the handles are placed).
+    const auto kv = [&](const Vec3& v) -> Vec3 {
+      return h2 * s.stiffness * ((1.0 - g) * e.dot(v) * e + g * v);
+    };
+    if (a >= 0 && b >= 0) {
+      diagonal_[a] += block;
+      diagonal_[b] += block;
+      coupling_.push_back({std::max(a, b), std::min(a, b), block});
+      const Vec3 t = h * f + kv(dv);
+      rhs_.segment<3>(3 * a) += t;
+      rhs_.segment<3>(3 * b) -= t;
+    } else if (a >= 0) {
+      diagonal_[a] += block;
+      rhs_.segment<3>(3 * a) += h * f - kv(v_[s.a]);
+    } else if (b >= 0) {
+      diagonal_[b] += block;
+      rhs_.segment<3>(3 * b) -= h * f + kv(v_[s.b]);
+    }
+  }
+  // The lower triangle of M - h C - h^2 K (the factorisation reads no more).
+  system_.setZero(3 * n, 3 * n);
+  for (int a = 0; a < n; ++a) system_.block<3, 3>(3 * a, 3 * a) = diagonal_[a];
+  for (const Coupling& c : coupling_) system_.block<3, 3>(3 * c.row, 3 * c.col) -= c.block;
+  // Cholesky in place, column by column (unblocked: at 9-100 unknowns Eigen's blocked LLT spends more time
+  // in its block machinery than in arithmetic), then the two triangular solves.
+  const int m = 3 * n;
+  for (int j = 0; j < m; ++j) {
+    auto below = system_.col(j).tail(m - j);
+    if (j > 0) below.noalias() -= system_.block(j, 0, m - j, j) * system_.row(j).head(j).transpose();
+    const double pivot = below(0);
+    if (!(pivot > 0) || !std::isfinite(pivot)) {
+      std::ostringstream why;
+      why << "brush skeleton unstable at step " << steps_ + 1
+          << ": the implicit Euler system is not positive definite (non-finite spring state)";
+      throw BrushInstability(why.str());
+    }
+    below /= std::sqrt(pivot);
+  }
+  const auto factor = system_.triangularView<Eigen::Lower>();
+  factor.solveInPlace(rhs_);
+  factor.adjoint().solveInPlace(rhs_);
+  for (int a = 0; a < n; ++a) {
+    const int i = handle_count_ + a;
+    v_[i] += rhs_.segment<3>(3 * a);
+    x_prev_[i] = x_[i];
+    x_[i] += h * v_[i];
+    checkActive(i, h, world_T_brush);
+  }
 }
 
 void BrushSkeleton::projectActive(int node, const Vec3& position, const Vec3& normal) {

@@ -1,5 +1,5 @@
 // The brush skeleton of thesis 5.4: linear springs (5.1) between handle points, which follow the device
-// rigidly, and active masses integrated with Verlet.
+// rigidly, and active masses integrated with Verlet (or, as the fast setting, linearised backward Euler).
 #pragma once
 
 #include <Eigen/Geometry>
@@ -42,10 +42,10 @@ class BrushSkeleton {
 
   /// Places the brush at `world_T_brush` in its rest shape, at rest (no velocity).
   void reset(const Eigen::Isometry3d& world_T_brush);
-  /// One Verlet step of length dt: the handle points jump rigidly to `world_T_brush` (the caller interpolates
-  /// the device pose over substeps), the active masses integrate spring (5.1), damping and gravity forces.
-  /// Throws BrushInstability on non-finite or runaway positions (farther than 10 bristle lengths from the
-  /// handle), naming the step and the likely cause.
+  /// One step of length dt with the preset's integrator: the handle points jump rigidly to `world_T_brush`
+  /// (the caller interpolates the device pose over substeps), the active masses integrate spring (5.1),
+  /// damping and gravity forces. Throws BrushInstability on non-finite or runaway positions (farther than 10
+  /// bristle lengths from the handle), naming the step and the likely cause.
   void step(double dt, const Eigen::Isometry3d& world_T_brush);
   /// Overwrites the position of an active mass (collision projection (5.5)); its velocity keeps the
   /// tangential part and loses the part along `normal` that points into the surface.
@@ -63,6 +63,10 @@ class BrushSkeleton {
 
  private:
   Vec3 springForce(const BrushSpring& s, const std::vector<Vec3>& x, const std::vector<Vec3>& v) const;
+  void stepVerlet(double dt, const Eigen::Isometry3d& world_T_brush);
+  void stepImplicitEuler(double dt, const Eigen::Isometry3d& world_T_brush);
+  /// Throws BrushInstability if active mass `node` is not finite or ran away from the handle.
+  void checkActive(int node, double dt, const Eigen::Isometry3d& world_T_brush) const;
 
   BrushPreset preset_;
   int handle_count_ = 0;
@@ -71,6 +75,15 @@ class BrushSkeleton {
   std::vector<BrushSpring> springs_;
   std::vector<Vec3> x_, x_prev_, v_;
   std::vector<Vec3> force_;  // scratch of step()
+  // Scratch of stepImplicitEuler(): M - h C - h^2 K over the active masses, assembled from 3x3 blocks.
+  struct Coupling {
+    int row, col;  // active masses, row > col
+    Eigen::Matrix3d block;
+  };
+  std::vector<Eigen::Matrix3d> diagonal_;
+  std::vector<Coupling> coupling_;
+  Eigen::MatrixXd system_;
+  Eigen::VectorXd rhs_;
   Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
   double last_dt_ = 0;
   long steps_ = 0;

@@ -36,6 +36,49 @@ PaintSurface::PaintSurface(SurfelCloud originals) : originals_(std::move(origina
     std::nth_element(scale.begin(), scale.begin() + scale.size() / 2, scale.end());
     typical_radius_ = scale[scale.size() / 2];
   }
+  buildCollisionGrid(stride);
+}
+
+void PaintSurface::buildCollisionGrid(size_t stride) {
+  // Cells of kGridCellSpacings median nearest-neighbour spacings: the 27 cells around a query near the
+  // surface hold about a hundred surfels, enough to certify the 10 nearest.
+  std::vector<double> spacing;
+  for (size_t i = 0; i < originals_.size(); i += stride) {
+    Neighbor n[2];
+    if (tree_->knn(originals_.positions[i], 2, n) == 2 && n[1].sq_dist > 0)
+      spacing.push_back(std::sqrt(n[1].sq_dist));
+  }
+  double cell = 0;
+  if (!spacing.empty()) {
+    std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
+    cell = kGridCellSpacings * spacing[spacing.size() / 2];
+  }
+  grid_.build(originals_.positions, cell, 1, "PaintSurface");
+  sorted_positions_.resize(originals_.size());
+  for (size_t s = 0; s < sorted_positions_.size(); ++s)
+    sorted_positions_[s] = originals_.positions[grid_.order()[s]];
+}
+
+size_t PaintSurface::nearestOriginals(const Vec3& x, size_t k, Neighbor* out) const {
+  // The cells around x hold every surfel closer than one cell width: if the k-th nearest among them is that
+  // close, they are the k nearest of all (the kd-tree answers otherwise).
+  k = std::min(k, originals_.size());
+  if (k == 0) return 0;
+  SortedCellGrid::Run runs[9];
+  const int num_runs = x.allFinite() ? grid_.runsAround(x, runs) : 0;
+  size_t count = 0;
+  for (int r = 0; r < num_runs; ++r)
+    for (uint32_t s = runs[r].begin; s < runs[r].end; ++s) {
+      const double d = (sorted_positions_[s] - x).squaredNorm();
+      if (count == k && d >= out[k - 1].sq_dist) continue;
+      size_t i = count < k ? count++ : k - 1;
+      for (; i > 0 && out[i - 1].sq_dist > d; --i) out[i] = out[i - 1];
+      out[i] = {s, d};
+    }
+  const double width = grid_.cellWidth();
+  if (count < k || out[k - 1].sq_dist > width * width) return tree_->knn(x, k, out);
+  for (size_t i = 0; i < k; ++i) out[i].index = grid_.order()[out[i].index];
+  return k;
 }
 
 uint32_t PaintSurface::closestOriginal(const Vec3& x) const {

@@ -8,6 +8,7 @@
 
 #include "relaxed_connectivity/core/kd_tree.h"
 #include "relaxed_connectivity/core/neighbor.h"
+#include "relaxed_connectivity/core/sorted_cell_grid.h"
 #include "relaxed_connectivity/core/surfel_cloud.h"
 
 namespace rc {
@@ -33,8 +34,10 @@ class PaintSurface {
   /// sample): the sampling scale collision margins use.
   double typicalRadius() const { return typical_radius_; }
 
-  /// The k original surfels nearest to x, sorted by distance (squared distances); returns how many.
-  size_t nearestOriginals(const Vec3& x, size_t k, Neighbor* out) const { return tree_->knn(x, k, out); }
+  /// The k original surfels nearest to x, sorted by distance (squared distances); returns how many. Exact:
+  /// answered from a uniform grid of the originals where the cells around x certify the result (near the
+  /// surface, 3-5x faster than the kd-tree, bench_paint_brush), else by the kd-tree.
+  size_t nearestOriginals(const Vec3& x, size_t k, Neighbor* out) const;
   /// The original surfel closest to x: the father a new child surfel is assigned to (5.5).
   uint32_t closestOriginal(const Vec3& x) const;
 
@@ -58,8 +61,13 @@ class PaintSurface {
   SurfelCloud activeCloud() const;
 
  private:
+  static constexpr double kGridCellSpacings = 3.0;
+  void buildCollisionGrid(size_t stride);
+
   SurfelCloud originals_;
   std::unique_ptr<KdTree> tree_;
+  SortedCellGrid grid_;                 // the originals sorted by cell, for nearestOriginals
+  std::vector<Vec3> sorted_positions_;  // positions in grid order
   std::vector<uint8_t> enabled_;
   std::vector<std::vector<ChildSurfel>> children_;
   size_t enabled_count_ = 0;

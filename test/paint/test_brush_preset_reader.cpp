@@ -55,6 +55,13 @@ TEST(BrushPresetReader, AStiffPresetAboveTheStepLimitIsRefused) {
   EXPECT_EQ(e.rfind("brush.yaml:2:12: time_step 0.001 s exceeds the skeleton's explicit step limit", 0), 0u)
       << e;
   EXPECT_NO_THROW(parseBrushPreset("spring_stiffness: 4000\ntime_step: 1.0e-4\n", "ok.yaml"));
+  EXPECT_NE(e.find("integrator: implicit_euler"), std::string::npos) << e;
+  // The implicit integrator has no step limit: the same stiff preset loads with one step per event.
+  const BrushPreset p =
+      parseBrushPreset("spring_stiffness: 4000\nintegrator: implicit_euler\ntime_step: 0.0333\n", "ok.yaml");
+  EXPECT_EQ(p.integrator, BrushIntegrator::kImplicitEuler);
+  EXPECT_EQ(errorOf("integrator: rk4\n"),
+            "brush.yaml:1:13: integrator: unknown 'rk4' (known: verlet, implicit_euler)");
 }
 
 }  // namespace

@@ -99,6 +99,68 @@ TEST(BrushSkeleton, StepLimitSeparatesStableFromUnstableSteps) {
   }
 }
 
+BrushPreset implicitPreset(BrushPreset p, double time_step) {
+  p.integrator = BrushIntegrator::kImplicitEuler;
+  p.time_step = time_step;
+  return p;
+}
+
+TEST(BrushSkeleton, ImplicitEulerKeepsTheRestShapeAtAnyStep) {
+  for (const BrushPreset& base : {BrushPreset(), paint_test::flatPreset()}) {
+    const BrushPreset p = implicitPreset(base, 1.0 / 30);
+    BrushSkeleton s(p);
+    const Eigen::Isometry3d pose = somePose();
+    s.reset(pose);
+    for (int i = 0; i < 100; ++i) s.step(p.time_step, pose);
+    for (int n = 0; n < s.nodeCount(); ++n)
+      EXPECT_NEAR((s.positions()[n] - pose * s.restPositions()[n]).norm(), 0.0, 1e-15) << "node " << n;
+    EXPECT_LT(s.bristleForce().norm(), 1e-12);
+  }
+}
+
+/// Positions of a brush hanging under gravity from a fixed handle after `seconds`.
+std::vector<Vec3> hangingShape(const BrushPreset& p, double seconds) {
+  BrushSkeleton s(p);
+  s.reset(somePose());
+  const int steps = int(std::lround(seconds / p.time_step));
+  for (int i = 0; i < steps; ++i) s.step(p.time_step, somePose());
+  return s.positions();
+}
+
+TEST(BrushSkeleton, ImplicitEulerReachesTheSameStaticEquilibriumAsVerlet) {
+  for (BrushPreset p : {BrushPreset(), paint_test::flatPreset()}) {
+    p.gravity = Vec3(0, 0, -9.81);
+    p.damping = 0.02;  // settles within the 60 s of the Verlet run
+    p.time_step = 0.5 * BrushSkeleton(p).stepLimit();
+    const std::vector<Vec3> verlet = hangingShape(p, 60.0);
+    const std::vector<Vec3> implicit = hangingShape(implicitPreset(p, 1.0 / 30), 20.0);
+    double sag = 0, worst = 0;
+    const BrushSkeleton rest(p);
+    for (size_t n = 0; n < verlet.size(); ++n) {
+      sag = std::max(sag, (verlet[n] - somePose() * rest.restPositions()[n]).norm());
+      worst = std::max(worst, (verlet[n] - implicit[n]).norm());
+    }
+    EXPECT_GT(sag, 5e-6);     // gravity stretches the bristles (6-30 um) ...
+    EXPECT_LT(worst, 1e-12);  // ... and both integrators agree on how far
+  }
+}
+
+TEST(BrushSkeleton, ImplicitEulerStaysStableFarBeyondTheExplicitLimit) {
+  for (BrushPreset p : {BrushPreset(), paint_test::flatPreset()}) {
+    for (const double stiffness : {40.0, 4000.0, 4e6}) {
+      p.spring_stiffness = stiffness;
+      const double limit = BrushSkeleton(p).stepLimit();
+      for (const double factor : {2.0, 30.0, 1000.0}) {
+        const BrushPreset q = implicitPreset(p, factor * limit);
+        const double early = peakEnergyAfterKick(q, q.time_step, 0, 1);
+        const double late = peakEnergyAfterKick(q, q.time_step, 50, 100);
+        EXPECT_TRUE(std::isfinite(early));
+        EXPECT_LE(late, early) << "stiffness " << stiffness << ", " << factor << "x the explicit limit";
+      }
+    }
+  }
+}
+
 TEST(BrushSkeleton, StiffnessScalesTheLimitAsOneOverSqrtK) {
   BrushPreset p;
   p.damping = 0;

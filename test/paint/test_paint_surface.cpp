@@ -3,6 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "relaxed_connectivity/core/kd_tree.h"
+
 #include "paint_test_surfaces.h"
 
 namespace rc {
@@ -63,6 +67,33 @@ TEST(PaintSurface, ExplicitFatherAndEnableFlagsCount) {
   EXPECT_EQ(s.activeCount(), s.originalCount() - 2 + 1);
   s.setEnabled(3, true);
   EXPECT_EQ(s.activeCount(), s.originalCount());
+}
+
+TEST(PaintSurface, NearestOriginalsFromTheGridEqualTheKdTree) {
+  // Queries on, near, deep below, far above and outside the bounding box of a sphere and of a flat plane
+  // (a zero-thickness box): the grid answers near the surface, the kd-tree elsewhere; both must agree.
+  for (const SurfelCloud& cloud :
+       {paint_test::sphereCloud(Vec3::Zero(), 0.05, 20000), paint_test::planeCloud(0.02, 0.0005)}) {
+    const PaintSurface surface(cloud);
+    const KdTree tree(cloud.positions);
+    uint32_t state = 12345;
+    const auto uniform = [&]() { return (state = state * 1664525u + 1013904223u) / 4294967296.0; };
+    for (int q = 0; q < 3000; ++q) {
+      const Vec3& on = cloud.positions[size_t(uniform() * cloud.size())];
+      const double offset = std::pow(10.0, -6 + 5 * uniform()) * (uniform() < 0.5 ? -1 : 1);  // 1 um - 10 cm
+      const Vec3 x =
+          on + offset * cloud.normals[0].cwiseAbs().maxCoeff() * Vec3(uniform(), uniform(), 1).normalized();
+      for (const size_t k : {size_t(1), size_t(10), size_t(40)}) {
+        Neighbor grid[64], exact[64];
+        ASSERT_EQ(surface.nearestOriginals(x, k, grid), tree.knn(x, k, exact));
+        for (size_t i = 0; i < k; ++i) {
+          ASSERT_EQ(grid[i].sq_dist, exact[i].sq_dist) << "query " << q << " k " << k << " rank " << i;
+          // Equal distances may come in another order; the surfel must lie at that distance.
+          EXPECT_EQ((cloud.positions[grid[i].index] - x).squaredNorm(), grid[i].sq_dist);
+        }
+      }
+    }
+  }
 }
 
 TEST(PaintSurface, RejectsCloudsItCannotCollideWith) {
