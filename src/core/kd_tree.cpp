@@ -33,8 +33,9 @@ using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<do
 /// tree positions are mapped back to the caller's indices at the end.
 class NeighborKnnSet {
  public:
-  NeighborKnnSet(size_t k, Neighbor* out) : out_(out), capacity_(k) {
-    out_[capacity_ - 1].sq_dist = std::numeric_limits<double>::max();
+  NeighborKnnSet(size_t k, Neighbor* out, double worst = std::numeric_limits<double>::max())
+      : out_(out), capacity_(k) {
+    out_[capacity_ - 1].sq_dist = worst;
   }
   size_t size() const { return count_; }
   bool full() const { return count_ == capacity_; }
@@ -127,6 +128,16 @@ size_t KdTree::knn(const Vec3& query, size_t k, Neighbor* out) const {
   const size_t found = rs.size();
   impl_->mapBack(out, out + found);
   return found;
+}
+
+bool KdTree::nearestWithin(const Vec3& query, double bound_sq, Neighbor* out) const {
+  if (size() == 0 || !(bound_sq >= 0)) return false;
+  // The bound seeds the result set's worst distance, so the search prunes with it from the root down.
+  NeighborKnnSet rs(1, out, std::nextafter(bound_sq, std::numeric_limits<double>::infinity()));
+  impl_->tree.findNeighbors(rs, query.data(), nanoflann::SearchParams());
+  if (rs.size() == 0) return false;
+  impl_->mapBack(out, out + 1);
+  return true;
 }
 
 size_t KdTree::radius(const Vec3& query, double radius, std::vector<Neighbor>& out, bool sorted) const {

@@ -31,6 +31,11 @@ class KdTree {
   /// hold k entries); `Neighbor::sq_dist` is the squared distance. Returns the number written.
   size_t knn(const Vec3& query, size_t k, Neighbor* out) const;
 
+  /// The nearest point if it lies within sqrt(bound_sq) (inclusive): a known upper bound, such as the
+  /// distance to a point found near the query before, prunes the search from the start. Returns false,
+  /// leaving `out` unspecified, when no point is that close.
+  bool nearestWithin(const Vec3& query, double bound_sq, Neighbor* out) const;
+
   /// All points with distance <= radius (the radius is NOT squared). `out` is cleared first and keeps its
   /// capacity. Sorted by distance only if `sorted`. Returns out.size().
   size_t radius(const Vec3& query, double radius, std::vector<Neighbor>& out, bool sorted = false) const;

@@ -27,8 +27,11 @@ Brush::Brush(const BrushPreset& preset, BrushOptions options)
   options_.validate();
   active_contacts_.resize(skeleton_.activeCount());
   cache_.resize(skeleton_.nodeCount());
+  // The handle's bounding sphere (centred on the bounding box of its points).
   const std::vector<Vec3> handles = skeleton_.handleOffsets();
-  for (const Vec3& h : handles) handle_centre_ += h / double(handles.size());
+  Vec3 lo = handles.front(), hi = handles.front();
+  for (const Vec3& h : handles) lo = lo.cwiseMin(h), hi = hi.cwiseMax(h);
+  handle_centre_ = 0.5 * (lo + hi);
   for (const Vec3& h : handles) handle_radius_ = std::max(handle_radius_, (h - handle_centre_).norm());
 }
 
@@ -70,6 +73,7 @@ BrushEventStats Brush::advance(double dt, const Eigen::Isometry3d& world_T_brush
     pose.linear() = q0.slerp(t, q1).toRotationMatrix();
     pose.translation() = (1 - t) * start.translation() + t * world_T_brush.translation();
     if (s == stats.substeps) pose = world_T_brush;
+    if (surface && preset_.integrator == BrushIntegrator::kImplicitEuler) setContactPlanes();
     skeleton_.step(h, pose);
     if (surface && (s % every == 0 || s == stats.substeps))
       collideActives(*surface, &stats);
@@ -103,12 +107,12 @@ SurfaceContact Brush::contactOf(int node, const PaintSurface& surface, BrushEven
   const SurfelCloud& originals = surface.originals();
   const double near = kNearSurfaceRadii * surface.typicalRadius();
   if (cache.outside && cache.clearance > near) {
-    Neighbor closest;
-    surface.nearestOriginals(x, 1, &closest);
+    const Neighbor closest = surface.closestOriginal(x, cache.closest);
     ++stats->queries;
     const Vec3& p = originals.positions[closest.index];
     const Vec3& n = originals.normals[closest.index];
     const double distance = std::sqrt(closest.sq_dist);
+    cache.closest = closest.index;
     if ((x - p).dot(n) >= 0 && distance > near) {
       cache.from = x;
       cache.clearance = distance;
@@ -138,6 +142,7 @@ SurfaceContact Brush::contactOf(int node, const PaintSurface& surface, BrushEven
   const SurfaceContact c = forceShade(originals, x, found.data(), count);
   cache.outside = !c.inside;
   cache.from = x;
+  if (count > 0) cache.closest = found[0].index;
   // Clearance from x is proven only by a query at x (one at its projection may miss nearer surfels).
   cache.clearance = count > 0 && query == x ? std::sqrt(found[0].sq_dist) : 0.0;
   cache.has_plane = count > 0;
@@ -169,6 +174,18 @@ void Brush::collideActives(const PaintSurface& surface, BrushEventStats* stats) 
   }
 }
 
+void Brush::setContactPlanes() {
+  // The masses touching at the last exact pass stay on their tangent planes through the implicit step.
+  std::vector<BrushSkeleton::ContactPlane>& planes = contact_planes_;
+  planes.assign(skeleton_.activeCount(), BrushSkeleton::ContactPlane());
+  for (int a = 0; a < skeleton_.activeCount(); ++a) {
+    const NodeCache& cache = cache_[skeleton_.handleCount() + a];
+    if (active_contacts_[a].inside && cache.has_plane)
+      planes[a] = {true, cache.plane_point, cache.plane_normal};
+  }
+  skeleton_.setContactPlanes(planes);
+}
+
 void Brush::collideWithPlanes() {
   const double reach = options_.proxy_reach * preset_.bristle_length;
   for (int node = skeleton_.handleCount(); node < skeleton_.nodeCount(); ++node) {
@@ -186,8 +203,8 @@ void Brush::collideHandles(const PaintSurface& surface, BrushEventStats* stats) 
   const double margin = handle_radius_ + 2 * surface.typicalRadius();
   NodeCache& cache = handle_cache_;
   if (!cache.outside || (centre - cache.from).norm() >= cache.clearance - margin) {
-    Neighbor closest;
-    surface.nearestOriginals(centre, 1, &closest);
+    const Neighbor closest = surface.closestOriginal(centre, cache.closest);
+    cache.closest = closest.index;
     ++stats->queries;
     const SurfelCloud& originals = surface.originals();
     // Outside by the closest surfel (3.9); inside, the per-point test below decides.

@@ -76,6 +76,7 @@ class Brush {
     bool outside = false;
     Vec3 from = Vec3::Zero();
     double clearance = 0;
+    uint32_t closest = 0;  ///< the closest original at the last query (bounds the next search)
     bool has_plane = false;
     Vec3 plane_point = Vec3::Zero(), plane_normal = Vec3::UnitZ();
   };
@@ -83,6 +84,7 @@ class Brush {
   SurfaceContact contactOf(int node, const PaintSurface& surface, BrushEventStats* stats);
   void collideActives(const PaintSurface& surface, BrushEventStats* stats);
   void collideWithPlanes();
+  void setContactPlanes();
   void collideHandles(const PaintSurface& surface, BrushEventStats* stats);
 
   BrushPreset preset_;
@@ -94,6 +96,7 @@ class Brush {
   std::vector<SurfaceContact> active_contacts_;
   BrushSplit split_;
   std::vector<NodeCache> cache_;
+  std::vector<BrushSkeleton::ContactPlane> contact_planes_;
   // The handle is rigid: one query at the centre of its points proves them all outside while the centre
   // stays within clearance - handle_radius_ of where that query was made.
   NodeCache handle_cache_;

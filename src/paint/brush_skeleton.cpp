@@ -9,6 +9,9 @@ namespace rc {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+/// Contact penalty of the implicit integrator, relative to the spring stiffness: stiff enough that a
+/// bristle pressed by its springs stays within a fraction of a millimetre of the plane.
+constexpr double kContactStiffness = 1000;
 
 /// Handle points and active masses of a preset in the brush frame (Fig. 5.3); chains[c][k] is the node of
 /// segment k (0 = next to the ferrule) of bristle chain c.
@@ -113,6 +116,7 @@ void BrushSkeleton::reset(const Eigen::Isometry3d& world_T_brush) {
   for (size_t i = 0; i < rest_.size(); ++i) x_[i] = world_T_brush * rest_[i];
   x_prev_ = x_;
   v_.assign(x_.size(), Vec3::Zero());
+  planes_.clear();
   steps_ = 0;
 }
 
@@ -176,12 +180,14 @@ void BrushSkeleton::stepVerlet(double dt, const Eigen::Isometry3d& world_T_brush
 }
 
 void BrushSkeleton::stepImplicitEuler(double h, const Eigen::Isometry3d& world_T_brush) {
-  // Linearised backward Euler (Baraff and Witkin 1998) over the active masses, with the handle points
-  // already at their new positions: (M - h C - h^2 K) dv = h (f + h K v), x' = x + h (v + dv), where
-  // K = df/dx, C = df/dv of the springs (5.1) and dashpots.
-  for (int i = 0; i < handle_count_; ++i) {
-    const Vec3 next = world_T_brush * rest_[i];
-    v_[i] = (next - x_[i]) / h;
+  // Linearised backward Euler (Baraff and Witkin 1998) over the active masses: v' = v + dv solves
+  // (M - h C - h^2 K) dv = h f(x*, v), x' = x* + h dv, with K = df/dx and C = df/dv of the springs (5.1) and
+  // dashpots linearised at the predictor x* = x + h v (the handle points already at their new pose). From
+  // x* rather than x, a brush carried along at constant velocity is at rest in its frame after one step: the
+  // springs' lateral stiffness vanishes at rest length, and a linearisation at x makes them lag.
+  for (int i = 0; i < nodeCount(); ++i) {
+    const Vec3 next = isHandle(i) ? Vec3(world_T_brush * rest_[i]) : Vec3(x_[i] + h * v_[i]);
+    if (isHandle(i)) v_[i] = (next - x_[i]) / h;
     x_prev_[i] = x_[i];
     x_[i] = next;
   }
@@ -199,31 +205,24 @@ void BrushSkeleton::stepImplicitEuler(double h, const Eigen::Isometry3d& world_T
     const double l = d.norm();
     if (l <= 0) continue;
     const Vec3 e = d / l;
-    const Vec3 dv = v_[s.b] - v_[s.a];
-    const Vec3 f = (s.stiffness * (l - s.rest_length) + s.damping * e.dot(dv)) * e;  // on a
+    const Vec3 f = (s.stiffness * (l - s.rest_length) + s.damping * e.dot(v_[s.b] - v_[s.a])) * e;  // on a
     const double g = std::max(0.0, 1.0 - s.rest_length / l);
     const double along = h * s.damping + h2 * s.stiffness * (1.0 - g), across = h2 * s.stiffness * g;
     Eigen::Matrix3d block = along * (e * e.transpose());
     block.diagonal().array() += across;
     const int a = s.a - handle_count_, b = s.b - handle_count_;
-    // h^2 K v: only the active masses move with their velocity inside the step (the handles are placed).
-    const auto kv = [&](const Vec3& v) -> Vec3 {
-      return h2 * s.stiffness * ((1.0 - g) * e.dot(v) * e + g * v);
-    };
-    if (a >= 0 && b >= 0) {
-      diagonal_[a] += block;
-      diagonal_[b] += block;
-      coupling_.push_back({std::max(a, b), std::min(a, b), block});
-      const Vec3 t = h * f + kv(dv);
-      rhs_.segment<3>(3 * a) += t;
-      rhs_.segment<3>(3 * b) -= t;
-    } else if (a >= 0) {
-      diagonal_[a] += block;
-      rhs_.segment<3>(3 * a) += h * f - kv(v_[s.a]);
-    } else if (b >= 0) {
-      diagonal_[b] += block;
-      rhs_.segment<3>(3 * b) -= h * f + kv(v_[s.b]);
-    }
+    if (a >= 0) diagonal_[a] += block, rhs_.segment<3>(3 * a) += h * f;
+    if (b >= 0) diagonal_[b] += block, rhs_.segment<3>(3 * b) -= h * f;
+    if (a >= 0 && b >= 0) coupling_.push_back({std::max(a, b), std::min(a, b), block});
+  }
+  // Contact planes: f = k_c (n . (p - x)) n, df/dx = -k_c n n^T.
+  const double contact = kContactStiffness * preset_.spring_stiffness;
+  for (int a = 0; a < n && a < int(planes_.size()); ++a) {
+    const ContactPlane& c = planes_[a];
+    if (!c.active) continue;
+    const double depth = c.normal.dot(c.point - x_[handle_count_ + a]);
+    diagonal_[a] += h2 * contact * (c.normal * c.normal.transpose());
+    rhs_.segment<3>(3 * a) += h * contact * depth * c.normal;
   }
   // The lower triangle of M - h C - h^2 K (the factorisation reads no more).
   system_.setZero(3 * n, 3 * n);
@@ -250,8 +249,7 @@ void BrushSkeleton::stepImplicitEuler(double h, const Eigen::Isometry3d& world_T
   for (int a = 0; a < n; ++a) {
     const int i = handle_count_ + a;
     v_[i] += rhs_.segment<3>(3 * a);
-    x_prev_[i] = x_[i];
-    x_[i] += h * v_[i];
+    x_[i] += h * rhs_.segment<3>(3 * a);
     checkActive(i, h, world_T_brush);
   }
 }

@@ -50,6 +50,15 @@ class BrushSkeleton {
   /// Overwrites the position of an active mass (collision projection (5.5)); its velocity keeps the
   /// tangential part and loses the part along `normal` that points into the surface.
   void projectActive(int node, const Vec3& position, const Vec3& normal);
+  /// Contact planes the implicit integrator keeps active masses on within its steps: a stiff penalty along
+  /// `normal` towards the plane through `point`, linearised in the solve, so that a long step lets a bristle
+  /// slide along the surface instead of relaxing through it. Index = active mass; cleared by reset().
+  /// Verlet ignores them (its steps are short; the caller projects).
+  struct ContactPlane {
+    bool active = false;
+    Vec3 point = Vec3::Zero(), normal = Vec3::UnitZ();
+  };
+  void setContactPlanes(const std::vector<ContactPlane>& planes) { planes_ = planes; }
   /// Sum of the spring forces the active masses exert on the handle points [N], world frame.
   Vec3 bristleForce() const;
   /// Kinetic energy of the active masses [J].
@@ -75,6 +84,7 @@ class BrushSkeleton {
   std::vector<BrushSpring> springs_;
   std::vector<Vec3> x_, x_prev_, v_;
   std::vector<Vec3> force_;  // scratch of step()
+  std::vector<ContactPlane> planes_;
   // Scratch of stepImplicitEuler(): M - h C - h^2 K over the active masses, assembled from 3x3 blocks.
   struct Coupling {
     int row, col;  // active masses, row > col

@@ -87,6 +87,18 @@ uint32_t PaintSurface::closestOriginal(const Vec3& x) const {
   return n.index;
 }
 
+Neighbor PaintSurface::closestOriginal(const Vec3& x, uint32_t hint) const {
+  Neighbor found;
+  const double bound = (originals_.positions.at(hint) - x).squaredNorm();
+  const double width = grid_.cellWidth();
+  if (bound <= width * width) {  // the grid certifies it
+    nearestOriginals(x, 1, &found);
+    return found;
+  }
+  if (!tree_->nearestWithin(x, bound, &found)) found = {hint, bound};  // rounding: the hint itself
+  return found;
+}
+
 void PaintSurface::setEnabled(size_t original, bool enabled) {
   if (enabled_[original] == uint8_t(enabled)) return;
   enabled_[original] = enabled;

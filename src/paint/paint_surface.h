@@ -38,6 +38,9 @@ class PaintSurface {
   /// answered from a uniform grid of the originals where the cells around x certify the result (near the
   /// surface, 3-5x faster than the kd-tree, bench_paint_brush), else by the kd-tree.
   size_t nearestOriginals(const Vec3& x, size_t k, Neighbor* out) const;
+  /// The original surfel closest to x (exact), given an original `hint` near x (e.g. the closest one at a
+  /// previous position): its distance bounds the search.
+  Neighbor closestOriginal(const Vec3& x, uint32_t hint) const;
   /// The original surfel closest to x: the father a new child surfel is assigned to (5.5).
   uint32_t closestOriginal(const Vec3& x) const;
 

@@ -123,6 +123,28 @@ TEST(KdTree, BoundaryCases) {
   EXPECT_THROW(KdTree(pts, 0), std::invalid_argument);
 }
 
+TEST(KdTree, NearestWithinABoundEqualsTheNearest) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.2, 1.2);
+  std::vector<Vec3> pts;
+  for (int i = 0; i < 5000; ++i) pts.push_back(Vec3(u(rng), u(rng), u(rng)));
+  const KdTree tree(pts);
+  for (int q = 0; q < 500; ++q) {
+    const Vec3 x(u(rng), u(rng), u(rng));
+    Neighbor nearest, bounded;
+    tree.knn(x, 1, &nearest);
+    // A bound from any point (here a random one, or the nearest itself) finds the nearest ...
+    const size_t other = size_t(q * 7) % pts.size();
+    for (const double bound : {(pts[other] - x).squaredNorm(), nearest.sq_dist}) {
+      ASSERT_TRUE(tree.nearestWithin(x, bound, &bounded));
+      EXPECT_EQ(bounded.sq_dist, nearest.sq_dist);
+      EXPECT_EQ((pts[bounded.index] - x).squaredNorm(), nearest.sq_dist);
+    }
+    // ... and a bound below it finds nothing.
+    EXPECT_FALSE(tree.nearestWithin(x, 0.999 * nearest.sq_dist, &bounded));
+  }
+}
+
 TEST(KdTree, EmptySetAndRebuild) {
   std::vector<Vec3> pts;
   KdTree tree(pts);

@@ -116,7 +116,8 @@ TEST(Brush, ImplicitEulerConvergesToVerletWithMoreStepsPerEvent) {
           largestDistance(tiltedPressAndDrag(implicitEuler(p, kEvent / steps_per_event), plane), verlet);
       EXPECT_LT(off, previous) << p.name << ", " << steps_per_event << " steps per event";
       previous = off;
-      std::printf("%s, %g steps per event: %.3f mm\n", p.name.c_str(), steps_per_event, 1e3 * off);
+      std::printf("%s, %g steps per event: %.3f mm\n", p.shape == BrushShape::kFlat ? "flat" : "round",
+                  steps_per_event, 1e3 * off);
     }
     // 16 steps: within 15 % of the bristle length (measured 4 % round, 12 % flat, over the whole stroke).
     EXPECT_LT(previous, 0.15 * p.bristle_length) << p.name;
