@@ -8,8 +8,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <thread>
 #include <vector>
+
+#include <unistd.h>
 
 #include "relaxed_connectivity/paint/brush_skeleton.h"
 #include "relaxed_connectivity/paint/fixed_rate_loop.h"
@@ -40,10 +45,25 @@ std::vector<StrokeSample> pressingStroke() {  // 1 s back and forth 2 mm into th
   return samples;
 }
 
+/// CPU time the hypervisor gave to other guests while this VM's CPUs wanted to run ("steal", the 8th value of
+/// /proc/stat's cpu line) [s], summed over CPUs; negative if unknown.
+double stealSeconds() {
+  std::ifstream stat("/proc/stat");
+  std::string line, cpu;
+  if (!std::getline(stat, line)) return -1;
+  std::istringstream in(line);
+  in >> cpu;
+  double value = 0, steal = -1;
+  for (int field = 1; field <= 8 && in >> value; ++field)
+    if (field == 8) steal = value;
+  return steal < 0 ? -1 : steal / double(sysconf(_SC_CLK_TCK));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const double seconds = argc > 1 ? std::atof(argv[1]) : 10.0;
+  const double steal_start = stealSeconds();
   const int busy_threads = argc > 2 ? std::atoi(argv[2]) : int(std::thread::hardware_concurrency());
   const int priority = argc > 3 ? std::atoi(argv[3]) : 0;
 
@@ -104,5 +124,9 @@ int main(int argc, char** argv) {
               1e3 * s.period_p99, 1e3 * s.period_max, 1e3 * s.jitter_p50, 1e3 * s.jitter_p99,
               1e3 * s.jitter_max, 1e6 * work_max);
   std::printf("(mean filtered force %.3f N, sink %.3f)\n", force_sum / double(s.ticks), sink.load());
+  const double steal_end = stealSeconds();
+  if (steal_start >= 0 && steal_end >= 0)
+    std::printf("steal time during the run (the hypervisor ran other guests): %.0f ms over all CPUs\n",
+                1e3 * (steal_end - steal_start));
   return 0;
 }
