@@ -92,6 +92,18 @@ int SortedCellGrid::neighborRuns(uint32_t c, Run runs[9]) const {
   return num_runs;
 }
 
+void SortedCellGrid::cellCoordinates(const Vec3& q, double coordinates[3], double* outside_distance) const {
+  const double width = cellWidth();
+  double sq = 0;
+  for (int a = 0; a < 3; ++a) {
+    coordinates[a] = std::floor((q[a] - origin_[a]) * inv_cell_);
+    const double below = origin_[a] - q[a], above = q[a] - (origin_[a] + double(dims_[a]) * width);
+    const double out = std::max({below, above, 0.0});
+    sq += out * out;
+  }
+  *outside_distance = std::sqrt(sq);
+}
+
 int SortedCellGrid::runsAround(const Vec3& q, Run runs[9]) const {
   if (order_.empty()) return 0;
   long lo[3], hi[3];

@@ -34,6 +34,11 @@ class SortedCellGrid {
   uint32_t cellOfSorted(size_t s) const { return sorted_cell_[s]; }
   /// The runs of sorted positions in the (up to) 27 cells around `cell`; returns their number (<= 9).
   int neighborRuns(uint32_t cell, Run runs[9]) const;
+  /// Cells per axis, and whether a cell (linear index, x fastest) holds a point.
+  size_t dim(int axis) const { return dims_[axis]; }
+  bool occupied(size_t cell) const { return cell_start_[cell] != cell_start_[cell + 1]; }
+  /// The (unclamped) cell coordinates of q, and the Euclidean distance from q to the grid's box (0 inside).
+  void cellCoordinates(const Vec3& q, double coordinates[3], double* outside_distance) const;
   /// Width of a cell: the cell size given to build(), or coarser.
   double cellWidth() const { return 1.0 / inv_cell_; }
   /// The runs of sorted positions in the cells within one cell of the one containing `q` along each axis

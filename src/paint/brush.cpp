@@ -101,6 +101,17 @@ SurfaceContact Brush::contactOf(int node, const PaintSurface& surface, BrushEven
   // Conservative advancement: outside, and no surfel within reach of where it was proven outside.
   if (cache.outside && (x - cache.from).norm() < cache.clearance - 2 * surface.typicalRadius())
     return SurfaceContact();
+  // Still outside without a query: no surfel within the distance-transform bound of x, and the segment from
+  // where it was proven outside keeps 2 radii from every surfel ((C + bound - L) / 2 at its worst point), so
+  // x is on the same side.
+  if (cache.outside) {
+    const double bound = surface.clearanceLowerBound(x), margin = 2 * surface.typicalRadius();
+    if (bound > margin && (x - cache.from).norm() < cache.clearance + bound - 2 * margin) {
+      cache.from = x;
+      cache.clearance = bound;
+      return SurfaceContact();
+    }
+  }
   // Outside by the closest surfel (3.9) and clear of the surface: the closest surfel alone proves it (a
   // cheap query), and its tangent plane is the proxy. Near or below the surface: force shading over n. A
   // node that was near at its last query goes straight to force shading.

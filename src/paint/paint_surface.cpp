@@ -54,9 +54,47 @@ void PaintSurface::buildCollisionGrid(size_t stride) {
     cell = kGridCellSpacings * spacing[spacing.size() / 2];
   }
   grid_.build(originals_.positions, cell, 1, "PaintSurface");
+  buildCellDistances();
   sorted_positions_.resize(originals_.size());
   for (size_t s = 0; s < sorted_positions_.size(); ++s)
     sorted_positions_[s] = originals_.positions[grid_.order()[s]];
+}
+
+void PaintSurface::buildCellDistances() {
+  // Breadth-first over the 26 neighbours from every occupied cell: the Chebyshev distance in cells, up to
+  // kMaxCellDistance (farther cells keep that value, still a valid bound).
+  const size_t nx = grid_.dim(0), ny = grid_.dim(1), nz = grid_.dim(2), cells = nx * ny * nz;
+  cell_distance_.assign(cells, kMaxCellDistance);
+  std::vector<uint32_t> front, next;
+  for (size_t c = 0; c < cells; ++c)
+    if (grid_.occupied(c)) cell_distance_[c] = 0, front.push_back(uint32_t(c));
+  for (uint8_t d = 1; d < kMaxCellDistance && !front.empty(); ++d) {
+    next.clear();
+    for (const uint32_t c : front) {
+      const long x = long(c % nx), y = long((c / nx) % ny), z = long(c / (nx * ny));
+      for (long dz = -1; dz <= 1; ++dz)
+        for (long dy = -1; dy <= 1; ++dy)
+          for (long dx = -1; dx <= 1; ++dx) {
+            const long X = x + dx, Y = y + dy, Z = z + dz;
+            if (X < 0 || Y < 0 || Z < 0 || X >= long(nx) || Y >= long(ny) || Z >= long(nz)) continue;
+            const size_t n = size_t(X) + nx * (size_t(Y) + ny * size_t(Z));
+            if (cell_distance_[n] > d) cell_distance_[n] = d, next.push_back(uint32_t(n));
+          }
+    }
+    front.swap(next);
+  }
+}
+
+double PaintSurface::clearanceLowerBound(const Vec3& x) const {
+  if (!x.allFinite()) return 0;
+  double c[3], outside = 0;
+  grid_.cellCoordinates(x, c, &outside);
+  if (outside > 0) return outside;  // no surfel lies outside the grid's box
+  size_t i[3];
+  for (int a = 0; a < 3; ++a) i[a] = size_t(std::min(std::max(c[a], 0.0), double(grid_.dim(a) - 1)));
+  const size_t cell = i[0] + grid_.dim(0) * (i[1] + grid_.dim(1) * i[2]);
+  // k cells apart along some axis: at least k - 1 whole cells lie between x and any surfel.
+  return std::max(0.0, double(cell_distance_[cell]) - 1.0) * grid_.cellWidth();
 }
 
 size_t PaintSurface::nearestOriginals(const Vec3& x, size_t k, Neighbor* out) const {

@@ -38,6 +38,9 @@ class PaintSurface {
   /// answered from a uniform grid of the originals where the cells around x certify the result (near the
   /// surface, 3-5x faster than the kd-tree, bench_paint_brush), else by the kd-tree.
   size_t nearestOriginals(const Vec3& x, size_t k, Neighbor* out) const;
+  /// A lower bound on the distance from x to every original surfel, in O(1) from a distance transform of the
+  /// collision grid's occupied cells (0 within a cell of an occupied one; capped at a few cells).
+  double clearanceLowerBound(const Vec3& x) const;
   /// The original surfel closest to x (exact), given an original `hint` near x (e.g. the closest one at a
   /// previous position): its distance bounds the search.
   Neighbor closestOriginal(const Vec3& x, uint32_t hint) const;
@@ -65,12 +68,15 @@ class PaintSurface {
 
  private:
   static constexpr double kGridCellSpacings = 3.0;
+  static constexpr uint8_t kMaxCellDistance = 16;
   void buildCollisionGrid(size_t stride);
+  void buildCellDistances();
 
   SurfelCloud originals_;
   std::unique_ptr<KdTree> tree_;
   SortedCellGrid grid_;                 // the originals sorted by cell, for nearestOriginals
   std::vector<Vec3> sorted_positions_;  // positions in grid order
+  std::vector<uint8_t> cell_distance_;  // Chebyshev distance in cells to the nearest occupied cell (capped)
   std::vector<uint8_t> enabled_;
   std::vector<std::vector<ChildSurfel>> children_;
   size_t enabled_count_ = 0;

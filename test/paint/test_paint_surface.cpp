@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "relaxed_connectivity/core/kd_tree.h"
 
@@ -93,6 +94,31 @@ TEST(PaintSurface, NearestOriginalsFromTheGridEqualTheKdTree) {
         }
       }
     }
+  }
+}
+
+TEST(PaintSurface, ClearanceLowerBoundNeverExceedsTheDistance) {
+  for (const SurfelCloud& cloud :
+       {paint_test::sphereCloud(Vec3::Zero(), 0.05, 20000), paint_test::planeCloud(0.02, 0.0005)}) {
+    const PaintSurface surface(cloud);
+    const KdTree tree(cloud.positions);
+    uint32_t state = 99;
+    const auto uniform = [&]() { return (state = state * 1664525u + 1013904223u) / 4294967296.0; };
+    int positive = 0, far = 0;
+    for (int q = 0; q < 5000; ++q) {
+      const Vec3 x = 0.12 * Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5);
+      Neighbor nearest;
+      tree.knn(x, 1, &nearest);
+      const double bound = surface.clearanceLowerBound(x);
+      ASSERT_LE(bound, std::sqrt(nearest.sq_dist)) << "query " << q;
+      // Not vacuous far from the surface (the Chebyshev cell distance gives about d / sqrt(3) - w
+      // diagonally).
+      const double distance = std::sqrt(nearest.sq_dist);
+      if (distance > 0.02) ++far, positive += bound > 0.25 * distance;
+    }
+    std::printf("%d of %d queries with 2 cm clearance or more get a bound above a quarter of the distance\n",
+                positive, far);
+    EXPECT_GT(positive, far / 2);
   }
 }
 
