@@ -5,6 +5,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <utility>
+#include <vector>
 
 #include "relaxed_connectivity/core/kd_tree.h"
 
@@ -70,15 +73,34 @@ TEST(PaintSurface, ExplicitFatherAndEnableFlagsCount) {
   EXPECT_EQ(s.activeCount(), s.originalCount());
 }
 
+/// A sphere and a flat plane (a zero-thickness bounding box) to query, each with its surface and a kd-tree
+/// over the same points as the reference.
+struct QueriedSurface {
+  SurfelCloud cloud;
+  PaintSurface surface;
+  KdTree tree;
+  explicit QueriedSurface(SurfelCloud c) : cloud(std::move(c)), surface(cloud), tree(cloud.positions) {}
+};
+
+std::vector<std::unique_ptr<QueriedSurface>> queriedSurfaces() {
+  std::vector<std::unique_ptr<QueriedSurface>> out;
+  out.push_back(std::make_unique<QueriedSurface>(paint_test::sphereCloud(Vec3::Zero(), 0.05, 20000)));
+  out.push_back(std::make_unique<QueriedSurface>(paint_test::planeCloud(0.02, 0.0005)));
+  return out;
+}
+
+/// Deterministic uniform numbers in [0, 1).
+struct Uniform {
+  uint32_t state;
+  double operator()() { return (state = state * 1664525u + 1013904223u) / 4294967296.0; }
+};
+
 TEST(PaintSurface, NearestOriginalsFromTheGridEqualTheKdTree) {
   // Queries on, near, deep below, far above and outside the bounding box of a sphere and of a flat plane
   // (a zero-thickness box): the grid answers near the surface, the kd-tree elsewhere; both must agree.
-  for (const SurfelCloud& cloud :
-       {paint_test::sphereCloud(Vec3::Zero(), 0.05, 20000), paint_test::planeCloud(0.02, 0.0005)}) {
-    const PaintSurface surface(cloud);
-    const KdTree tree(cloud.positions);
-    uint32_t state = 12345;
-    const auto uniform = [&]() { return (state = state * 1664525u + 1013904223u) / 4294967296.0; };
+  for (const auto& queried : queriedSurfaces()) {
+    const auto& [cloud, surface, tree] = *queried;
+    Uniform uniform{12345};
     for (int q = 0; q < 3000; ++q) {
       const Vec3& on = cloud.positions[size_t(uniform() * cloud.size())];
       const double offset = std::pow(10.0, -6 + 5 * uniform()) * (uniform() < 0.5 ? -1 : 1);  // 1 um - 10 cm
@@ -98,12 +120,9 @@ TEST(PaintSurface, NearestOriginalsFromTheGridEqualTheKdTree) {
 }
 
 TEST(PaintSurface, ClearanceLowerBoundNeverExceedsTheDistance) {
-  for (const SurfelCloud& cloud :
-       {paint_test::sphereCloud(Vec3::Zero(), 0.05, 20000), paint_test::planeCloud(0.02, 0.0005)}) {
-    const PaintSurface surface(cloud);
-    const KdTree tree(cloud.positions);
-    uint32_t state = 99;
-    const auto uniform = [&]() { return (state = state * 1664525u + 1013904223u) / 4294967296.0; };
+  for (const auto& queried : queriedSurfaces()) {
+    const auto& [cloud, surface, tree] = *queried;
+    Uniform uniform{99};
     int positive = 0, far = 0;
     for (int q = 0; q < 5000; ++q) {
       const Vec3 x = 0.12 * Vec3(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5);
