@@ -138,7 +138,10 @@ SurfaceContact Brush::contactOf(int node, const PaintSurface& surface, BrushEven
   Vec3 query = x;
   if (options_.plane_proxy && cache.has_plane) {
     const double below = cache.plane_normal.dot(cache.plane_point - x);
-    if (below > 0) query = x + below * cache.plane_normal;
+    const Vec3 projected = x + below * cache.plane_normal;
+    // Only a plane within reach (a plane left from far away would bring the neighbours of another place).
+    if (below > 0 && (projected - cache.plane_point).norm() <= options_.proxy_reach * preset_.bristle_length)
+      query = projected;
   }
   std::array<Neighbor, 64>& found = neighbours_;
   const size_t count = neighbour_count_ =

@@ -171,6 +171,30 @@ TEST(Brush, PressedOntoASphereMassesStayOnItAndHandlesSeeItsNormal) {
   }
 }
 
+TEST(Brush, AStrokeAroundASphereNeverFindsAMassDeep) {
+  // Three times around a sphere at 0.1 m/s, leaning 30 degrees, the ferrule 6 mm closer than the bristles
+  // are long: every exact pass finds the masses within one substep's push of the surface (the proxy holds
+  // them between passes; a node that was far away must not look up neighbours by a plane left elsewhere).
+  const double r = 0.05;
+  const PaintSurface sphere(paint_test::sphereCloud(Vec3::Zero(), r, 60000));
+  for (const BrushPreset& p : {BrushPreset(), paint_test::flatPreset()}) {
+    for (const int passes : {1, 4}) {
+      BrushOptions options;
+      options.collision_passes = passes;
+      Brush brush(p, options);
+      const auto pose = [&](int e) {
+        const double angle = 0.1 * kEvent * e / r;
+        const Vec3 up(std::sin(angle), 0, std::cos(angle)), ahead(std::cos(angle), 0, -std::sin(angle));
+        return stylus((r + p.bristle_length - 0.006) * up, -std::sqrt(0.75) * up - 0.5 * ahead);
+      };
+      brush.reset(pose(0));
+      for (int e = 1; e <= 300; ++e)
+        EXPECT_LT(brush.advance(kEvent, pose(e), &sphere).deepest, 0.001)
+            << (p.shape == BrushShape::kFlat ? "flat" : "round") << ", " << passes << " passes, event " << e;
+    }
+  }
+}
+
 TEST(Brush, FlatBrushSplitsOnAConvexEdgeOnly) {
   const PaintSurface edge(paint_test::edgeCloud(0.04, 0.0005));
   const BrushPreset p = paint_test::flatPreset();
