@@ -1,0 +1,30 @@
+// The paint state of surfels as named attribute columns of a SurfelCloud (float64, so that a PLY or
+// PointCloud2 round trip is exact): the painted model is saved, loaded and sent as an ordinary cloud.
+#pragma once
+
+#include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/paint/paint_state.h"
+
+namespace rc {
+
+/// Column names (thesis 5.6 symbols in the comments); the _rgb columns hold 3 values, the rest 1.
+constexpr const char* kPaintWetRgb = "paint_wet_rgb";                    ///< C_w
+constexpr const char* kPaintWetReflectivity = "paint_wet_reflectivity";  ///< of C_w
+constexpr const char* kPaintWetShininess = "paint_wet_shininess";        ///< of C_w
+constexpr const char* kPaintDryRgb = "paint_dry_rgb";                    ///< C_d
+constexpr const char* kPaintDryReflectivity = "paint_dry_reflectivity";  ///< of C_d
+constexpr const char* kPaintDryShininess = "paint_dry_shininess";        ///< of C_d
+constexpr const char* kPaintWetVolume = "paint_wet_volume";              ///< V_w
+constexpr const char* kPaintDryVolume = "paint_dry_volume";              ///< V_d
+constexpr const char* kPaintOpticalDensity = "paint_optical_density";    ///< rho
+
+/// Whether the cloud carries every paint column (with the right type and size).
+bool hasPaintAttributes(const SurfelCloud& cloud);
+/// Adds the paint columns (or overwrites them) with `initial` for every surfel; a surfel's own colour, when
+/// the cloud has colours and `dry_from_colours` is set, becomes its dry colour.
+void addPaintAttributes(SurfelCloud& cloud, const PaintState& initial, bool dry_from_colours = true);
+/// The paint of surfel i (std::invalid_argument if the columns are missing or i is out of range).
+PaintState readPaint(const SurfelCloud& cloud, size_t i);
+void writePaint(SurfelCloud& cloud, size_t i, const PaintState& paint);
+
+}  // namespace rc

@@ -1,0 +1,23 @@
+#include "relaxed_connectivity/paint/paint_state.h"
+
+#include <algorithm>
+
+namespace rc {
+
+PaintColour PaintColour::mix(const PaintColour& a, double va, const PaintColour& b, double vb) {
+  const double total = va + vb;
+  if (!(total > 0)) return a;
+  const double wa = va / total, wb = vb / total;
+  PaintColour c;
+  c.rgb = wa * a.rgb + wb * b.rgb;
+  c.reflectivity = wa * a.reflectivity + wb * b.reflectivity;
+  c.shininess = wa * a.shininess + wb * b.shininess;
+  return c;
+}
+
+PaintColour visibleColour(const PaintState& s) {
+  const double alpha = std::clamp(s.optical_density * s.wet_volume, 0.0, 1.0);  // (5.8)
+  return PaintColour::mix(s.wet, alpha, s.dry, 1.0 - alpha);
+}
+
+}  // namespace rc

@@ -1,0 +1,38 @@
+// The paint at one surfel or brush sample (thesis 5.6): wet and dry paint, each with a "colour" that is a set
+// of appearance attributes (RGB, reflectivity, shininess), the wet and dry volumes and the optical density.
+#pragma once
+
+#include "relaxed_connectivity/core/surfel_cloud.h"
+
+namespace rc {
+
+/// A paint "colour" in the thesis' sense (5.6): everything that determines appearance and mixes by volume.
+struct PaintColour {
+  Vec3 rgb = Vec3::Zero();  ///< linear RGB, 0..1
+  double reflectivity = 0;  ///< environment reflection weight, 0..1 (metallic paint)
+  double shininess = 0;     ///< specular exponent
+
+  /// Volume-weighted mix: (a va + b vb) / (va + vb); `a` when both volumes are zero.
+  static PaintColour mix(const PaintColour& a, double va, const PaintColour& b, double vb);
+  bool operator==(const PaintColour& o) const {
+    return rgb == o.rgb && reflectivity == o.reflectivity && shininess == o.shininess;
+  }
+};
+
+struct PaintState {
+  PaintColour wet;             ///< C_w
+  PaintColour dry;             ///< C_d (the object's own colour before any paint dried on it)
+  double wet_volume = 0;       ///< V_w
+  double dry_volume = 0;       ///< V_d
+  double optical_density = 1;  ///< rho of the wet paint: alpha = min(rho V_w, 1)
+
+  bool operator==(const PaintState& o) const {
+    return wet == o.wet && dry == o.dry && wet_volume == o.wet_volume && dry_volume == o.dry_volume &&
+           optical_density == o.optical_density;
+  }
+};
+
+/// The visible colour (5.8): alpha C_w + (1 - alpha) C_d with alpha = min(rho V_w, 1) (dry paint is opaque).
+PaintColour visibleColour(const PaintState& s);
+
+}  // namespace rc
