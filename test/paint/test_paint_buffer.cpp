@@ -1,0 +1,129 @@
+// The paint buffer (thesis 5.5, Fig. 5.6): the least-squares plane, splatting with the depth test, the
+// per-pixel exchange, and exact conservation through scatter, transfer and gather.
+#include "relaxed_connectivity/paint/paint_buffer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace rc {
+namespace {
+
+constexpr double kPixel = 5e-4;
+
+/// Samples on a square grid in the plane z = height, `half` samples each side of the centre.
+std::vector<PaintSample> patch(double spacing, int half, double height, const Vec3& rgb, double volume) {
+  std::vector<PaintSample> out;
+  for (int y = -half; y <= half; ++y)
+    for (int x = -half; x <= half; ++x) {
+      PaintSample s;
+      s.position = Vec3(x * spacing, y * spacing, height);
+      s.radius = 1.2 * spacing;
+      s.paint.wet.rgb = rgb;
+      s.paint.wet_volume = volume * (1.0 + 0.1 * std::sin(0.7 * x + 0.3 * y));
+      out.push_back(s);
+    }
+  return out;
+}
+
+double total(const std::vector<PaintState>& states) {
+  double sum = 0;
+  for (const PaintState& s : states) sum += s.wet_volume;
+  return sum;
+}
+
+std::vector<PaintState> states(const std::vector<PaintSample>& samples) {
+  std::vector<PaintState> out;
+  for (const PaintSample& s : samples) out.push_back(s.paint);
+  return out;
+}
+
+TEST(PaintBuffer, FitsTheLeastSquaresPlane) {
+  std::vector<Vec3> points;
+  const Vec3 n = Vec3(0.2, -0.3, 1).normalized(), u = n.unitOrthogonal(), v = n.cross(u);
+  for (int i = 0; i < 200; ++i)
+    points.push_back(Vec3(0.1, 0.2, 0.3) + 0.01 * std::sin(i) * u + 0.01 * std::cos(1.7 * i) * v +
+                     1e-5 * std::sin(13.0 * i) * n);
+  Vec3 centre, normal;
+  PaintBuffer::fitPlane(points, -n, &centre, &normal);
+  EXPECT_NEAR(normal.dot(-n), 1.0, 1e-6);  // oriented like `up`
+  EXPECT_LT(std::abs((centre - Vec3(0.1, 0.2, 0.3)).dot(n)), 1e-5);
+  EXPECT_THROW(PaintBuffer::fitPlane({Vec3::Zero(), Vec3::UnitX()}, n, &centre, &normal),
+               std::invalid_argument);
+}
+
+TEST(PaintBuffer, ConservesWetVolumeThroughSplatTransferAndGather) {
+  const std::vector<PaintSample> surface = patch(1e-3, 12, 0.0, Vec3(0.1, 0.2, 0.9), 0.3);
+  const std::vector<PaintSample> brush = patch(4e-4, 15, -2e-4, Vec3(0.9, 0.1, 0.1), 1.0);  // 0.2 mm deep
+  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
+  buffer.splat(PaintBuffer::kSurface, surface);
+  buffer.splat(PaintBuffer::kBrush, brush);
+  std::vector<PaintState> s = states(surface), b = states(brush);
+  const double before = total(s) + total(b);
+  const PaintTransferStats stats = buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30);
+  EXPECT_GT(stats.penetrated_pixels, 400);
+  EXPECT_GT(stats.moved_to_surface, 0.01 * before);
+  buffer.gather(PaintBuffer::kSurface, s);
+  buffer.gather(PaintBuffer::kBrush, b);
+  EXPECT_NEAR(total(s) + total(b), before, 1e-12 * before);
+  // Paint went both ways: the surface turned towards red, the brush towards blue.
+  EXPECT_GT(s[s.size() / 2].wet.rgb.x(), 0.2);
+  EXPECT_GT(b[b.size() / 2].wet.rgb.z(), 0.1 + 1e-3);
+}
+
+TEST(PaintBuffer, NoTransferToTheBrushLeavesItsPaintUnmixed) {
+  // Fig. 5.8 bottom, through the whole buffer.
+  const std::vector<PaintSample> surface = patch(1e-3, 12, 0.0, Vec3(0.1, 0.2, 0.9), 0.3);
+  const std::vector<PaintSample> brush = patch(4e-4, 15, -2e-4, Vec3(0.9, 0.1, 0.1), 1.0);
+  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
+  buffer.splat(PaintBuffer::kSurface, surface);
+  buffer.splat(PaintBuffer::kBrush, brush);
+  std::vector<PaintState> s = states(surface), b = states(brush);
+  const double before = total(s) + total(b);
+  buffer.transfer(4.0, 0.0, 2000.0, 1.0 / 30);
+  buffer.gather(PaintBuffer::kSurface, s);
+  buffer.gather(PaintBuffer::kBrush, b);
+  EXPECT_NEAR(total(s) + total(b), before, 1e-12 * before);
+  for (size_t i = 0; i < b.size(); ++i) {
+    EXPECT_LE(b[i].wet_volume, brush[i].paint.wet_volume * (1 + 1e-12)) << "brush sample " << i;
+    EXPECT_LT((b[i].wet.rgb - Vec3(0.9, 0.1, 0.1)).norm(), 1e-12) << "brush sample " << i;
+  }
+}
+
+TEST(PaintBuffer, OnlyPenetratingBrushPartsTakePart) {
+  const std::vector<PaintSample> surface = patch(1e-3, 12, 0.0, Vec3(0.1, 0.2, 0.9), 0.3);
+  const std::vector<PaintSample> above = patch(4e-4, 15, 1e-3, Vec3(0.9, 0.1, 0.1), 1.0);  // 1 mm above
+  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
+  buffer.splat(PaintBuffer::kSurface, surface);
+  buffer.splat(PaintBuffer::kBrush, above);
+  EXPECT_EQ(buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30).penetrated_pixels, 0);
+  std::vector<PaintState> b = states(above);
+  buffer.gather(PaintBuffer::kBrush, b);
+  for (size_t i = 0; i < b.size(); ++i) EXPECT_EQ(b[i], above[i].paint);
+}
+
+TEST(PaintBuffer, HoldsAStripeNarrowerThanTheSurfaceSampling) {
+  // A bare surface sampled every 2 mm; a brush stripe 1 mm wide (two pixels) pressed into it. The surface
+  // layer receives the stripe at pixel resolution: edges within 2 pixels of the stripe's.
+  const std::vector<PaintSample> surface = patch(2e-3, 6, 0.0, Vec3(1, 1, 1), 0.0);
+  std::vector<PaintSample> stripe;
+  for (const PaintSample& s : patch(2.5e-4, 40, -2e-4, Vec3(0.9, 0.1, 0.1), 1.0))
+    if (std::abs(s.position.x()) < 5e-4) stripe.push_back(s);
+  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
+  buffer.splat(PaintBuffer::kSurface, surface);
+  buffer.splat(PaintBuffer::kBrush, stripe);
+  buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30);
+  const int y = 20;
+  double peak = 0;
+  for (int x = 0; x < 40; ++x) peak = std::max(peak, buffer.volume(PaintBuffer::kSurface, x, y));
+  ASSERT_GT(peak, 0);
+  for (int x = 0; x < 40; ++x) {
+    const double offset = std::abs(buffer.pixelCentre(x, y).x());
+    const double v = buffer.volume(PaintBuffer::kSurface, x, y) / peak;
+    if (offset < 2.5e-4) EXPECT_GT(v, 0.5) << "x " << x;              // inside the stripe
+    if (offset > 5e-4 + 2 * kPixel) EXPECT_LT(v, 1e-3) << "x " << x;  // 2 pixels beyond its edge
+  }
+}
+
+}  // namespace
+}  // namespace rc
