@@ -57,6 +57,11 @@ void PaintBuffer::splat(Layer layer, const std::vector<PaintSample>& samples) {
   contributed_[layer].assign(n, 0.0);
   shares_[layer].clear();
   sample_volume_[layer].assign(samples.size(), 0.0);
+  if (layer == kSurface) {
+    normal_sum_.assign(n, Vec3::Zero());
+    dry_.assign(n, PaintState());
+    penetrated_.assign(n, 0);
+  }
 
   Camera camera = Camera::orthographic(uint32_t(width_), uint32_t(height_), width_ * pixel_size_);
   Eigen::Matrix3d rotation;
@@ -86,6 +91,12 @@ void PaintBuffer::splat(Layer layer, const std::vector<PaintSample>& samples) {
         return;  // the depth test: only penetrating brush parts take part
       const double w = std::exp(-0.5 * cutoff_sigmas * cutoff_sigmas * double(r2));
       footprint.push_back({uint32_t(i), uint32_t(p), w, w});
+      if (layer == kSurface) {
+        normal_sum_[p] += w * s.normal.normalized();
+        PaintState& d = dry_[p];
+        d.dry = PaintColour::mix(d.dry, weight_[layer][p], s.paint.dry, w);
+        d.dry_volume = (d.dry_volume * weight_[layer][p] + s.paint.dry_volume * w) / (weight_[layer][p] + w);
+      }
       height_sum_[layer][p] += w * h;
       weight_[layer][p] += w;
       total += w;
@@ -119,6 +130,7 @@ PaintTransferStats PaintBuffer::transfer(double tau_brush_to_surface, double tau
       const double depth = height(kSurface, x, y) - height(kBrush, x, y);
       if (!(depth > 0)) continue;
       ++stats.penetrated_pixels;
+      penetrated_[index(x, y)] = 1;
       PaintState& brush = pixel_[kBrush][index(x, y)];
       PaintState& surface = pixel_[kSurface][index(x, y)];
       const double surface_before = surface.wet_volume, brush_before = brush.wet_volume;
@@ -130,34 +142,85 @@ PaintTransferStats PaintBuffer::transfer(double tau_brush_to_surface, double tau
   return stats;
 }
 
+template <class Take>
+void PaintBuffer::forEachPart(Layer layer, Take&& take) const {
+  for (const Share& share : shares_[layer]) {
+    // The sample's part of the pixel: its share of the volume the pixel received, or of the footprint
+    // weights where the pixel received no volume.
+    const double from = contributed_[layer][share.pixel];
+    const double part = from > 0 ? share.weight * sample_volume_[layer][share.sample] / from
+                                 : share.raw_weight / weight_[layer][share.pixel];
+    take(share.sample, share.pixel, part * pixel_[layer][share.pixel].wet_volume);
+  }
+}
+
+namespace {
+
+/// Wet paint received in parts: volume, and the colour and density of what was received.
+struct Received {
+  double volume = 0, density = 0;
+  PaintColour colour;
+  bool touched = false;
+  void add(const PaintState& px, double v) {
+    colour = PaintColour::mix(colour, volume, px.wet, v);
+    density =
+        volume + v > 0 ? (density * volume + px.optical_density * v) / (volume + v) : px.optical_density;
+    volume += v;
+    touched = true;
+  }
+  void writeTo(PaintState& s) const {
+    if (!touched) return;
+    s.wet_volume = volume;
+    if (volume > 0) s.wet = colour, s.optical_density = density;
+  }
+};
+
+}  // namespace
+
 void PaintBuffer::gather(Layer layer, std::vector<PaintState>& states) const {
   if (states.size() != sample_volume_[layer].size())
     throw std::invalid_argument("PaintBuffer::gather: " + std::to_string(states.size()) + " states for " +
                                 std::to_string(sample_volume_[layer].size()) + " splatted samples");
-  // Per sample: the volume, colour and density it takes back.
-  std::vector<double> volume(states.size(), 0.0), density(states.size(), 0.0);
-  std::vector<PaintColour> colour(states.size());
-  std::vector<uint8_t> touched(states.size(), 0);
-  for (const Share& share : shares_[layer]) {
-    const PaintState& px = pixel_[layer][share.pixel];
-    const double from = contributed_[layer][share.pixel];
-    // The sample's part of the pixel: its share of the volume the pixel received, or of the footprint
-    // weights where the pixel received no volume.
-    const double part = from > 0 ? share.weight * sample_volume_[layer][share.sample] / from
-                                 : share.raw_weight / weight_[layer][share.pixel];
-    const double v = part * px.wet_volume;
-    const uint32_t i = share.sample;
-    colour[i] = PaintColour::mix(colour[i], volume[i], px.wet, v);
-    density[i] = volume[i] + v > 0 ? (density[i] * volume[i] + px.optical_density * v) / (volume[i] + v)
-                                   : px.optical_density;
-    volume[i] += v;
-    touched[i] = 1;
-  }
-  for (size_t i = 0; i < states.size(); ++i) {
-    if (!touched[i]) continue;
-    states[i].wet_volume = volume[i];
-    if (volume[i] > 0) states[i].wet = colour[i], states[i].optical_density = density[i];
-  }
+  std::vector<Received> received(states.size());
+  forEachPart(layer, [&](uint32_t i, uint32_t p, double v) { received[i].add(pixel_[layer][p], v); });
+  for (size_t i = 0; i < states.size(); ++i) received[i].writeTo(states[i]);
+}
+
+std::vector<uint8_t> PaintBuffer::penetratedSurfaceSamples() const {
+  std::vector<uint8_t> out(sample_volume_[kSurface].size(), 0);
+  for (const Share& share : shares_[kSurface])
+    if (penetrated_[share.pixel]) out[share.sample] = 1;
+  return out;
+}
+
+void PaintBuffer::resample(const std::vector<uint8_t>& replace, std::vector<PaintState>& states,
+                           std::vector<PixelSurfel>& surfels) const {
+  if (states.size() != sample_volume_[kSurface].size() || replace.size() != states.size())
+    throw std::invalid_argument("PaintBuffer::resample: " + std::to_string(states.size()) + " states and " +
+                                std::to_string(replace.size()) + " flags for " +
+                                std::to_string(sample_volume_[kSurface].size()) + " splatted samples");
+  std::vector<Received> received(states.size());
+  std::vector<Received> at_pixel(pixel_[kSurface].size());
+  forEachPart(kSurface, [&](uint32_t i, uint32_t p, double v) {
+    (replace[i] ? at_pixel[p] : received[i]).add(pixel_[kSurface][p], v);
+  });
+  for (size_t i = 0; i < states.size(); ++i)
+    if (!replace[i]) received[i].writeTo(states[i]);
+  surfels.clear();
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x) {
+      const size_t p = index(x, y);
+      if (!at_pixel[p].touched) continue;
+      PixelSurfel s;
+      s.x = x, s.y = y;
+      s.position = pixelCentre(x, y) + height(kSurface, x, y) * normal_;
+      s.normal = normal_sum_[p].norm() > 0 ? Vec3(normal_sum_[p].normalized()) : normal_;
+      s.radius = pixel_size_;
+      s.paint = dry_[p];
+      s.paint.wet_volume = 0;
+      at_pixel[p].writeTo(s.paint);
+      surfels.push_back(s);
+    }
 }
 
 }  // namespace rc

@@ -19,6 +19,14 @@ struct PaintSample {
   PaintState paint;
 };
 
+/// A surfel made for one pixel when the surface is resampled (5.5).
+struct PixelSurfel {
+  int x = 0, y = 0;
+  Vec3 position = Vec3::Zero(), normal = Vec3::UnitZ();
+  double radius = 0;
+  PaintState paint;
+};
+
 struct PaintTransferStats {
   int penetrated_pixels = 0;    ///< pixels where the brush is below the surface
   double moved_to_surface = 0;  ///< wet volume the surface received
@@ -71,6 +79,15 @@ class PaintBuffer {
   /// volumes equals the sum of the pixels'. Samples that were left out keep their state.
   void gather(Layer layer, std::vector<PaintState>& states) const;
 
+  /// Surface samples with a share in a pixel where paint was exchanged by the last transfer().
+  std::vector<uint8_t> penetratedSurfaceSamples() const;
+  /// Resampling (5.5), instead of gather(kSurface): the samples marked in `replace` give their part of every
+  /// pixel they covered to one new surfel per such pixel (on the surface layer's plane there, with its
+  /// normal, a radius of one pixel, the pixel's wet colour and density, the volume of those parts, and the
+  /// pixel's dry paint); the other samples take their part back as gather() does. Volume is conserved.
+  void resample(const std::vector<uint8_t>& replace, std::vector<PaintState>& states,
+                std::vector<PixelSurfel>& surfels) const;
+
  private:
   size_t index(int x, int y) const { return size_t(y) * size_t(width_) + size_t(x); }
   struct Share {
@@ -86,6 +103,12 @@ class PaintBuffer {
   std::vector<double> weight_[2], height_sum_[2], contributed_[2];
   std::vector<Share> shares_[2];
   std::vector<double> sample_volume_[2];
+  std::vector<Vec3> normal_sum_;     // surface layer: footprint-weighted normals
+  std::vector<PaintState> dry_;      // surface layer: footprint-weighted dry paint (colour, volume)
+  std::vector<uint8_t> penetrated_;  // pixels of the last transfer
+  /// The parts each splatted sample takes back from the pixels: calls take(sample, pixel, volume).
+  template <class Take>
+  void forEachPart(Layer layer, Take&& take) const;
 };
 
 }  // namespace rc

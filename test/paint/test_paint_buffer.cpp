@@ -113,16 +113,77 @@ TEST(PaintBuffer, HoldsAStripeNarrowerThanTheSurfaceSampling) {
   buffer.splat(PaintBuffer::kSurface, surface);
   buffer.splat(PaintBuffer::kBrush, stripe);
   buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30);
-  const int y = 20;
+  // Classified by the world x of each pixel centre (the buffer's own axes need not be the world's).
   double peak = 0;
-  for (int x = 0; x < 40; ++x) peak = std::max(peak, buffer.volume(PaintBuffer::kSurface, x, y));
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 40; ++x) peak = std::max(peak, buffer.volume(PaintBuffer::kSurface, x, y));
   ASSERT_GT(peak, 0);
-  for (int x = 0; x < 40; ++x) {
-    const double offset = std::abs(buffer.pixelCentre(x, y).x());
-    const double v = buffer.volume(PaintBuffer::kSurface, x, y) / peak;
-    if (offset < 2.5e-4) EXPECT_GT(v, 0.5) << "x " << x;              // inside the stripe
-    if (offset > 5e-4 + 2 * kPixel) EXPECT_LT(v, 1e-3) << "x " << x;  // 2 pixels beyond its edge
+  int inside = 0, outside = 0;
+  for (int y = 0; y < 40; ++y)
+    for (int x = 0; x < 40; ++x) {
+      const Vec3 centre = buffer.pixelCentre(x, y);
+      if (std::abs(centre.y()) > 8e-3) continue;  // away from the stripe's ends
+      const double offset = std::abs(centre.x()), v = buffer.volume(PaintBuffer::kSurface, x, y) / peak;
+      if (offset < 2.6e-4) {  // inside the stripe (the pixels at +-0.25 mm)
+        ++inside;
+        EXPECT_GT(v, 0.5) << x << ", " << y;
+      }
+      if (offset > 5e-4 + 2 * kPixel) {  // 2 pixels beyond its edge
+        ++outside;
+        EXPECT_LT(v, 1e-3) << x << ", " << y;
+      }
+    }
+  EXPECT_GT(inside, 40);
+  EXPECT_GT(outside, 400);
+}
+
+TEST(PaintBuffer, ResamplingReplacesThePenetratedSurfelsByPixelSurfelsAndConservesPaint) {
+  const std::vector<PaintSample> surface = patch(2e-3, 6, 0.0, Vec3(0.1, 0.2, 0.9), 0.3);
+  std::vector<PaintSample> stripe;  // 1 mm wide, narrower than the 2 mm surface sampling
+  for (const PaintSample& s : patch(2.5e-4, 40, -2e-4, Vec3(0.9, 0.1, 0.1), 1.0))
+    if (std::abs(s.position.x()) < 5e-4) stripe.push_back(s);
+  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
+  buffer.splat(PaintBuffer::kSurface, surface);
+  buffer.splat(PaintBuffer::kBrush, stripe);
+  std::vector<PaintState> s = states(surface), b = states(stripe);
+  const double before = total(s) + total(b);
+  buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30);
+  const std::vector<uint8_t> replace = buffer.penetratedSurfaceSamples();
+  size_t replaced = 0;
+  for (uint8_t r : replace) replaced += r;
+  EXPECT_GT(replaced, 0u);
+  EXPECT_LT(replaced, surface.size());
+  std::vector<PixelSurfel> children;
+  buffer.resample(replace, s, children);
+  buffer.gather(PaintBuffer::kBrush, b);
+  // Conservation: the kept surfels, the new pixel surfels and the brush.
+  double after = total(b);
+  for (size_t i = 0; i < s.size(); ++i)
+    if (!replace[i]) after += s[i].wet_volume;
+  for (const PixelSurfel& c : children) after += c.paint.wet_volume;
+  EXPECT_NEAR(after, before, 1e-12 * before);
+  // One surfel per pixel, on the surface (z = 0), facing up, a pixel wide.
+  EXPECT_GT(children.size(), 100u);
+  for (const PixelSurfel& c : children) {
+    EXPECT_NEAR(c.position.z(), 0.0, 1e-6);
+    EXPECT_NEAR(c.normal.z(), 1.0, 1e-12);
+    EXPECT_EQ(c.radius, kPixel);
   }
+  // The stripe at pixel resolution: red inside, the surface's blue two pixels beyond its edge.
+  int inside = 0, outside = 0;
+  for (const PixelSurfel& c : children) {
+    const double offset = std::abs(c.position.x());
+    if (offset < 2.6e-4) {
+      ++inside;
+      EXPECT_GT(c.paint.wet.rgb.x(), 0.5) << c.x << ", " << c.y;
+    }
+    if (offset > 5e-4 + 2 * kPixel) {
+      ++outside;
+      EXPECT_LT(c.paint.wet.rgb.x(), 0.1 + 1e-3) << c.x << ", " << c.y;
+    }
+  }
+  EXPECT_GT(inside, 20);
+  EXPECT_GT(outside, 20);
 }
 
 }  // namespace
