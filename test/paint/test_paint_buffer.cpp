@@ -38,6 +38,27 @@ std::vector<PaintState> states(const std::vector<PaintSample>& samples) {
   return out;
 }
 
+/// A 40 x 40 buffer at the origin in the plane z = 0 with `surface` and `brush` splatted, their paint states
+/// and their total wet volume.
+struct Pressed {
+  PaintBuffer buffer{Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40};
+  std::vector<PaintState> s, b;
+  double before;
+  Pressed(const std::vector<PaintSample>& surface, const std::vector<PaintSample>& brush)
+      : s(states(surface)), b(states(brush)), before(total(s) + total(b)) {
+    buffer.splat(PaintBuffer::kSurface, surface);
+    buffer.splat(PaintBuffer::kBrush, brush);
+  }
+};
+
+/// A red brush stripe 1 mm wide along y, 0.2 mm below z = 0.
+std::vector<PaintSample> stripeBrush() {
+  std::vector<PaintSample> stripe;
+  for (const PaintSample& s : patch(2.5e-4, 40, -2e-4, Vec3(0.9, 0.1, 0.1), 1.0))
+    if (std::abs(s.position.x()) < 5e-4) stripe.push_back(s);
+  return stripe;
+}
+
 TEST(PaintBuffer, FitsTheLeastSquaresPlane) {
   std::vector<Vec3> points;
   const Vec3 n = Vec3(0.2, -0.3, 1).normalized(), u = n.unitOrthogonal(), v = n.cross(u);
@@ -55,11 +76,10 @@ TEST(PaintBuffer, FitsTheLeastSquaresPlane) {
 TEST(PaintBuffer, ConservesWetVolumeThroughSplatTransferAndGather) {
   const std::vector<PaintSample> surface = patch(1e-3, 12, 0.0, Vec3(0.1, 0.2, 0.9), 0.3);
   const std::vector<PaintSample> brush = patch(4e-4, 15, -2e-4, Vec3(0.9, 0.1, 0.1), 1.0);  // 0.2 mm deep
-  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
-  buffer.splat(PaintBuffer::kSurface, surface);
-  buffer.splat(PaintBuffer::kBrush, brush);
-  std::vector<PaintState> s = states(surface), b = states(brush);
-  const double before = total(s) + total(b);
+  Pressed pressed(surface, brush);
+  PaintBuffer& buffer = pressed.buffer;
+  std::vector<PaintState>&s = pressed.s, &b = pressed.b;
+  const double before = pressed.before;
   const PaintTransferStats stats = buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30);
   EXPECT_GT(stats.penetrated_pixels, 400);
   EXPECT_GT(stats.moved_to_surface, 0.01 * before);
@@ -75,11 +95,10 @@ TEST(PaintBuffer, NoTransferToTheBrushLeavesItsPaintUnmixed) {
   // Fig. 5.8 bottom, through the whole buffer.
   const std::vector<PaintSample> surface = patch(1e-3, 12, 0.0, Vec3(0.1, 0.2, 0.9), 0.3);
   const std::vector<PaintSample> brush = patch(4e-4, 15, -2e-4, Vec3(0.9, 0.1, 0.1), 1.0);
-  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
-  buffer.splat(PaintBuffer::kSurface, surface);
-  buffer.splat(PaintBuffer::kBrush, brush);
-  std::vector<PaintState> s = states(surface), b = states(brush);
-  const double before = total(s) + total(b);
+  Pressed pressed(surface, brush);
+  PaintBuffer& buffer = pressed.buffer;
+  std::vector<PaintState>&s = pressed.s, &b = pressed.b;
+  const double before = pressed.before;
   buffer.transfer(4.0, 0.0, 2000.0, 1.0 / 30);
   buffer.gather(PaintBuffer::kSurface, s);
   buffer.gather(PaintBuffer::kBrush, b);
@@ -93,12 +112,10 @@ TEST(PaintBuffer, NoTransferToTheBrushLeavesItsPaintUnmixed) {
 TEST(PaintBuffer, OnlyPenetratingBrushPartsTakePart) {
   const std::vector<PaintSample> surface = patch(1e-3, 12, 0.0, Vec3(0.1, 0.2, 0.9), 0.3);
   const std::vector<PaintSample> above = patch(4e-4, 15, 1e-3, Vec3(0.9, 0.1, 0.1), 1.0);  // 1 mm above
-  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
-  buffer.splat(PaintBuffer::kSurface, surface);
-  buffer.splat(PaintBuffer::kBrush, above);
-  EXPECT_EQ(buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30).penetrated_pixels, 0);
-  std::vector<PaintState> b = states(above);
-  buffer.gather(PaintBuffer::kBrush, b);
+  Pressed pressed(surface, above);
+  EXPECT_EQ(pressed.buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30).penetrated_pixels, 0);
+  std::vector<PaintState>& b = pressed.b;
+  pressed.buffer.gather(PaintBuffer::kBrush, b);
   for (size_t i = 0; i < b.size(); ++i) EXPECT_EQ(b[i], above[i].paint);
 }
 
@@ -106,12 +123,8 @@ TEST(PaintBuffer, HoldsAStripeNarrowerThanTheSurfaceSampling) {
   // A bare surface sampled every 2 mm; a brush stripe 1 mm wide (two pixels) pressed into it. The surface
   // layer receives the stripe at pixel resolution: edges within 2 pixels of the stripe's.
   const std::vector<PaintSample> surface = patch(2e-3, 6, 0.0, Vec3(1, 1, 1), 0.0);
-  std::vector<PaintSample> stripe;
-  for (const PaintSample& s : patch(2.5e-4, 40, -2e-4, Vec3(0.9, 0.1, 0.1), 1.0))
-    if (std::abs(s.position.x()) < 5e-4) stripe.push_back(s);
-  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
-  buffer.splat(PaintBuffer::kSurface, surface);
-  buffer.splat(PaintBuffer::kBrush, stripe);
+  Pressed pressed(surface, stripeBrush());
+  PaintBuffer& buffer = pressed.buffer;
   buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30);
   // Classified by the world x of each pixel centre (the buffer's own axes need not be the world's).
   double peak = 0;
@@ -139,14 +152,11 @@ TEST(PaintBuffer, HoldsAStripeNarrowerThanTheSurfaceSampling) {
 
 TEST(PaintBuffer, ResamplingReplacesThePenetratedSurfelsByPixelSurfelsAndConservesPaint) {
   const std::vector<PaintSample> surface = patch(2e-3, 6, 0.0, Vec3(0.1, 0.2, 0.9), 0.3);
-  std::vector<PaintSample> stripe;  // 1 mm wide, narrower than the 2 mm surface sampling
-  for (const PaintSample& s : patch(2.5e-4, 40, -2e-4, Vec3(0.9, 0.1, 0.1), 1.0))
-    if (std::abs(s.position.x()) < 5e-4) stripe.push_back(s);
-  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 40, 40);
-  buffer.splat(PaintBuffer::kSurface, surface);
-  buffer.splat(PaintBuffer::kBrush, stripe);
-  std::vector<PaintState> s = states(surface), b = states(stripe);
-  const double before = total(s) + total(b);
+  const std::vector<PaintSample> stripe = stripeBrush();  // 1 mm wide, narrower than the 2 mm sampling
+  Pressed pressed(surface, stripe);
+  PaintBuffer& buffer = pressed.buffer;
+  std::vector<PaintState>&s = pressed.s, &b = pressed.b;
+  const double before = pressed.before;
   buffer.transfer(4.0, 4.0, 2000.0, 1.0 / 30);
   const std::vector<uint8_t> replace = buffer.penetratedSurfaceSamples();
   size_t replaced = 0;
