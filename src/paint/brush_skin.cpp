@@ -73,8 +73,10 @@ BrushSkin::BrushSkin(const BrushPreset& p, const BrushSkeleton& skeleton) {
     node_neighbours_[s.b].push_back(s.a);
   }
   rotations_.assign(nodes.size(), Eigen::Matrix3d::Identity());
-  wet_colour.assign(size(), p.paint_colour);
-  wet_volume.assign(size(), p.paint_volume);
+  PaintState loaded;
+  loaded.wet.rgb = p.paint_colour;
+  loaded.wet_volume = p.paint_volume;
+  paint.assign(size(), loaded);
   update(skeleton);
 }
 
@@ -118,7 +120,7 @@ SurfelCloud BrushSkin::cloud() const {
   c.colors.resize(size());
   for (size_t i = 0; i < size(); ++i)
     for (int k = 0; k < 3; ++k)
-      c.colors[i][k] = uint8_t(std::lround(255.0 * std::clamp(wet_colour[i][k], 0.0, 1.0)));
+      c.colors[i][k] = uint8_t(std::lround(255.0 * std::clamp(paint[i].wet.rgb[k], 0.0, 1.0)));
   for (auto& col : c.colors) col[3] = 255;
   return c;
 }

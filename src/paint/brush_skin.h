@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "relaxed_connectivity/paint/brush_skeleton.h"
+#include "relaxed_connectivity/paint/paint_state.h"
 
 namespace rc {
 
@@ -28,10 +29,8 @@ class BrushSkin {
   const std::vector<Vec3>& positions() const { return positions_; }
   const std::vector<Vec3>& normals() const { return normals_; }
 
-  /// Paint on the brush (the paint model exchanges it, 5.5): wet colour (linear RGB) and wet volume per
-  /// surfel.
-  std::vector<Vec3> wet_colour;
-  std::vector<double> wet_volume;
+  /// Paint on the brush, per surfel (the paint model exchanges its wet part, 5.5; brush paint never dries).
+  std::vector<PaintState> paint;
 
   /// The skin as a surfel cloud (positions, normals, radii, colours of the wet paint) in the world frame.
   SurfelCloud cloud() const;

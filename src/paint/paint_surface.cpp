@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "relaxed_connectivity/paint/paint_attributes.h"
+
 namespace rc {
 
 PaintSurface::PaintSurface(SurfelCloud originals) : originals_(std::move(originals)) {
@@ -20,6 +22,19 @@ PaintSurface::PaintSurface(SurfelCloud originals) : originals_(std::move(origina
   for (Vec3& n : originals_.normals) n.normalize();
   tree_ = std::make_unique<KdTree>(originals_.positions);
   enabled_.assign(originals_.size(), 1);
+  if (hasPaintAttributes(originals_)) {
+    original_paint_.resize(originals_.size());
+    for (size_t i = 0; i < originals_.size(); ++i) original_paint_[i] = readPaint(originals_, i);
+  } else {
+    PaintState base;  // the object's own colour as a dry base layer
+    base.dry.rgb = Vec3::Ones();
+    base.dry_volume = 1.0;
+    original_paint_.assign(originals_.size(), base);
+    if (originals_.hasColors())
+      for (size_t i = 0; i < originals_.size(); ++i)
+        original_paint_[i].dry.rgb =
+            Vec3(originals_.colors[i][0], originals_.colors[i][1], originals_.colors[i][2]) / 255.0;
+  }
   children_.resize(originals_.size());
   enabled_count_ = originals_.size();
   std::vector<double> scale;
@@ -155,6 +170,22 @@ void PaintSurface::addChild(uint32_t father, const ChildSurfel& child) {
   setEnabled(father, false);
 }
 
+void PaintSurface::originalsWithin(const Vec3& x, double radius, std::vector<uint32_t>& out) const {
+  std::vector<Neighbor> found;
+  tree_->radius(x, radius, found, true);
+  out.clear();
+  for (const Neighbor& n : found) out.push_back(n.index);
+}
+
+void PaintSurface::removeChild(size_t original, size_t k) {
+  std::vector<ChildSurfel>& list = children_.at(original);
+  if (k >= list.size())
+    throw std::out_of_range("PaintSurface::removeChild: child " + std::to_string(k) + " of " +
+                            std::to_string(list.size()));
+  list.erase(list.begin() + long(k));
+  --child_count_;
+}
+
 void PaintSurface::clearChildren(size_t original) {
   child_count_ -= children_.at(original).size();
   children_[original].clear();
@@ -169,30 +200,32 @@ SurfelCloud PaintSurface::activeCloud() const {
   out.normals.reserve(n);
   out.radii.reserve(n);
   out.colors.reserve(n);
-  Attribute& father = out.attributes.add("father", ScalarType::kUInt32, 1, 0);
-  father.bytes.reserve(n * 4);
+  std::vector<const PaintState*> paint;
+  paint.reserve(n);
+  std::vector<uint32_t> fathers;
+  fathers.reserve(n);
   const auto to_byte = [](double c) { return uint8_t(std::lround(255.0 * std::clamp(c, 0.0, 1.0))); };
-  const auto push_father = [&](uint32_t i) {
-    const auto* b = reinterpret_cast<const uint8_t*>(&i);
-    father.bytes.insert(father.bytes.end(), b, b + 4);
+  const auto push = [&](const Vec3& p, const Vec3& normal, double radius, const PaintState& state,
+                        uint32_t father) {
+    out.positions.push_back(p);
+    out.normals.push_back(normal);
+    out.radii.push_back(radius);
+    const Vec3 c = visibleColour(state).rgb;  // (5.8)
+    out.colors.push_back({to_byte(c[0]), to_byte(c[1]), to_byte(c[2]), 255});
+    paint.push_back(&state);
+    fathers.push_back(father);
   };
   for (size_t i = 0; i < originals_.size(); ++i) {
-    if (enabled_[i]) {
-      out.positions.push_back(originals_.positions[i]);
-      out.normals.push_back(originals_.normals[i]);
-      out.radii.push_back(originals_.hasRadii() ? originals_.radii[i] : 0.0);
-      out.colors.push_back(originals_.hasColors() ? originals_.colors[i] : Rgba{255, 255, 255, 255});
-      push_father(uint32_t(i));
-    }
-    for (const ChildSurfel& c : children_[i]) {
-      out.positions.push_back(c.position);
-      out.normals.push_back(c.normal);
-      out.radii.push_back(c.radius);
-      out.colors.push_back({to_byte(c.colour[0]), to_byte(c.colour[1]), to_byte(c.colour[2]), 255});
-      push_father(uint32_t(i));
-    }
+    if (enabled_[i])
+      push(originals_.positions[i], originals_.normals[i], originals_.hasRadii() ? originals_.radii[i] : 0.0,
+           original_paint_[i], uint32_t(i));
+    for (const ChildSurfel& c : children_[i]) push(c.position, c.normal, c.radius, c.paint, uint32_t(i));
   }
   if (!originals_.hasRadii() && child_count_ == 0) out.radii.clear();
+  addPaintAttributes(out, PaintState(), false);
+  for (size_t k = 0; k < out.size(); ++k) writePaint(out, k, *paint[k]);
+  Attribute& father = out.attributes.add("father", ScalarType::kUInt32, 1, out.size());
+  for (size_t k = 0; k < out.size(); ++k) father.set(k, fathers[k]);
   return out;
 }
 

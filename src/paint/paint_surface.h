@@ -10,16 +10,16 @@
 #include "relaxed_connectivity/core/neighbor.h"
 #include "relaxed_connectivity/core/sorted_cell_grid.h"
 #include "relaxed_connectivity/core/surfel_cloud.h"
+#include "relaxed_connectivity/paint/paint_state.h"
 
 namespace rc {
 
-/// A surfel that replaced (part of) an original after resampling (5.5): its geometry and colour. The paint
-/// model adds its paint attributes alongside.
+/// A surfel that replaced (part of) an original after resampling (5.5): its geometry and paint.
 struct ChildSurfel {
   Vec3 position;
   Vec3 normal;
   double radius = 0;
-  Vec3 colour = Vec3::Zero();  ///< linear RGB, 0..1
+  PaintState paint;
 };
 
 class PaintSurface {
@@ -51,6 +51,15 @@ class PaintSurface {
   bool enabled(size_t original) const { return enabled_[original] != 0; }
   void setEnabled(size_t original, bool enabled);
   const std::vector<ChildSurfel>& children(size_t original) const { return children_[original]; }
+  std::vector<ChildSurfel>& children(size_t original) { return children_[original]; }
+  /// The paint of an original surfel: from the cloud's paint columns when it has them (paint_attributes.h),
+  /// else no wet paint over a dry base layer (volume 1) of the surfel's own colour (white without colours).
+  const PaintState& originalPaint(size_t original) const { return original_paint_[original]; }
+  PaintState& originalPaint(size_t original) { return original_paint_[original]; }
+  /// The indices of the originals within `radius` of x (enabled or not), into `out` (cleared first).
+  void originalsWithin(const Vec3& x, double radius, std::vector<uint32_t>& out) const;
+  /// Removes child `k` of `original` (a child deleted by resampling, 5.5); the original stays disabled.
+  void removeChild(size_t original, size_t k);
   /// Appends a child to its father (the closest original, or `father` when given) and disables the father.
   /// Returns the father.
   uint32_t addChild(const ChildSurfel& child);
@@ -62,8 +71,9 @@ class PaintSurface {
   size_t childCount() const { return child_count_; }
   /// Surfels shown and painted: enabled originals plus all children.
   size_t activeCount() const { return enabled_count_ + child_count_; }
-  /// The active surfels as one cloud (positions, normals, radii, colours) for rendering and export; the
-  /// uint32 attribute `father` names each surfel's original.
+  /// The active surfels as one cloud (positions, normals, radii, visible colours (5.8)) with their paint
+  /// columns (paint_attributes.h) for rendering and export; the uint32 attribute `father` names each
+  /// surfel's original.
   SurfelCloud activeCloud() const;
 
  private:
@@ -79,6 +89,7 @@ class PaintSurface {
   std::vector<uint8_t> cell_distance_;  // Chebyshev distance in cells to the nearest occupied cell (capped)
   std::vector<uint8_t> enabled_;
   std::vector<std::vector<ChildSurfel>> children_;
+  std::vector<PaintState> original_paint_;
   size_t enabled_count_ = 0;
   size_t child_count_ = 0;
   double typical_radius_ = 0;

@@ -29,7 +29,8 @@ TEST(PaintSurface, ChildrenReplaceTheirClosestOriginalAndOriginalsStay) {
     c.position = Vec3(0.002 + 0.0002 * (k % 2), -0.003 + 0.0002 * (k / 2), 0);
     c.normal = Vec3::UnitZ();
     c.radius = 0.0002;
-    c.colour = Vec3(1, 0, 0);
+    c.paint.wet.rgb = Vec3(1, 0, 0);
+    c.paint.wet_volume = 1.0;
     EXPECT_EQ(s.addChild(c), father);
   }
   EXPECT_FALSE(s.enabled(father));

@@ -1,0 +1,179 @@
+#include "relaxed_connectivity/paint/paint_transfer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "relaxed_connectivity/paint/paint_buffer.h"
+
+namespace rc {
+
+namespace {
+
+/// Where a splatted surface sample lives in the PaintSurface.
+struct SurfaceRef {
+  uint32_t original;
+  int32_t child;  ///< -1: the original itself
+};
+
+/// One tip's paint buffer: plane, extent, splats, exchange, resampling, gather.
+void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const Vec3& tip_normal,
+                   Brush& brush, PaintSurface& surface, const PaintType& paint, double dt,
+                   const PaintTransferOptions& o, PaintEventStats* stats) {
+  BrushSkin& skin = brush.skin();
+  const double pixel = o.pixel_size > 0 ? o.pixel_size : brush.preset().surfel_spacing;
+  const double reach = brush.preset().bristle_length;
+  // (5.5) The least-squares plane of the object around the tip.
+  std::vector<uint32_t> near;
+  surface.originalsWithin(tip, 0.5 * reach, near);
+  if (near.size() < 3) return;
+  std::vector<Vec3> points;
+  for (uint32_t i : near) points.push_back(surface.originals().positions[i]);
+  Vec3 centre, normal;
+  PaintBuffer::fitPlane(points, tip_normal, &centre, &normal);
+  // The buffer covers the skin surfels of this tip that reach below the plane (plus a margin).
+  Vec3 low_centre = Vec3::Zero();
+  std::vector<int> low;
+  for (int i : skin_samples) {
+    const double h = normal.dot(skin.positions()[size_t(i)] - centre);
+    if (h < skin.radius()) low.push_back(i), low_centre += skin.positions()[size_t(i)];
+  }
+  if (low.empty()) return;
+  low_centre /= double(low.size());
+  low_centre -= normal.dot(low_centre - centre) * normal;  // onto the plane
+  double half = 0;
+  for (int i : low) {
+    const Vec3 d = skin.positions()[size_t(i)] - low_centre;
+    half = std::max(half, (d - normal.dot(d) * normal).norm());
+  }
+  half = std::min(half + skin.radius() + o.margin_pixels * pixel, 0.5 * o.max_extent);
+  const int side = std::max(1, int(std::ceil(2 * half / pixel)));
+  PaintBuffer buffer(low_centre, normal, pixel, side, side);
+
+  // The object's active surfels near the buffer (children lie near their fathers).
+  std::vector<PaintSample> surface_samples;
+  std::vector<SurfaceRef> refs;
+  surface.originalsWithin(low_centre, half * std::sqrt(2.0) + 4 * surface.typicalRadius(), near);
+  for (uint32_t i : near) {
+    const SurfelCloud& originals = surface.originals();
+    if (surface.enabled(i)) {
+      PaintSample s;
+      s.position = originals.positions[i];
+      s.normal = originals.normals[i];
+      s.radius = originals.hasRadii() ? originals.radii[i] : surface.typicalRadius();
+      s.paint = surface.originalPaint(i);
+      surface_samples.push_back(s);
+      refs.push_back({i, -1});
+    }
+    const std::vector<ChildSurfel>& children = surface.children(i);
+    for (size_t k = 0; k < children.size(); ++k) {
+      surface_samples.push_back(
+          {children[k].position, children[k].normal, children[k].radius, children[k].paint});
+      refs.push_back({i, int32_t(k)});
+    }
+  }
+  std::vector<PaintSample> brush_samples;
+  for (int i : skin_samples)
+    brush_samples.push_back(
+        {skin.positions()[size_t(i)], skin.normals()[size_t(i)], skin.radius(), skin.paint[size_t(i)]});
+
+  buffer.splat(PaintBuffer::kSurface, surface_samples);
+  buffer.splat(PaintBuffer::kBrush, brush_samples);
+  const PaintTransferStats t =
+      buffer.transfer(paint.transfer_to_surface, paint.transfer_to_brush, o.pressure_per_depth, dt);
+  ++stats->buffers;
+  stats->penetrated_pixels += t.penetrated_pixels;
+  stats->moved_to_surface += t.moved_to_surface;
+  stats->moved_to_brush += t.moved_to_brush;
+  if (t.penetrated_pixels == 0) return;
+
+  // Brush: gathered back (the brush is not resampled, 5.5).
+  std::vector<PaintState> brush_states;
+  for (const PaintSample& s : brush_samples) brush_states.push_back(s.paint);
+  buffer.gather(PaintBuffer::kBrush, brush_states);
+  for (size_t k = 0; k < skin_samples.size(); ++k) skin.paint[size_t(skin_samples[k])] = brush_states[k];
+
+  // Surface: kept samples take their paint back; the penetrated ones are replaced by pixel surfels.
+  const std::vector<uint8_t> replace = buffer.penetratedSurfaceSamples();
+  std::vector<PaintState> states;
+  for (const PaintSample& s : surface_samples) states.push_back(s.paint);
+  std::vector<PixelSurfel> pixels;
+  buffer.resample(replace, states, pixels);
+  for (size_t k = 0; k < refs.size(); ++k) {
+    if (replace[k]) continue;
+    if (refs[k].child < 0)
+      surface.originalPaint(refs[k].original) = states[k];
+    else
+      surface.children(refs[k].original)[size_t(refs[k].child)].paint = states[k];
+  }
+  // Deleted children go from the back of each list so that the other indices stay valid.
+  for (size_t k = refs.size(); k-- > 0;) {
+    if (!replace[k]) continue;
+    if (refs[k].child < 0) {
+      surface.setEnabled(refs[k].original, false);
+      ++stats->originals_disabled;
+    } else {
+      surface.removeChild(refs[k].original, size_t(refs[k].child));
+      ++stats->children_removed;
+    }
+  }
+  for (const PixelSurfel& p : pixels) {
+    surface.addChild(ChildSurfel{p.position, p.normal, p.radius, p.paint});
+    ++stats->children_added;
+  }
+}
+
+}  // namespace
+
+void PaintTransferOptions::validate() const {
+  if (!(pixel_size >= 0) || !std::isfinite(pixel_size))
+    throw std::invalid_argument("paint transfer: pixel_size must be >= 0 (0: the brush's surfel spacing)");
+  if (!(pressure_per_depth >= 0) || !std::isfinite(pressure_per_depth))
+    throw std::invalid_argument("paint transfer: pressure_per_depth must be >= 0");
+  if (margin_pixels < 0 || margin_pixels > 64)
+    throw std::invalid_argument("paint transfer: margin_pixels must lie in 0..64");
+  if (!(max_extent > 0) || !std::isfinite(max_extent))
+    throw std::invalid_argument("paint transfer: max_extent must be positive");
+}
+
+PaintEventStats transferPaint(Brush& brush, PaintSurface& surface, const PaintType& paint, double dt,
+                              const PaintTransferOptions& options) {
+  options.validate();
+  if (!(dt >= 0)) throw std::invalid_argument("transferPaint: dt must be >= 0");
+  PaintEventStats stats;
+  const BrushSplit& split = brush.split();
+  if (split.tips.empty()) return stats;
+  const BrushSkeleton& skeleton = brush.skeleton();
+  BrushSkin& skin = brush.skin();
+  // Tip centres: the mean of each tip's colliding active masses.
+  std::vector<Vec3> tips;
+  for (const std::vector<int>& tip : split.tips) {
+    Vec3 c = Vec3::Zero();
+    for (int a : tip) c += skeleton.positions()[size_t(skeleton.handleCount() + a)];
+    tips.push_back(c / double(tip.size()));
+  }
+  // Each skin surfel goes to the buffer of its nearest tip (one buffer when the brush is not split).
+  std::vector<std::vector<int>> samples(tips.size());
+  for (size_t i = 0; i < skin.size(); ++i) {
+    size_t best = 0;
+    for (size_t t = 1; t < tips.size(); ++t)
+      if ((skin.positions()[i] - tips[t]).squaredNorm() < (skin.positions()[i] - tips[best]).squaredNorm())
+        best = t;
+    samples[best].push_back(int(i));
+  }
+  for (size_t t = 0; t < tips.size(); ++t)
+    transferAtTip(samples[t], tips[t], split.tip_normals[t], brush, surface, paint, dt, options, &stats);
+  return stats;
+}
+
+double surfaceWetVolume(const PaintSurface& surface) {
+  double sum = 0;
+  for (size_t i = 0; i < surface.originalCount(); ++i) {
+    if (surface.enabled(i)) sum += surface.originalPaint(i).wet_volume;
+    for (const ChildSurfel& c : surface.children(i)) sum += c.paint.wet_volume;
+  }
+  return sum;
+}
+
+}  // namespace rc

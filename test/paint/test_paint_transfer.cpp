@@ -1,0 +1,112 @@
+// One paint event after another (thesis 5.5): a brush pressed and dragged over a sampled plane leaves paint
+// along its path on new child surfels; wet paint is conserved between brush and surface; replays are
+// identical; nothing happens in the air.
+#include "relaxed_connectivity/paint/paint_transfer.h"
+
+#include <gtest/gtest.h>
+
+#include "paint_test_surfaces.h"
+
+namespace rc {
+namespace {
+
+constexpr double kEvent = 1.0 / 30;
+
+Eigen::Isometry3d stylusAt(const Vec3& ferrule) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = Eigen::Quaterniond::FromTwoVectors(Vec3(0, 0, -1), Vec3(-0.5, 0, -std::sqrt(0.75)))
+                   .toRotationMatrix();  // leaning back 30 degrees against +x motion
+  t.translation() = ferrule;
+  return t;
+}
+
+PaintType symmetricPaint() {
+  PaintType p;
+  p.transfer_to_surface = 4.0;
+  p.transfer_to_brush = 4.0;
+  return p;
+}
+
+struct Session {
+  PaintSurface surface{paint_test::planeCloud(0.03, 0.001)};  // 6 cm square, 1 mm sampling
+  Brush brush{BrushPreset()};
+  std::vector<PaintEventStats> events;
+
+  /// Presses the brush 4 mm closer than its bristles are long over 10 events, then drags it 2 cm along +x.
+  void stroke(const PaintType& paint, int drag_events = 30) {
+    const double l = brush.preset().bristle_length;
+    brush.reset(stylusAt(Vec3(-0.01, 0, l)));
+    for (int e = 1; e <= 10 + drag_events; ++e) {
+      const double lower = std::min(1.0, e / 10.0) * 0.004;
+      const double x = -0.01 + 0.02 * std::max(0, e - 10) / double(drag_events);
+      brush.advance(kEvent, stylusAt(Vec3(x, 0, l - lower)), &surface);
+      events.push_back(transferPaint(brush, surface, paint, kEvent));
+    }
+  }
+};
+
+double brushWetVolume(const Brush& brush) {
+  double sum = 0;
+  for (const PaintState& p : brush.skin().paint) sum += p.wet_volume;
+  return sum;
+}
+
+TEST(PaintTransfer, AStrokeLeavesPaintOnChildSurfelsAndConservesWetPaint) {
+  Session s;
+  const double before = brushWetVolume(s.brush) + surfaceWetVolume(s.surface);
+  s.stroke(symmetricPaint());
+  const double after = brushWetVolume(s.brush) + surfaceWetVolume(s.surface);
+  EXPECT_NEAR(after, before, 1e-12 * before);
+  // Paint moved to the surface, on children at the paint buffer's resolution along the path.
+  size_t disabled = 0, painted = 0;
+  double xmin = 1, xmax = -1;
+  for (size_t i = 0; i < s.surface.originalCount(); ++i) {
+    disabled += !s.surface.enabled(i);
+    for (const ChildSurfel& c : s.surface.children(i))
+      if (c.paint.wet_volume > 1e-3) {
+        ++painted;
+        xmin = std::min(xmin, c.position.x()), xmax = std::max(xmax, c.position.x());
+        EXPECT_NEAR(c.position.z(), 0.0, 1e-9);
+        EXPECT_GT(c.paint.wet.rgb.x(), c.paint.wet.rgb.z());  // the brush's red
+      }
+  }
+  EXPECT_GT(disabled, 20u);
+  EXPECT_GT(painted, 100u);
+  EXPECT_GT(surfaceWetVolume(s.surface), 0.005 * before);  // measured 1.1 % of the load
+  // The path runs along x for the 2 cm of the drag (the trailing tip 1-2 cm behind the ferrule).
+  EXPECT_GT(xmax - xmin, 0.015);
+  // The surface's wet paint is what the events moved there (nothing was on it before).
+  double moved = 0;
+  for (const PaintEventStats& e : s.events) moved += e.moved_to_surface - e.moved_to_brush;
+  EXPECT_NEAR(surfaceWetVolume(s.surface), moved, 1e-9 * before);
+}
+
+TEST(PaintTransfer, ReplayingAStrokeGivesIdenticalSurfels) {
+  Session a, b;
+  a.stroke(symmetricPaint(), 12);
+  b.stroke(symmetricPaint(), 12);
+  ASSERT_EQ(a.surface.childCount(), b.surface.childCount());
+  const SurfelCloud ca = a.surface.activeCloud(), cb = b.surface.activeCloud();
+  ASSERT_EQ(ca.size(), cb.size());
+  for (size_t i = 0; i < ca.size(); ++i) {
+    ASSERT_EQ(ca.positions[i], cb.positions[i]) << i;
+    ASSERT_EQ(ca.colors[i], cb.colors[i]) << i;
+  }
+  for (const auto& column : ca.attributes.columns())
+    EXPECT_EQ(column.bytes, cb.attributes.find(column.name)->bytes);
+}
+
+TEST(PaintTransfer, ABrushInTheAirTransfersNothing) {
+  Session s;
+  s.brush.reset(stylusAt(Vec3(0, 0, 0.05)));
+  s.brush.advance(kEvent, stylusAt(Vec3(0.001, 0, 0.05)), &s.surface);
+  const PaintEventStats e = transferPaint(s.brush, s.surface, symmetricPaint(), kEvent);
+  EXPECT_EQ(e.buffers, 0);
+  EXPECT_EQ(s.surface.childCount(), 0u);
+  PaintTransferOptions bad;
+  bad.pixel_size = -1;
+  EXPECT_THROW(transferPaint(s.brush, s.surface, symmetricPaint(), kEvent, bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rc
