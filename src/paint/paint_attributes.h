@@ -27,4 +27,18 @@ void addPaintAttributes(SurfelCloud& cloud, const PaintState& initial, bool dry_
 PaintState readPaint(const SurfelCloud& cloud, size_t i);
 void writePaint(SurfelCloud& cloud, size_t i, const PaintState& paint);
 
+/// The paint columns of a cloud looked up once, for many surfels (readPaint/writePaint look them up per
+/// call). Throws std::invalid_argument if a column is missing; valid while no column is added or removed.
+class PaintColumns {
+ public:
+  explicit PaintColumns(SurfelCloud& cloud);
+  PaintState read(size_t i) const;
+  void write(size_t i, const PaintState& paint);
+
+ private:
+  Attribute *wet_rgb_, *wet_reflectivity_, *wet_shininess_, *dry_rgb_, *dry_reflectivity_, *dry_shininess_,
+      *wet_volume_, *dry_volume_, *optical_density_;
+  size_t size_;
+};
+
 }  // namespace rc

@@ -24,7 +24,8 @@ PaintSurface::PaintSurface(SurfelCloud originals) : originals_(std::move(origina
   enabled_.assign(originals_.size(), 1);
   if (hasPaintAttributes(originals_)) {
     original_paint_.resize(originals_.size());
-    for (size_t i = 0; i < originals_.size(); ++i) original_paint_[i] = readPaint(originals_, i);
+    const PaintColumns columns(originals_);
+    for (size_t i = 0; i < originals_.size(); ++i) original_paint_[i] = columns.read(i);
   } else {
     PaintState base;  // the object's own colour as a dry base layer
     base.dry.rgb = Vec3::Ones();
@@ -223,7 +224,8 @@ SurfelCloud PaintSurface::activeCloud() const {
   }
   if (!originals_.hasRadii() && child_count_ == 0) out.radii.clear();
   addPaintAttributes(out, PaintState(), false);
-  for (size_t k = 0; k < out.size(); ++k) writePaint(out, k, *paint[k]);
+  PaintColumns columns(out);
+  for (size_t k = 0; k < out.size(); ++k) columns.write(k, *paint[k]);
   Attribute& father = out.attributes.add("father", ScalarType::kUInt32, 1, out.size());
   for (size_t k = 0; k < out.size(); ++k) father.set(k, fathers[k]);
   return out;

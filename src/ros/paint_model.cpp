@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "relaxed_connectivity/paint/brush_preset_reader.h"
+#include "relaxed_connectivity/paint/paint_type_reader.h"
 #include "relaxed_connectivity/ros/brush_messages.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
@@ -24,6 +25,12 @@ void PaintModelParams::validate() const {
     fail(e.what());
   }
   if (!(skin_rate >= 0) || !std::isfinite(skin_rate)) fail("skin_rate must be >= 0");
+  if (!(painted_rate > 0) || !std::isfinite(painted_rate)) fail("painted_rate must be positive");
+  try {
+    transfer.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
 }
 
 PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
@@ -36,6 +43,10 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
   pnh.param("plane_proxy", p.brush_options.plane_proxy, p.brush_options.plane_proxy);
   pnh.param("proxy_reach", p.brush_options.proxy_reach, p.brush_options.proxy_reach);
   pnh.param("skin_rate", p.skin_rate, p.skin_rate);
+  pnh.param("paint", p.paint, p.paint);
+  pnh.param("pixel_size", p.transfer.pixel_size, p.transfer.pixel_size);
+  pnh.param("pressure_per_depth", p.transfer.pressure_per_depth, p.transfer.pressure_per_depth);
+  pnh.param("painted_rate", p.painted_rate, p.painted_rate);
   p.validate();
   return p;
 }
@@ -49,15 +60,20 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   contact_pub_ = nh_.advertise<relaxed_connectivity::BrushContact>("brush_contact", 10);
   skeleton_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("brush/skeleton", 2);
   skin_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("brush/skin", 2);
+  if (!params_.paint.empty()) {
+    paint_type_ = std::make_unique<PaintType>(readPaintType(params_.paint));
+    painted_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("surfels/painted", 1, true);
+  }
   surfels_sub_ = nh_.subscribe("surfels", 1, &PaintModel::surfelsCallback, this);
   pose_sub_ = nh_.subscribe(params_.device + "/pose", 10, &PaintModel::poseCallback, this,
                             ros::TransportHints().tcpNoDelay());
   timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &PaintModel::tick, this);
-  ROS_INFO_STREAM("paint_model: brush '" << brush_->preset().name << "' (" << brush_->skeleton().handleCount()
-                                         << " handle points, " << brush_->skeleton().activeCount()
-                                         << " active masses, " << brush_->skin().size() << " skin surfels), "
-                                         << params_.rate << " Hz main loop, device poses on "
-                                         << pose_sub_.getTopic());
+  ROS_INFO_STREAM("paint_model: brush '"
+                  << brush_->preset().name << "' (" << brush_->skeleton().handleCount() << " handle points, "
+                  << brush_->skeleton().activeCount() << " active masses, " << brush_->skin().size()
+                  << " skin surfels), " << params_.rate << " Hz main loop, device poses on "
+                  << pose_sub_.getTopic()
+                  << (paint_type_ ? ", paint '" + paint_type_->name + "'" : ", no paint"));
 }
 
 void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
@@ -70,7 +86,7 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
       cloud.transform(tf2::transformToEigen(tf));
     }
     cloud.frame_id = params_.world_frame;
-    auto surface = std::make_shared<const PaintSurface>(std::move(cloud));
+    auto surface = std::make_shared<PaintSurface>(std::move(cloud));
     std::lock_guard<std::mutex> lock(mutex_);
     surface_ = surface;
     ROS_INFO_STREAM("paint_model: object of "
@@ -101,7 +117,7 @@ void PaintModel::poseCallback(const geometry_msgs::PoseStampedConstPtr& msg) {
 
 void PaintModel::tick(const ros::WallTimerEvent&) {
   geometry_msgs::PoseStampedConstPtr pose;
-  std::shared_ptr<const PaintSurface> surface;
+  std::shared_ptr<PaintSurface> surface;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     pose = latest_pose_;
@@ -137,6 +153,14 @@ void PaintModel::tick(const ros::WallTimerEvent&) {
                                      << " so far)");
     brush_->reset(world_T_stylus);
   }
+  if (paint_type_ && surface) {
+    try {
+      const PaintEventStats painted = transferPaint(*brush_, *surface, *paint_type_, dt, params_.transfer);
+      painted_dirty_ = painted_dirty_ || painted.penetrated_pixels > 0;
+    } catch (const std::exception& e) {  // the event's paint is lost, the session goes on
+      ROS_ERROR_STREAM_THROTTLE(1.0, "paint_model: paint transfer failed: " << e.what());
+    }
+  }
   contact_pub_.publish(toBrushContactMessage(*brush_, world_T_pose_frame.inverse(), pose->header.frame_id,
                                              pose->header.stamp));
   const ros::Time now = ros::Time::now();
@@ -150,6 +174,14 @@ void PaintModel::tick(const ros::WallTimerEvent&) {
     skin.stamp_ns = now.toNSec();
     skin_pub_.publish(PointCloud2Converter::toMessage(skin));
     last_skin_ = wall;
+  }
+  if (painted_dirty_ && surface && (wall - last_painted_).toSec() >= 1.0 / params_.painted_rate) {
+    SurfelCloud painted = surface->activeCloud();
+    painted.frame_id = params_.world_frame;
+    painted.stamp_ns = now.toNSec();
+    painted_pub_.publish(PointCloud2Converter::toMessage(painted));
+    painted_dirty_ = false;
+    last_painted_ = wall;
   }
 }
 
