@@ -1,0 +1,57 @@
+#include "relaxed_connectivity/paint/paint_downsampling.h"
+
+#include <stdexcept>
+
+namespace rc {
+
+PaintDownsampler::PaintDownsampler(DownsamplingOptions options) : options_(options) {
+  if (!(options_.colour_variance >= 0) || !(options_.normal_variance >= 0))
+    throw std::invalid_argument("PaintDownsampler: variance thresholds must be >= 0");
+}
+
+DownsamplingStats PaintDownsampler::run(PaintSurface& surface, size_t max_visits) {
+  DownsamplingStats stats;
+  const size_t n = surface.originalCount();
+  for (size_t scanned = 0; scanned < n && stats.visited < max_visits; ++scanned) {
+    const size_t i = cursor_;
+    cursor_ = (cursor_ + 1) % n;
+    const std::vector<ChildSurfel>& children = surface.children(i);
+    if (children.empty()) continue;
+    ++stats.visited;
+    // Colour variance (of what is seen, 5.8) and normal spread of the children (5.5.2).
+    Vec3 mean = Vec3::Zero(), normal = Vec3::Zero();
+    for (const ChildSurfel& c : children) mean += visibleColour(c.paint).rgb, normal += c.normal.normalized();
+    mean /= double(children.size());
+    double variance = 0;
+    for (const ChildSurfel& c : children) variance += (visibleColour(c.paint).rgb - mean).squaredNorm();
+    variance /= double(children.size());
+    const double spread = 1.0 - normal.norm() / double(children.size());
+    if (variance > options_.colour_variance || spread > options_.normal_variance) continue;
+    // Merge into the father.
+    PaintState merged = surface.originalPaint(i);
+    double wet = 0, density = 0, dry = 0;
+    PaintColour wet_colour, dry_colour;
+    for (const ChildSurfel& c : children) {
+      const PaintState& p = c.paint;
+      wet_colour = PaintColour::mix(wet_colour, wet, p.wet, p.wet_volume);
+      density = wet + p.wet_volume > 0
+                    ? (density * wet + p.optical_density * p.wet_volume) / (wet + p.wet_volume)
+                    : p.optical_density;
+      wet += p.wet_volume;
+      dry_colour = PaintColour::mix(dry_colour, dry, p.dry, 1.0);
+      dry += 1.0;
+      merged.dry_volume += (p.dry_volume - merged.dry_volume) / dry;  // running mean over the children
+    }
+    merged.wet = wet_colour;
+    merged.wet_volume = wet;
+    if (wet > 0) merged.optical_density = density;
+    merged.dry = dry_colour;
+    surface.originalPaint(i) = merged;
+    stats.children_removed += children.size();
+    surface.clearChildren(i);  // re-enables the father
+    ++stats.merged;
+  }
+  return stats;
+}
+
+}  // namespace rc
