@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "paint_test_surfaces.h"
+#include "relaxed_connectivity/paint/paint_transfer.h"
 
 namespace rc {
 namespace {
@@ -29,19 +30,10 @@ PaintSurface paintedPlane(size_t first, size_t count, const Vec3& colour, bool s
   return s;
 }
 
-double wetVolume(const PaintSurface& s) {
-  double sum = 0;
-  for (size_t i = 0; i < s.originalCount(); ++i) {
-    if (s.enabled(i)) sum += s.originalPaint(i).wet_volume;
-    for (const ChildSurfel& c : s.children(i)) sum += c.paint.wet_volume;
-  }
-  return sum;
-}
-
 TEST(PaintDownsampling, AUniformlyPaintedRegionReturnsToTheOriginalSampling) {
   PaintSurface s = paintedPlane(100, 50, Vec3(0.8, 0.1, 0.1), false);
   const size_t original_active = s.originalCount();
-  const double before = wetVolume(s);
+  const double before = surfaceWetVolume(s);
   ASSERT_EQ(s.activeCount(), original_active - 50 + 200);
   PaintDownsampler downsampler;
   const DownsamplingStats stats = downsampler.run(s, 1000);
@@ -49,7 +41,7 @@ TEST(PaintDownsampling, AUniformlyPaintedRegionReturnsToTheOriginalSampling) {
   EXPECT_EQ(stats.children_removed, 200u);
   EXPECT_EQ(s.activeCount(), original_active);  // the original surfel count
   EXPECT_EQ(s.childCount(), 0u);
-  EXPECT_NEAR(wetVolume(s), before, 1e-12);
+  EXPECT_NEAR(surfaceWetVolume(s), before, 1e-12);
   for (size_t i = 100; i < 150; ++i) {
     EXPECT_TRUE(s.enabled(i));
     EXPECT_LT((visibleColour(s.originalPaint(i)).rgb - Vec3(0.8, 0.1, 0.1)).norm(), 1e-12) << i;
