@@ -26,6 +26,7 @@ void PaintModelParams::validate() const {
   }
   if (!(skin_rate >= 0) || !std::isfinite(skin_rate)) fail("skin_rate must be >= 0");
   if (!(painted_rate > 0) || !std::isfinite(painted_rate)) fail("painted_rate must be positive");
+  if (drying_visits < 0) fail("drying_visits must be >= 0");
   try {
     transfer.validate();
   } catch (const std::invalid_argument& e) {
@@ -47,6 +48,7 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
   pnh.param("pixel_size", p.transfer.pixel_size, p.transfer.pixel_size);
   pnh.param("pressure_per_depth", p.transfer.pressure_per_depth, p.transfer.pressure_per_depth);
   pnh.param("painted_rate", p.painted_rate, p.painted_rate);
+  pnh.param("drying_visits", p.drying_visits, p.drying_visits);
   p.validate();
   return p;
 }
@@ -63,7 +65,10 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   if (!params_.paint.empty()) {
     paint_type_ = std::make_unique<PaintType>(readPaintType(params_.paint));
     painted_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("surfels/painted", 1, true);
+    if (params_.drying_visits > 0 && paint_type_->drying_rate > 0)
+      dryer_ = std::make_unique<PaintDryer>(paint_type_->drying_rate, paint_type_->drying);
   }
+  start_ = ros::WallTime::now();
   surfels_sub_ = nh_.subscribe("surfels", 1, &PaintModel::surfelsCallback, this);
   pose_sub_ = nh_.subscribe(params_.device + "/pose", 10, &PaintModel::poseCallback, this,
                             ros::TransportHints().tcpNoDelay());
@@ -157,6 +162,10 @@ void PaintModel::tick(const ros::WallTimerEvent&) {
     try {
       const PaintEventStats painted = transferPaint(*brush_, *surface, *paint_type_, dt, params_.transfer);
       painted_dirty_ = painted_dirty_ || painted.penetrated_pixels > 0;
+      if (dryer_)  // (5.6.1) in bounded slices; what dries changes what is seen
+        painted_dirty_ = dryer_->run(*surface, (ros::WallTime::now() - start_).toSec(),
+                                     size_t(params_.drying_visits)) > 0 ||
+                         painted_dirty_;
     } catch (const std::exception& e) {  // the event's paint is lost, the session goes on
       ROS_ERROR_STREAM_THROTTLE(1.0, "paint_model: paint transfer failed: " << e.what());
     }

@@ -1,8 +1,9 @@
 // The paint_model node/nodelet: the object being painted (PaintSurface, thesis 5.3) and the brush the haptic
 // device holds (5.4), stepped in the main loop (Fig. 5.4) with the latest device pose. It hands the contact
 // parameters to the haptic_driver's 1 kHz force loop, which therefore never queries the surface. With a paint
-// type it also transfers paint every tick (5.5: paint buffer, exchange, resampling of the object) and
-// publishes the painted object. Drying, diffusion, undo and the services are the next pieces.
+// type it also transfers paint every tick (5.5: paint buffer, exchange, resampling of the object), dries the
+// object's paint in bounded slices (5.6.1) and publishes the painted object. Diffusion, downsampling in the
+// node, undo and the services are the next pieces.
 //
 // Subscribes  surfels (sensor_msgs/PointCloud2 with normals, any frame with a tf path to world_frame): the
 //             object; each message replaces it (the kd-tree is built once per object)
@@ -15,7 +16,8 @@
 //             loop [Hz], 60; the brush holds still at the latest pose until a new one arrives),
 //             collision_passes (1), plane_proxy (true), proxy_reach (0.25), skin_rate ([Hz], 30; 0: off),
 //             paint (paint type file, config/paint/paints/; empty: no paint transfer), pixel_size ([m], 0:
-//             the brush's skin spacing), pressure_per_depth ([1/m], 2000), painted_rate ([Hz], 1); see
+//             the brush's skin spacing), pressure_per_depth ([1/m], 2000), painted_rate ([Hz], 1),
+//             drying_visits (originals dried per tick, 2000; 0: no drying); see
 //             config/paint/brush_demo.yaml.
 #pragma once
 
@@ -30,6 +32,7 @@
 #include <string>
 
 #include "relaxed_connectivity/paint/brush.h"
+#include "relaxed_connectivity/paint/paint_dryer.h"
 #include "relaxed_connectivity/paint/paint_transfer.h"
 
 namespace rc {
@@ -44,6 +47,7 @@ struct PaintModelParams {
   std::string paint;  ///< paint type file; empty: the brush does not paint
   PaintTransferOptions transfer;
   double painted_rate = 1.0;
+  int drying_visits = 2000;
 
   /// Throws std::invalid_argument naming the parameter and the bad value.
   void validate() const;
@@ -71,6 +75,8 @@ class PaintModel {
   std::mutex mutex_;                       // surface_, latest_pose_ (callbacks) against tick()
   std::shared_ptr<PaintSurface> surface_;  // painted by tick() only
   std::unique_ptr<PaintType> paint_type_;
+  std::unique_ptr<PaintDryer> dryer_;
+  ros::WallTime start_;
   bool painted_dirty_ = false;
   ros::WallTime last_painted_;
   std::unique_ptr<Brush> brush_;
