@@ -51,6 +51,9 @@ Vec3 PaintBuffer::pixelCentre(int x, int y) const {
 
 void PaintBuffer::splat(Layer layer, const std::vector<PaintSample>& samples) {
   const size_t n = size_t(width_) * size_t(height_);
+  if (layer == kBrush && weight_[kSurface].size() != n)
+    throw std::logic_error(
+        "PaintBuffer::splat: splat the surface before the brush (the depth test needs it)");
   pixel_[layer].assign(n, PaintState());
   weight_[layer].assign(n, 0.0);
   height_sum_[layer].assign(n, 0.0);

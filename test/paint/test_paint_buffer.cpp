@@ -71,6 +71,9 @@ TEST(PaintBuffer, FitsTheLeastSquaresPlane) {
   EXPECT_LT(std::abs((centre - Vec3(0.1, 0.2, 0.3)).dot(n)), 1e-5);
   EXPECT_THROW(PaintBuffer::fitPlane({Vec3::Zero(), Vec3::UnitX()}, n, &centre, &normal),
                std::invalid_argument);
+  PaintBuffer buffer(Vec3::Zero(), Vec3::UnitZ(), kPixel, 4, 4);
+  EXPECT_THROW(buffer.splat(PaintBuffer::kBrush, {}), std::logic_error);  // the surface comes first
+  EXPECT_THROW(PaintBuffer(Vec3::Zero(), Vec3::UnitZ(), 0.0, 4, 4), std::invalid_argument);
 }
 
 TEST(PaintBuffer, ConservesWetVolumeThroughSplatTransferAndGather) {
