@@ -95,51 +95,57 @@ BrushEventStats Brush::advance(double dt, const Eigen::Isometry3d& world_T_brush
   return stats;
 }
 
+bool Brush::provenOutside(NodeCache& cache, const Vec3& x, const PaintSurface& surface) const {
+  if (!cache.outside) return false;
+  const double margin = 2 * surface.typicalRadius();
+  // Conservative advancement: no surfel within reach of where it was proven outside.
+  if ((x - cache.from).norm() < cache.clearance - margin) return true;
+  // No surfel within the distance-transform bound of x either, and the segment from where it was proven
+  // outside keeps 2 radii from every surfel ((C + bound - L) / 2 at its worst point): x is on the same side.
+  const double bound = surface.clearanceLowerBound(x);
+  if (bound > margin && (x - cache.from).norm() < cache.clearance + bound - 2 * margin) {
+    cache.from = x;
+    cache.clearance = bound;
+    return true;
+  }
+  return false;
+}
+
+bool Brush::outsideByClosestSurfel(NodeCache& cache, const Vec3& x, const PaintSurface& surface,
+                                   BrushEventStats* stats) const {
+  // Outside by the closest surfel (3.9) and clear of the surface: the closest surfel alone proves it (a cheap
+  // query) and its tangent plane is the proxy. A node that was near at its last query skips this.
+  const double near = kNearSurfaceRadii * surface.typicalRadius();
+  if (!cache.outside || cache.clearance <= near) return false;
+  const Neighbor closest = surface.closestOriginal(x, cache.closest);
+  ++stats->queries;
+  const Vec3& p = surface.originals().positions[closest.index];
+  const Vec3& n = surface.originals().normals[closest.index];
+  const double distance = std::sqrt(closest.sq_dist);
+  cache.closest = closest.index;
+  if ((x - p).dot(n) < 0 || distance <= near) return false;
+  cache.from = x;
+  cache.clearance = distance;
+  cache.has_plane = true;
+  cache.plane_point = p;
+  cache.plane_normal = n;
+  return true;
+}
+
 SurfaceContact Brush::contactOf(int node, const PaintSurface& surface, BrushEventStats* stats) {
   NodeCache& cache = cache_[node];
   const Vec3& x = skeleton_.positions()[node];
-  // Conservative advancement: outside, and no surfel within reach of where it was proven outside.
-  if (cache.outside && (x - cache.from).norm() < cache.clearance - 2 * surface.typicalRadius())
+  if (provenOutside(cache, x, surface) || outsideByClosestSurfel(cache, x, surface, stats))
     return SurfaceContact();
-  // Still outside without a query: no surfel within the distance-transform bound of x, and the segment from
-  // where it was proven outside keeps 2 radii from every surfel ((C + bound - L) / 2 at its worst point), so
-  // x is on the same side.
-  if (cache.outside) {
-    const double bound = surface.clearanceLowerBound(x), margin = 2 * surface.typicalRadius();
-    if (bound > margin && (x - cache.from).norm() < cache.clearance + bound - 2 * margin) {
-      cache.from = x;
-      cache.clearance = bound;
-      return SurfaceContact();
-    }
-  }
-  // Outside by the closest surfel (3.9) and clear of the surface: the closest surfel alone proves it (a
-  // cheap query), and its tangent plane is the proxy. Near or below the surface: force shading over n. A
-  // node that was near at its last query goes straight to force shading.
+  // Near or below the surface: force shading over the n nearest (5.2)-(5.4). Below its last tangent plane
+  // (a long step pushed it in) the neighbours are looked up at its projection onto that plane: the same n
+  // surfels on a plane, near the surface (cheap) instead of deep inside. Only a plane within reach: a plane
+  // left from far away would bring the neighbours of another place.
   const SurfelCloud& originals = surface.originals();
-  const double near = kNearSurfaceRadii * surface.typicalRadius();
-  if (cache.outside && cache.clearance > near) {
-    const Neighbor closest = surface.closestOriginal(x, cache.closest);
-    ++stats->queries;
-    const Vec3& p = originals.positions[closest.index];
-    const Vec3& n = originals.normals[closest.index];
-    const double distance = std::sqrt(closest.sq_dist);
-    cache.closest = closest.index;
-    if ((x - p).dot(n) >= 0 && distance > near) {
-      cache.from = x;
-      cache.clearance = distance;
-      cache.has_plane = true;
-      cache.plane_point = p;
-      cache.plane_normal = n;
-      return SurfaceContact();
-    }
-  }
-  // Below its last tangent plane (a long step pushed it in), the neighbours are looked up at its projection
-  // onto that plane: the same n surfels on a plane, near the surface (cheap) instead of deep inside.
   Vec3 query = x;
   if (options_.plane_proxy && cache.has_plane) {
     const double below = cache.plane_normal.dot(cache.plane_point - x);
     const Vec3 projected = x + below * cache.plane_normal;
-    // Only a plane within reach (a plane left from far away would bring the neighbours of another place).
     if (below > 0 && (projected - cache.plane_point).norm() <= options_.proxy_reach * preset_.bristle_length)
       query = projected;
   }

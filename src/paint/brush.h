@@ -82,6 +82,11 @@ class Brush {
   };
   /// Force shading at node's position, or none when its cache proves it outside.
   SurfaceContact contactOf(int node, const PaintSurface& surface, BrushEventStats* stats);
+  /// Whether the cache proves x outside without a query (updating it from the distance transform).
+  bool provenOutside(NodeCache& cache, const Vec3& x, const PaintSurface& surface) const;
+  /// Whether x, clear of the surface at its last query, is still outside by its closest surfel (one query).
+  bool outsideByClosestSurfel(NodeCache& cache, const Vec3& x, const PaintSurface& surface,
+                              BrushEventStats* stats) const;
   void collideActives(const PaintSurface& surface, BrushEventStats* stats);
   void collideWithPlanes();
   void setContactPlanes();
