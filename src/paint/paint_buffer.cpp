@@ -109,14 +109,8 @@ void PaintBuffer::splat(Layer layer, const std::vector<PaintSample>& samples) {
     const double volume = s.paint.wet_volume;
     sample_volume_[layer][i] = volume;
     for (const Share& share : footprint) {
-      PaintState& px = pixel_[layer][share.pixel];
       const double v = share.weight * volume;
-      px.wet = PaintColour::mix(px.wet, px.wet_volume, s.paint.wet, v);
-      px.optical_density =
-          px.wet_volume + v > 0
-              ? (px.optical_density * px.wet_volume + s.paint.optical_density * v) / (px.wet_volume + v)
-              : s.paint.optical_density;
-      px.wet_volume += v;
+      addWetPaint(pixel_[layer][share.pixel], s.paint, v);
       contributed_[layer][share.pixel] += v;
       shares_[layer].push_back(share);
     }
@@ -159,22 +153,19 @@ void PaintBuffer::forEachPart(Layer layer, Take&& take) const {
 
 namespace {
 
-/// Wet paint received in parts: volume, and the colour and density of what was received.
+/// Wet paint received in parts (a sample's take from the pixels): mixed by (5.11), written to the sample
+/// only if it took part.
 struct Received {
-  double volume = 0, density = 0;
-  PaintColour colour;
+  PaintState paint = PaintState{PaintColour(), PaintColour(), 0.0, 0.0, 1.0};
   bool touched = false;
   void add(const PaintState& px, double v) {
-    colour = PaintColour::mix(colour, volume, px.wet, v);
-    density =
-        volume + v > 0 ? (density * volume + px.optical_density * v) / (volume + v) : px.optical_density;
-    volume += v;
+    addWetPaint(paint, px, v);
     touched = true;
   }
   void writeTo(PaintState& s) const {
     if (!touched) return;
-    s.wet_volume = volume;
-    if (volume > 0) s.wet = colour, s.optical_density = density;
+    s.wet_volume = paint.wet_volume;
+    if (paint.wet_volume > 0) s.wet = paint.wet, s.optical_density = paint.optical_density;
   }
 };
 

@@ -67,14 +67,8 @@ void PaintDiffusion::visit(uint32_t i, std::vector<PaintState>& paint) {
       PaintState& giver = moved > 0 ? a : b;
       PaintState& taker = moved > 0 ? b : a;
       const double v = std::abs(moved);
-      taker.wet = PaintColour::mix(taker.wet, taker.wet_volume, giver.wet, v);  // (5.11)
-      const double density = taker.wet_volume + v > 0
-                                 ? (taker.optical_density * taker.wet_volume + giver.optical_density * v) /
-                                       (taker.wet_volume + v)
-                                 : taker.optical_density;
-      taker.optical_density = density;
-      taker.wet_volume += v;
       giver.wet_volume -= v;
+      addWetPaint(taker, giver, v);  // (5.11)
       if (moved > 0) markWet(j);
     }
   }

@@ -27,25 +27,18 @@ DownsamplingStats PaintDownsampler::run(PaintSurface& surface, size_t max_visits
     variance /= double(children.size());
     const double spread = 1.0 - normal.norm() / double(children.size());
     if (variance > options_.colour_variance || spread > options_.normal_variance) continue;
-    // Merge into the father.
+    // Merge into the father: the children's wet paint added up (5.11), their dry paint averaged.
     PaintState merged = surface.originalPaint(i);
-    double wet = 0, density = 0, dry = 0;
-    PaintColour wet_colour, dry_colour;
+    merged.wet_volume = 0;
+    merged.dry = PaintColour();
+    merged.dry_volume = 0;
+    double count = 0;
     for (const ChildSurfel& c : children) {
-      const PaintState& p = c.paint;
-      wet_colour = PaintColour::mix(wet_colour, wet, p.wet, p.wet_volume);
-      density = wet + p.wet_volume > 0
-                    ? (density * wet + p.optical_density * p.wet_volume) / (wet + p.wet_volume)
-                    : p.optical_density;
-      wet += p.wet_volume;
-      dry_colour = PaintColour::mix(dry_colour, dry, p.dry, 1.0);
-      dry += 1.0;
-      merged.dry_volume += (p.dry_volume - merged.dry_volume) / dry;  // running mean over the children
+      addWetPaint(merged, c.paint, c.paint.wet_volume);
+      count += 1;
+      merged.dry = PaintColour::mix(merged.dry, count - 1, c.paint.dry, 1.0);
+      merged.dry_volume += (c.paint.dry_volume - merged.dry_volume) / count;
     }
-    merged.wet = wet_colour;
-    merged.wet_volume = wet;
-    if (wet > 0) merged.optical_density = density;
-    merged.dry = dry_colour;
     surface.originalPaint(i) = merged;
     stats.children_removed += children.size();
     surface.clearChildren(i);  // re-enables the father

@@ -15,6 +15,14 @@ PaintColour PaintColour::mix(const PaintColour& a, double va, const PaintColour&
   return c;
 }
 
+void addWetPaint(PaintState& into, const PaintState& from, double volume) {
+  const double total = into.wet_volume + volume;
+  into.wet = PaintColour::mix(into.wet, into.wet_volume, from.wet, volume);
+  if (total > 0)
+    into.optical_density = (into.optical_density * into.wet_volume + from.optical_density * volume) / total;
+  into.wet_volume = total;
+}
+
 PaintColour visibleColour(const PaintState& s) {
   const double alpha = std::clamp(s.optical_density * s.wet_volume, 0.0, 1.0);  // (5.8)
   return PaintColour::mix(s.wet, alpha, s.dry, 1.0 - alpha);

@@ -32,6 +32,10 @@ struct PaintState {
   }
 };
 
+/// Adds `volume` of the wet paint of `from` to `into` (5.11): the wet colour and the optical density become
+/// the volume-weighted means of what `into` held and what it received (unchanged when both volumes are 0).
+void addWetPaint(PaintState& into, const PaintState& from, double volume);
+
 /// The visible colour (5.8): alpha C_w + (1 - alpha) C_d with alpha = min(rho V_w, 1) (dry paint is opaque).
 PaintColour visibleColour(const PaintState& s);
 

@@ -38,37 +38,30 @@ PaintSurface::PaintSurface(SurfelCloud originals) : originals_(std::move(origina
   }
   children_.resize(originals_.size());
   enabled_count_ = originals_.size();
-  std::vector<double> scale;
+  // The median nearest-neighbour spacing over a sample of ~1000 originals; the median radius when the cloud
+  // has radii, else that spacing, is the typical radius.
+  std::vector<double> spacing, radii;
   const size_t stride = std::max<size_t>(1, originals_.size() / 1000);
-  for (size_t i = 0; i < originals_.size(); i += stride) {
-    if (originals_.hasRadii()) {
-      scale.push_back(originals_.radii[i]);
-    } else {
-      Neighbor n[2];
-      if (tree_->knn(originals_.positions[i], 2, n) == 2) scale.push_back(std::sqrt(n[1].sq_dist));
-    }
-  }
-  if (!scale.empty()) {
-    std::nth_element(scale.begin(), scale.begin() + scale.size() / 2, scale.end());
-    typical_radius_ = scale[scale.size() / 2];
-  }
-  buildCollisionGrid(stride);
-}
-
-void PaintSurface::buildCollisionGrid(size_t stride) {
-  // Cells of kGridCellSpacings median nearest-neighbour spacings: the 27 cells around a query near the
-  // surface hold about a hundred surfels, enough to certify the 10 nearest.
-  std::vector<double> spacing;
   for (size_t i = 0; i < originals_.size(); i += stride) {
     Neighbor n[2];
     if (tree_->knn(originals_.positions[i], 2, n) == 2 && n[1].sq_dist > 0)
       spacing.push_back(std::sqrt(n[1].sq_dist));
+    if (originals_.hasRadii()) radii.push_back(originals_.radii[i]);
   }
-  double cell = 0;
-  if (!spacing.empty()) {
-    std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
-    cell = kGridCellSpacings * spacing[spacing.size() / 2];
-  }
+  const auto median = [](std::vector<double>& v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const double median_spacing = median(spacing);
+  typical_radius_ = originals_.hasRadii() ? median(radii) : median_spacing;
+  buildCollisionGrid(median_spacing);
+}
+
+void PaintSurface::buildCollisionGrid(double spacing) {
+  // Cells of kGridCellSpacings median nearest-neighbour spacings: the 27 cells around a query near the
+  // surface hold about a hundred surfels, enough to certify the 10 nearest.
+  const double cell = kGridCellSpacings * spacing;
   grid_.build(originals_.positions, cell, 1, "PaintSurface");
   buildCellDistances();
   sorted_positions_.resize(originals_.size());

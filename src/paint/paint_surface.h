@@ -79,7 +79,7 @@ class PaintSurface {
  private:
   static constexpr double kGridCellSpacings = 3.0;
   static constexpr uint8_t kMaxCellDistance = 16;
-  void buildCollisionGrid(size_t stride);
+  void buildCollisionGrid(double spacing);
   void buildCellDistances();
 
   SurfelCloud originals_;

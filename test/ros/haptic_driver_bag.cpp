@@ -47,7 +47,8 @@ TEST(HapticDriverBag, ForceFollowsTheForceLaw) {
     h.index = uint32_t(i);
     h.depth = kDepth;
     h.normal.z = 1;
-    h.position.x = offsets[i].x();  // where the handle point was when d was evaluated (the stylus at the origin,
+    h.position.x =
+        offsets[i].x();  // where the handle point was when d was evaluated (the stylus at the origin,
     h.position.y = offsets[i].y();  // not rotated); the stroke moves and turns it in its plane, so d stays d0
     h.position.z = offsets[i].z();
     contact.handles.push_back(h);
