@@ -35,6 +35,8 @@ class BrushSkeleton {
   bool isHandle(int node) const { return node < handle_count_; }
   const std::vector<Vec3>& restPositions() const { return rest_; }
   const std::vector<Vec3>& positions() const { return x_; }
+  /// Node velocities over the last step (handles: the device's motion).
+  const std::vector<Vec3>& velocities() const { return v_; }
   const std::vector<BrushSpring>& springs() const { return springs_; }
   /// Handle points in the brush frame (the contract with the haptic driver: handle point i of a preset).
   std::vector<Vec3> handleOffsets() const;

@@ -64,6 +64,7 @@ void PaintBuffer::splat(Layer layer, const std::vector<PaintSample>& samples) {
     normal_sum_.assign(n, Vec3::Zero());
     dry_.assign(n, PaintState());
     penetrated_.assign(n, 0);
+    pressure_.assign(n, 0.0);
   }
 
   Camera camera = Camera::orthographic(uint32_t(width_), uint32_t(height_), width_ * pixel_size_);
@@ -128,11 +129,11 @@ PaintTransferStats PaintBuffer::transfer(double tau_brush_to_surface, double tau
       if (!(depth > 0)) continue;
       ++stats.penetrated_pixels;
       penetrated_[index(x, y)] = 1;
+      pressure_[index(x, y)] = pressure_per_depth * depth;
       PaintState& brush = pixel_[kBrush][index(x, y)];
       PaintState& surface = pixel_[kSurface][index(x, y)];
       const double surface_before = surface.wet_volume, brush_before = brush.wet_volume;
-      exchangePaint(brush, surface, tau_brush_to_surface, tau_surface_to_brush, pressure_per_depth * depth,
-                    dt);
+      exchangePaint(brush, surface, tau_brush_to_surface, tau_surface_to_brush, pressure_[index(x, y)], dt);
       stats.moved_to_surface += std::max(0.0, surface.wet_volume - surface_before);
       stats.moved_to_brush += std::max(0.0, brush.wet_volume - brush_before);
     }
@@ -210,6 +211,7 @@ void PaintBuffer::resample(const std::vector<uint8_t>& replace, std::vector<Pain
       s.position = pixelCentre(x, y) + height(kSurface, x, y) * normal_;
       s.normal = normal_sum_[p].norm() > 0 ? Vec3(normal_sum_[p].normalized()) : normal_;
       s.radius = pixel_size_;
+      s.pressure = pressure_.empty() ? 0.0 : pressure_[p];
       s.paint = dry_[p];
       s.paint.wet_volume = 0;
       at_pixel[p].writeTo(s.paint);

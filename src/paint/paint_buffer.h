@@ -25,6 +25,7 @@ struct PixelSurfel {
   Vec3 position = Vec3::Zero(), normal = Vec3::UnitZ();
   double radius = 0;
   PaintState paint;
+  double pressure = 0;  ///< the exchange's pressure at the pixel (0 where the brush did not penetrate)
 };
 
 struct PaintTransferStats {
@@ -106,6 +107,7 @@ class PaintBuffer {
   std::vector<Vec3> normal_sum_;     // surface layer: footprint-weighted normals
   std::vector<PaintState> dry_;      // surface layer: footprint-weighted dry paint (colour, volume)
   std::vector<uint8_t> penetrated_;  // pixels of the last transfer
+  std::vector<double> pressure_;     // and their pressure
   /// The parts each splatted sample takes back from the pixels: calls take(sample, pixel, volume).
   template <class Take>
   void forEachPart(Layer layer, Take&& take) const;

@@ -1,6 +1,7 @@
 #include "relaxed_connectivity/paint/paint_downsampling.h"
 
 #include <stdexcept>
+#include <utility>
 
 namespace rc {
 
@@ -15,7 +16,7 @@ DownsamplingStats PaintDownsampler::run(PaintSurface& surface, size_t max_visits
   for (size_t scanned = 0; scanned < n && stats.visited < max_visits; ++scanned) {
     const size_t i = cursor_;
     cursor_ = (cursor_ + 1) % n;
-    const std::vector<ChildSurfel>& children = surface.children(i);
+    const std::vector<ChildSurfel>& children = std::as_const(surface).children(i);
     if (children.empty()) continue;
     ++stats.visited;
     // Colour variance (of what is seen, 5.8) and normal spread of the children (5.5.2).
@@ -28,7 +29,7 @@ DownsamplingStats PaintDownsampler::run(PaintSurface& surface, size_t max_visits
     const double spread = 1.0 - normal.norm() / double(children.size());
     if (variance > options_.colour_variance || spread > options_.normal_variance) continue;
     // Merge into the father: the children's wet paint added up (5.11), their dry paint averaged.
-    PaintState merged = surface.originalPaint(i);
+    PaintState merged = std::as_const(surface).originalPaint(i);
     merged.wet_volume = 0;
     merged.dry = PaintColour();
     merged.dry_volume = 0;

@@ -19,7 +19,8 @@ PaintSurface::PaintSurface(SurfelCloud originals) : originals_(std::move(origina
         originals_.normals[i].norm() == 0)
       throw std::invalid_argument("PaintSurface: surfel " + std::to_string(i) +
                                   " has a non-finite position or normal, or a zero normal");
-  for (Vec3& n : originals_.normals) n.normalize();
+  for (Vec3& n : originals_.normals)  // unit normals stay bitwise as given (a saved state reloads exactly)
+    if (std::abs(n.squaredNorm() - 1.0) > 1e-12) n.normalize();
   tree_ = std::make_unique<KdTree>(originals_.positions);
   enabled_.assign(originals_.size(), 1);
   if (hasPaintAttributes(originals_)) {
@@ -146,8 +147,19 @@ Neighbor PaintSurface::closestOriginal(const Vec3& x, uint32_t hint) const {
   return found;
 }
 
+PaintColour PaintSurface::baseColour(size_t original) const {
+  PaintColour c;
+  c.rgb = Vec3::Ones();
+  if (originals_.hasColors()) {
+    const Rgba& rgba = originals_.colors.at(original);
+    c.rgb = Vec3(rgba[0], rgba[1], rgba[2]) / 255.0;
+  }
+  return c;
+}
+
 void PaintSurface::setEnabled(size_t original, bool enabled) {
   if (enabled_[original] == uint8_t(enabled)) return;
+  notify(original);
   enabled_[original] = enabled;
   enabled ? ++enabled_count_ : --enabled_count_;
 }
@@ -159,9 +171,17 @@ uint32_t PaintSurface::addChild(const ChildSurfel& child) {
 }
 
 void PaintSurface::addChild(uint32_t father, const ChildSurfel& child) {
+  notify(father);
   children_.at(father).push_back(child);
   ++child_count_;
   setEnabled(father, false);
+}
+
+void PaintSurface::keepAsChild(uint32_t original) {
+  if (!enabled_.at(original)) return;
+  addChild(original,
+           {originals_.positions[original], originals_.normals[original],
+            originals_.hasRadii() ? originals_.radii[original] : typical_radius_, original_paint_[original]});
 }
 
 void PaintSurface::originalsWithin(const Vec3& x, double radius, std::vector<uint32_t>& out) const {
@@ -176,15 +196,29 @@ void PaintSurface::removeChild(size_t original, size_t k) {
   if (k >= list.size())
     throw std::out_of_range("PaintSurface::removeChild: child " + std::to_string(k) + " of " +
                             std::to_string(list.size()));
+  notify(original);
   list.erase(list.begin() + long(k));
   --child_count_;
 }
 
 void PaintSurface::clearChildren(size_t original) {
+  notify(original);
   child_count_ -= children_.at(original).size();
   children_[original].clear();
   children_[original].shrink_to_fit();
   setEnabled(original, true);
+}
+
+void PaintSurface::restoreOriginal(size_t original, bool enabled, const PaintState& paint,
+                                   std::vector<ChildSurfel> children) {
+  std::vector<ChildSurfel>& list = children_.at(original);
+  child_count_ = child_count_ - list.size() + children.size();
+  list = std::move(children);
+  original_paint_[original] = paint;
+  if (enabled_[original] != uint8_t(enabled)) {
+    enabled_[original] = enabled;
+    enabled ? ++enabled_count_ : --enabled_count_;
+  }
 }
 
 SurfelCloud PaintSurface::activeCloud() const {

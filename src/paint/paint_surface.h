@@ -20,6 +20,18 @@ struct ChildSurfel {
   Vec3 normal;
   double radius = 0;
   PaintState paint;
+
+  bool operator==(const ChildSurfel& o) const {
+    return position == o.position && normal == o.normal && radius == o.radius && paint == o.paint;
+  }
+};
+
+/// Told before the state of an original (its enabled flag, paint or children) changes: the undo journal
+/// (paint_journal.h) snapshots what a stroke is about to change.
+class PaintSurfaceObserver {
+ public:
+  virtual ~PaintSurfaceObserver() = default;
+  virtual void beforeChange(size_t original) = 0;
 };
 
 class PaintSurface {
@@ -51,11 +63,21 @@ class PaintSurface {
   bool enabled(size_t original) const { return enabled_[original] != 0; }
   void setEnabled(size_t original, bool enabled);
   const std::vector<ChildSurfel>& children(size_t original) const { return children_[original]; }
-  std::vector<ChildSurfel>& children(size_t original) { return children_[original]; }
+  /// Mutable access tells the observer first (read through a const surface to avoid that).
+  std::vector<ChildSurfel>& children(size_t original) {
+    notify(original);
+    return children_[original];
+  }
   /// The paint of an original surfel: from the cloud's paint columns when it has them (paint_attributes.h),
   /// else no wet paint over a dry base layer (volume 1) of the surfel's own colour (white without colours).
   const PaintState& originalPaint(size_t original) const { return original_paint_[original]; }
-  PaintState& originalPaint(size_t original) { return original_paint_[original]; }
+  PaintState& originalPaint(size_t original) {
+    notify(original);
+    return original_paint_[original];
+  }
+  /// The object's own colour at an original (its input colour; white without colours): what the eraser
+  /// restores.
+  PaintColour baseColour(size_t original) const;
   /// The indices of the originals within `radius` of x (enabled or not), into `out` (cleared first).
   void originalsWithin(const Vec3& x, double radius, std::vector<uint32_t>& out) const;
   /// Removes child `k` of `original` (a child deleted by resampling, 5.5); the original stays disabled.
@@ -64,9 +86,20 @@ class PaintSurface {
   /// Returns the father.
   uint32_t addChild(const ChildSurfel& child);
   void addChild(uint32_t father, const ChildSurfel& child);
+  /// An enabled original becomes its own first child (with its paint) and is disabled, so that a child
+  /// added to it next hides nothing it showed or held (resampling next to a surfel it keeps, 5.5).
+  void keepAsChild(uint32_t original);
   /// Removes every child of `original` (deleted children are dropped, 5.5) and re-enables it (downsampling,
   /// 5.5.2).
   void clearChildren(size_t original);
+
+  /// Sets everything about one original at once (undo, redo, loading a saved state); the observer is not
+  /// told.
+  void restoreOriginal(size_t original, bool enabled, const PaintState& paint,
+                       std::vector<ChildSurfel> children);
+  /// The observer told before each change (nullptr: none); not owned.
+  void setObserver(PaintSurfaceObserver* observer) { observer_ = observer; }
+  PaintSurfaceObserver* observer() const { return observer_; }
 
   size_t childCount() const { return child_count_; }
   /// Surfels shown and painted: enabled originals plus all children.
@@ -81,6 +114,9 @@ class PaintSurface {
   static constexpr uint8_t kMaxCellDistance = 16;
   void buildCollisionGrid(double spacing);
   void buildCellDistances();
+  void notify(size_t original) {
+    if (observer_) observer_->beforeChange(original);
+  }
 
   SurfelCloud originals_;
   std::unique_ptr<KdTree> tree_;
@@ -93,6 +129,7 @@ class PaintSurface {
   size_t enabled_count_ = 0;
   size_t child_count_ = 0;
   double typical_radius_ = 0;
+  PaintSurfaceObserver* observer_ = nullptr;
 };
 
 }  // namespace rc

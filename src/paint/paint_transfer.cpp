@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "relaxed_connectivity/paint/paint_buffer.h"
 
@@ -16,6 +17,48 @@ struct SurfaceRef {
   uint32_t original;
   int32_t child;  ///< -1: the original itself
 };
+
+/// The bristle pattern of viscous paint (5.6.3) for one buffer.
+struct Imprint {
+  bool active = false;
+  Vec3 tip = Vec3::Zero(), across = Vec3::UnitX();  ///< pattern origin, unit direction across the stroke
+  double depth = 0, spacing = 1;
+};
+
+/// Active while the device moves along the bristles' direction (both projected into the buffer plane).
+Imprint imprintAt(const Brush& brush, const Vec3& tip, const Vec3& normal, const PaintType& paint,
+                  const PaintTransferOptions& o) {
+  Imprint imprint;
+  if (!(paint.imprint_depth > 0)) return imprint;
+  const BrushSkeleton& skeleton = brush.skeleton();
+  Vec3 handle = Vec3::Zero(), velocity = Vec3::Zero();
+  for (int i = 0; i < skeleton.handleCount(); ++i)
+    handle += skeleton.positions()[size_t(i)], velocity += skeleton.velocities()[size_t(i)];
+  handle /= skeleton.handleCount();
+  velocity /= skeleton.handleCount();
+  const auto in_plane = [&](const Vec3& v) -> Vec3 { return v - normal.dot(v) * normal; };
+  const Vec3 bristles = in_plane(tip - handle), motion = in_plane(velocity);
+  if (motion.norm() < o.imprint_min_speed || bristles.norm() < 1e-9) return imprint;
+  if (std::abs(bristles.normalized().dot(motion.normalized())) < o.imprint_min_alignment) return imprint;
+  imprint.active = true;
+  imprint.tip = tip;
+  imprint.across = normal.cross(bristles).normalized();
+  imprint.depth = paint.imprint_depth;
+  imprint.spacing = paint.imprint_spacing;
+  return imprint;
+}
+
+/// Raises a new surfel above its father's tangent plane by the pattern (so that repeated events do not
+/// accumulate) and tilts its normal by the pattern's slope.
+void carve(const Imprint& imprint, const Vec3& father_position, const Vec3& father_normal,
+           ChildSurfel& child) {
+  const Vec3 on_plane = child.position - father_normal.dot(child.position - father_position) * father_normal;
+  const double phase = 2 * M_PI * imprint.across.dot(on_plane - imprint.tip) / imprint.spacing;
+  const double height = 0.5 * imprint.depth * (1 + std::cos(phase));
+  const double slope = -0.5 * imprint.depth * (2 * M_PI / imprint.spacing) * std::sin(phase);
+  child.position = on_plane + height * father_normal;
+  child.normal = (father_normal - slope * imprint.across).normalized();
+}
 
 /// One tip's paint buffer: plane, extent, splats, exchange, resampling, gather.
 void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const Vec3& tip_normal,
@@ -62,11 +105,11 @@ void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const 
       s.position = originals.positions[i];
       s.normal = originals.normals[i];
       s.radius = originals.hasRadii() ? originals.radii[i] : surface.typicalRadius();
-      s.paint = surface.originalPaint(i);
+      s.paint = std::as_const(surface).originalPaint(i);
       surface_samples.push_back(s);
       refs.push_back({i, -1});
     }
-    const std::vector<ChildSurfel>& children = surface.children(i);
+    const std::vector<ChildSurfel>& children = std::as_const(surface).children(i);
     for (size_t k = 0; k < children.size(); ++k) {
       surface_samples.push_back(
           {children[k].position, children[k].normal, children[k].radius, children[k].paint});
@@ -80,8 +123,9 @@ void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const 
 
   buffer.splat(PaintBuffer::kSurface, surface_samples);
   buffer.splat(PaintBuffer::kBrush, brush_samples);
-  const PaintTransferStats t =
-      buffer.transfer(paint.transfer_to_surface, paint.transfer_to_brush, o.pressure_per_depth, dt);
+  // The eraser deposits nothing; its transfer_to_surface restores the object's colour below.
+  const PaintTransferStats t = buffer.transfer(paint.eraser ? 0.0 : paint.transfer_to_surface,
+                                               paint.transfer_to_brush, o.pressure_per_depth, dt);
   ++stats->buffers;
   stats->penetrated_pixels += t.penetrated_pixels;
   stats->moved_to_surface += t.moved_to_surface;
@@ -118,8 +162,20 @@ void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const 
       ++stats->children_removed;
     }
   }
+  const Imprint imprint = imprintAt(brush, tip, normal, paint, o);
   for (const PixelSurfel& p : pixels) {
-    surface.addChild(ChildSurfel{p.position, p.normal, p.radius, p.paint});
+    ChildSurfel child{p.position, p.normal, p.radius, p.paint};
+    const uint32_t father = surface.closestOriginal(p.position);
+    surface.keepAsChild(father);           // a kept original next to the new surfels: its paint is not lost
+    if (paint.eraser && p.pressure > 0) {  // (5.9)'s rate, towards the object's own colour
+      const double f = 1.0 - std::exp(-paint.transfer_to_surface * p.pressure * dt);
+      child.paint.dry = PaintColour::mix(child.paint.dry, 1.0 - f, surface.baseColour(father), f);
+    }
+    if (imprint.active && p.pressure > 0) {
+      carve(imprint, surface.originals().positions[father], surface.originals().normals[father], child);
+      ++stats->children_imprinted;
+    }
+    surface.addChild(father, child);
     ++stats->children_added;
   }
 }
@@ -135,12 +191,22 @@ void PaintTransferOptions::validate() const {
     throw std::invalid_argument("paint transfer: margin_pixels must lie in 0..64");
   if (!(max_extent > 0) || !std::isfinite(max_extent))
     throw std::invalid_argument("paint transfer: max_extent must be positive");
+  if (!(imprint_min_alignment >= 0 && imprint_min_alignment <= 1))
+    throw std::invalid_argument("paint transfer: imprint_min_alignment must lie in 0..1");
+  if (!(imprint_min_speed >= 0) || !std::isfinite(imprint_min_speed))
+    throw std::invalid_argument("paint transfer: imprint_min_speed must be >= 0");
 }
 
 PaintEventStats transferPaint(Brush& brush, PaintSurface& surface, const PaintType& paint, double dt,
                               const PaintTransferOptions& options) {
   options.validate();
   if (!(dt >= 0)) throw std::invalid_argument("transferPaint: dt must be >= 0");
+  const double pixel = options.pixel_size > 0 ? options.pixel_size : brush.preset().surfel_spacing;
+  if (paint.imprint_depth > 0 && !(paint.imprint_spacing >= 2 * pixel))
+    throw std::invalid_argument("paint '" + paint.name + "': imprint spacing " +
+                                std::to_string(paint.imprint_spacing) +
+                                " m is below two paint buffer pixels (" + std::to_string(2 * pixel) +
+                                " m): the pattern would alias; raise imprint.spacing or lower pixel_size");
   PaintEventStats stats;
   const BrushSplit& split = brush.split();
   if (split.tips.empty()) return stats;

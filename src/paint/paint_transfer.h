@@ -16,6 +16,10 @@ struct PaintTransferOptions {
   double pressure_per_depth = 2000;  ///< p of (5.9) per metre the brush penetrates
   int margin_pixels = 2;             ///< buffer border around the penetrating part of the brush
   double max_extent = 0.05;          ///< largest buffer side [m] (a bound on the work per event)
+  /// Imprints (5.6.3) are carved while the brush moves along its skeleton: |cos| of the angle between the
+  /// device's velocity and the bristles' direction in the buffer plane at least this, at least this speed.
+  double imprint_min_alignment = 0.7;
+  double imprint_min_speed = 2e-3;  ///< [m/s]
 
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;
@@ -25,11 +29,17 @@ struct PaintEventStats {
   int buffers = 0;
   int penetrated_pixels = 0;
   size_t originals_disabled = 0, children_removed = 0, children_added = 0;
+  size_t children_imprinted = 0;
   double moved_to_surface = 0, moved_to_brush = 0;  ///< wet volume
 };
 
 /// Transfers paint between `brush` (after its advance() for this event) and `surface` for `dt` seconds with
 /// the rates of `paint`. Wet volume summed over the brush skin and the surface's active surfels is conserved.
+/// The eraser (paint.eraser) deposits nothing: it takes wet paint up at transfer_to_brush and moves the dry
+/// colour of the surfels it presses on towards the object's own colour at transfer_to_surface (the (5.9)
+/// rate). Viscous paint (imprint_depth > 0) raises the new surfels by the bristle pattern of 5.6.3:
+/// depth (1 + cos(2 pi u / spacing)) / 2 above the father's tangent plane, u across the stroke; throws
+/// std::invalid_argument when the spacing is below two buffer pixels (the pattern would alias).
 PaintEventStats transferPaint(Brush& brush, PaintSurface& surface, const PaintType& paint, double dt,
                               const PaintTransferOptions& options = {});
 

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "relaxed_connectivity/paint/brush_skin.h"
 #include "relaxed_connectivity/paint/paint_drying.h"
 #include "relaxed_connectivity/paint/paint_state.h"
 
@@ -26,6 +27,12 @@ struct PaintType {
   /// under the paint), not paint it carries.
   bool eraser = false;
 };
+
+/// Paint as loaded onto the brush: `load_volume` of `colour` with `optical_density` (none for the eraser,
+/// which carries no paint).
+PaintState freshPaint(const PaintType& paint);
+/// Loads every skin surfel with freshPaint (replacing what the brush carried: dipping into a clean pot).
+void loadBrush(BrushSkin& skin, const PaintType& paint);
 
 class PaintTypeError : public std::runtime_error {
  public:

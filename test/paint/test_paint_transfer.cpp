@@ -108,5 +108,90 @@ TEST(PaintTransfer, ABrushInTheAirTransfersNothing) {
   EXPECT_THROW(transferPaint(s.brush, s.surface, symmetricPaint(), kEvent, bad), std::invalid_argument);
 }
 
+TEST(PaintTransfer, TheEraserTakesWetPaintAwayAndRestoresTheObjectsColour) {
+  Session s;
+  for (size_t i = 0; i < s.surface.originalCount(); ++i) {  // dried blue paint under a wet blue layer
+    PaintState& p = s.surface.originalPaint(i);
+    p.dry.rgb = Vec3(0.1, 0.1, 0.9);
+    p.wet.rgb = Vec3(0.1, 0.1, 0.9);
+    p.wet_volume = 0.2;
+  }
+  PaintType eraser;
+  eraser.eraser = true;
+  eraser.transfer_to_surface = 30.0;  // as config/paint/paints/eraser.yaml
+  eraser.transfer_to_brush = 6.0;
+  loadBrush(s.brush.skin(), eraser);
+  EXPECT_EQ(brushWetVolume(s.brush), 0.0);  // the eraser carries no paint
+  const double before = surfaceWetVolume(s.surface);
+  s.stroke(eraser, 12);
+  EXPECT_NEAR(brushWetVolume(s.brush) + surfaceWetVolume(s.surface), before, 1e-12 * before);
+  EXPECT_GT(brushWetVolume(s.brush), 1.0);  // wet paint taken up (measured 2.3 of 0.2 per original)
+  // Where it pressed, the dry colour moved towards the object's own (white, the plane has no colours).
+  size_t restored = 0, children = 0;
+  for (size_t i = 0; i < s.surface.originalCount(); ++i)
+    for (const ChildSurfel& c : s.surface.children(i)) {
+      ++children;
+      EXPECT_LE(c.paint.dry.rgb.x(), 1.0 + 1e-12);
+      restored += c.paint.dry.rgb.x() > 0.5;  // from 0.1 towards 1
+    }
+  EXPECT_GT(restored, 100u);
+  EXPECT_LT(restored, children);  // the resampled border that was not pressed keeps its colour
+}
+
+TEST(PaintTransfer, ViscousPaintCarvesTheBristlePatternIntoNewSurfels) {
+  PaintType oil = symmetricPaint();
+  oil.imprint_depth = 2e-4;
+  oil.imprint_spacing = 1.5e-3;
+  Session s;
+  s.stroke(oil, 20);
+  size_t imprinted = 0;
+  for (const PaintEventStats& e : s.events) imprinted += e.children_imprinted;
+  EXPECT_GT(imprinted, 100u);
+  // Along y (across the +x stroke, the tip stays on y = 0) the carved surfels lie on
+  // depth (1 + cos(2 pi y / spacing)) / 2 with normals tilted by its slope; the others (resampled next to
+  // the pressed pixels, heights averaged by the splatting) stay within that range.
+  size_t raised = 0, on_pattern = 0;
+  double zmax = 0;
+  for (size_t i = 0; i < s.surface.originalCount(); ++i)
+    for (const ChildSurfel& c : s.surface.children(i)) {
+      const double z = c.position.z();
+      EXPECT_GT(z, -0.1 * oil.imprint_depth);
+      EXPECT_LT(z, 1.1 * oil.imprint_depth);
+      if (!(z > 1e-9)) continue;
+      ++raised;
+      const double phase = 2 * M_PI * c.position.y() / oil.imprint_spacing;
+      const double slope = -0.5 * oil.imprint_depth * 2 * M_PI / oil.imprint_spacing * std::sin(phase);
+      if (std::abs(z - 0.5 * oil.imprint_depth * (1 + std::cos(phase))) < 1e-7) {
+        ++on_pattern;
+        zmax = std::max(zmax, z);
+        EXPECT_NEAR(std::abs(c.normal.y()), std::abs(slope) / std::sqrt(1 + slope * slope), 1e-9);
+        EXPECT_NEAR(c.normal.x(), 0.0, 1e-9);
+      }
+    }
+  EXPECT_GT(on_pattern, 50u);     // measured 88 of 420 raised: the rest were resampled next to pressed pixels
+  EXPECT_GT(raised, on_pattern);  // (their heights averaged from the carved ones around them)
+  // Pixel centres at +-0.25, +-0.75, ... mm sample the 1.5 mm pattern at 3/4 depth and 0.
+  EXPECT_NEAR(zmax, 0.75 * oil.imprint_depth, 1e-9);
+  // Pressing without moving carves nothing.
+  Session still;
+  const double l = still.brush.preset().bristle_length;
+  still.brush.reset(stylusAt(Vec3(0, 0, l)));
+  size_t still_imprinted = 0;
+  for (int e = 1; e <= 10; ++e) {
+    still.brush.advance(kEvent, stylusAt(Vec3(0, 0, l - 0.0004 * e)), &still.surface);
+    still_imprinted += transferPaint(still.brush, still.surface, oil, kEvent).children_imprinted;
+  }
+  EXPECT_GT(still.surface.childCount(), 0u);
+  EXPECT_EQ(still_imprinted, 0u);
+  // A pattern finer than two buffer pixels would alias: refused with the reason.
+  oil.imprint_spacing = 1.5 * still.brush.preset().surfel_spacing;
+  try {
+    transferPaint(still.brush, still.surface, oil, kEvent);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("alias"), std::string::npos);
+  }
+}
+
 }  // namespace
 }  // namespace rc

@@ -26,6 +26,25 @@ TEST(PaintTypeReader, EveryShippedPaintLoads) {
   EXPECT_GT(readPaintType(paintDir() + "/oil.yaml").imprint_depth, 0);
   EXPECT_GT(readPaintType(paintDir() + "/metallic.yaml").colour.reflectivity, 0.5);
   EXPECT_TRUE(readPaintType(paintDir() + "/eraser.yaml").eraser);
+  // The shipped imprint patterns are at least two paint buffer pixels (the brushes' 0.5 mm skin spacing).
+  for (const char* name : {"oil", "acrylic"})
+    EXPECT_GE(readPaintType(paintDir() + "/" + name + ".yaml").imprint_spacing, 2 * 5e-4) << name;
+}
+
+TEST(PaintType, LoadingTheBrushReplacesItsWetPaintAndTheEraserCarriesNone) {
+  const BrushPreset preset;
+  const BrushSkeleton skeleton(preset);
+  BrushSkin skin(preset, skeleton);
+  const PaintType oil = readPaintType(paintDir() + "/oil.yaml");
+  loadBrush(skin, oil);
+  ASSERT_GT(skin.size(), 10u);
+  for (const PaintState& p : skin.paint) {
+    EXPECT_EQ(p.wet, oil.colour);
+    EXPECT_EQ(p.wet_volume, oil.load_volume);
+    EXPECT_EQ(p.optical_density, oil.optical_density);
+  }
+  loadBrush(skin, readPaintType(paintDir() + "/eraser.yaml"));
+  for (const PaintState& p : skin.paint) EXPECT_EQ(p.wet_volume, 0.0);
 }
 
 std::string errorOf(const std::string& yaml) {
