@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/paint/paint_dryer.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -21,8 +22,13 @@ double PaintDryer::run(PaintSurface& surface, double now, size_t max_visits) {
     if (dt < 0)
       throw std::invalid_argument("PaintDryer::run: time went back by " + std::to_string(-dt) + " s");
     last_visit_[i] = now;
-    dried += dryPaint(surface.originalPaint(i), kappa_, dt, drying_);  // (5.12), (5.13)
-    for (ChildSurfel& c : surface.children(i)) dried += dryPaint(c.paint, kappa_, dt, drying_);
+    // Only surfels with wet paint are touched (the others would be reported as changed for nothing).
+    const PaintSurface& view = surface;
+    if (view.originalPaint(i).wet_volume > 0)
+      dried += dryPaint(surface.originalPaint(i), kappa_, dt, drying_);  // (5.12), (5.13)
+    if (std::any_of(view.children(i).begin(), view.children(i).end(),
+                    [](const ChildSurfel& c) { return c.paint.wet_volume > 0; }))
+      for (ChildSurfel& c : surface.children(i)) dried += dryPaint(c.paint, kappa_, dt, drying_);
   }
   return dried;
 }

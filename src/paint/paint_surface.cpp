@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "relaxed_connectivity/paint/paint_attributes.h"
 
@@ -22,23 +23,9 @@ PaintSurface::PaintSurface(SurfelCloud originals) : originals_(std::move(origina
   for (Vec3& n : originals_.normals)  // unit normals stay bitwise as given (a saved state reloads exactly)
     if (std::abs(n.squaredNorm() - 1.0) > 1e-12) n.normalize();
   tree_ = std::make_unique<KdTree>(originals_.positions);
-  enabled_.assign(originals_.size(), 1);
-  if (hasPaintAttributes(originals_)) {
-    original_paint_.resize(originals_.size());
-    const PaintColumns columns(originals_);
-    for (size_t i = 0; i < originals_.size(); ++i) original_paint_[i] = columns.read(i);
-  } else {
-    PaintState base;  // the object's own colour as a dry base layer
-    base.dry.rgb = Vec3::Ones();
-    base.dry_volume = 1.0;
-    original_paint_.assign(originals_.size(), base);
-    if (originals_.hasColors())
-      for (size_t i = 0; i < originals_.size(); ++i)
-        original_paint_[i].dry.rgb =
-            Vec3(originals_.colors[i][0], originals_.colors[i][1], originals_.colors[i][2]) / 255.0;
-  }
-  children_.resize(originals_.size());
-  enabled_count_ = originals_.size();
+  changed_flag_.assign(originals_.size(), 0);
+  reset();
+  takeChangedOriginals();  // nothing has changed yet
   // The median nearest-neighbour spacing over a sample of ~1000 originals; the median radius when the cloud
   // has radii, else that spacing, is the typical radius.
   std::vector<double> spacing, radii;
@@ -157,6 +144,26 @@ PaintColour PaintSurface::baseColour(size_t original) const {
   return c;
 }
 
+void PaintSurface::reset() {
+  if (hasPaintAttributes(originals_)) {
+    original_paint_.resize(originals_.size());
+    const PaintColumns columns(originals_);
+    for (size_t i = 0; i < originals_.size(); ++i) original_paint_[i] = columns.read(i);
+  } else {
+    PaintState base;  // the object's own colour as a dry base layer
+    base.dry = baseColour(0);
+    base.dry_volume = 1.0;
+    original_paint_.assign(originals_.size(), base);
+    for (size_t i = 0; i < originals_.size(); ++i) original_paint_[i].dry = baseColour(i);
+  }
+  children_.assign(originals_.size(), {});
+  enabled_.assign(originals_.size(), 1);
+  enabled_count_ = originals_.size();
+  child_count_ = 0;
+  for (size_t i = 0; i < originals_.size(); ++i)
+    if (!changed_flag_[i]) changed_flag_[i] = 1, changed_.push_back(uint32_t(i));
+}
+
 void PaintSurface::setEnabled(size_t original, bool enabled) {
   if (enabled_[original] == uint8_t(enabled)) return;
   notify(original);
@@ -209,9 +216,15 @@ void PaintSurface::clearChildren(size_t original) {
   setEnabled(original, true);
 }
 
+std::vector<uint32_t> PaintSurface::takeChangedOriginals() {
+  for (uint32_t i : changed_) changed_flag_[i] = 0;
+  return std::exchange(changed_, {});
+}
+
 void PaintSurface::restoreOriginal(size_t original, bool enabled, const PaintState& paint,
                                    std::vector<ChildSurfel> children) {
   std::vector<ChildSurfel>& list = children_.at(original);
+  if (!changed_flag_[original]) changed_flag_[original] = 1, changed_.push_back(uint32_t(original));
   child_count_ = child_count_ - list.size() + children.size();
   list = std::move(children);
   original_paint_[original] = paint;
@@ -222,8 +235,19 @@ void PaintSurface::restoreOriginal(size_t original, bool enabled, const PaintSta
 }
 
 SurfelCloud PaintSurface::activeCloud() const {
+  return cloudOf(nullptr, originals_.size(), activeCount());
+}
+
+SurfelCloud PaintSurface::activeCloudOf(const std::vector<uint32_t>& originals) const {
+  for (uint32_t i : originals)
+    if (i >= originals_.size())
+      throw std::out_of_range("PaintSurface::activeCloudOf: original " + std::to_string(i) + " of " +
+                              std::to_string(originals_.size()));
+  return cloudOf(originals.data(), originals.size(), originals.size());
+}
+
+SurfelCloud PaintSurface::cloudOf(const uint32_t* list, size_t count, size_t n) const {
   SurfelCloud out;
-  const size_t n = activeCount();
   out.positions.reserve(n);
   out.normals.reserve(n);
   out.radii.reserve(n);
@@ -243,7 +267,8 @@ SurfelCloud PaintSurface::activeCloud() const {
     paint.push_back(&state);
     fathers.push_back(father);
   };
-  for (size_t i = 0; i < originals_.size(); ++i) {
+  for (size_t k = 0; k < count; ++k) {
+    const size_t i = list ? list[k] : k;
     if (enabled_[i])
       push(originals_.positions[i], originals_.normals[i], originals_.hasRadii() ? originals_.radii[i] : 0.0,
            original_paint_[i], uint32_t(i));

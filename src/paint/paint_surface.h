@@ -93,10 +93,19 @@ class PaintSurface {
   /// 5.5.2).
   void clearChildren(size_t original);
 
+  /// Back to the object as constructed: every original enabled with its initial paint, no children (the
+  /// paint model's clear). Every original is reported changed.
+  void reset();
   /// Sets everything about one original at once (undo, redo, loading a saved state); the observer is not
   /// told.
   void restoreOriginal(size_t original, bool enabled, const PaintState& paint,
                        std::vector<ChildSurfel> children);
+  /// The originals whose state (enabled flag, paint or children) changed since the last call, each once, in
+  /// the order of their first change; clears the list. What a delta message sends.
+  std::vector<uint32_t> takeChangedOriginals();
+  /// The active surfels of the listed originals (the enabled original or its children), as activeCloud()
+  /// writes them.
+  SurfelCloud activeCloudOf(const std::vector<uint32_t>& originals) const;
   /// The observer told before each change (nullptr: none); not owned.
   void setObserver(PaintSurfaceObserver* observer) { observer_ = observer; }
   PaintSurfaceObserver* observer() const { return observer_; }
@@ -114,7 +123,10 @@ class PaintSurface {
   static constexpr uint8_t kMaxCellDistance = 16;
   void buildCollisionGrid(double spacing);
   void buildCellDistances();
+  /// The active surfels of originals list[0..count) (all when list is null); n: the expected size.
+  SurfelCloud cloudOf(const uint32_t* list, size_t count, size_t n) const;
   void notify(size_t original) {
+    if (!changed_flag_[original]) changed_flag_[original] = 1, changed_.push_back(uint32_t(original));
     if (observer_) observer_->beforeChange(original);
   }
 
@@ -130,6 +142,8 @@ class PaintSurface {
   size_t child_count_ = 0;
   double typical_radius_ = 0;
   PaintSurfaceObserver* observer_ = nullptr;
+  std::vector<uint8_t> changed_flag_;
+  std::vector<uint32_t> changed_;
 };
 
 }  // namespace rc

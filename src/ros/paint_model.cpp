@@ -1,12 +1,17 @@
 #include "relaxed_connectivity/ros/paint_model.h"
 
+#include <relaxed_connectivity/PaintDelta.h>
+#include <relaxed_connectivity/PaintStats.h>
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <cmath>
+#include <functional>
 #include <stdexcept>
+#include <string_view>
 
 #include "relaxed_connectivity/paint/brush_preset_reader.h"
 #include "relaxed_connectivity/paint/paint_type_reader.h"
+#include "relaxed_connectivity/paint/painted_surface_io.h"
 #include "relaxed_connectivity/ros/brush_messages.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
@@ -27,6 +32,11 @@ void PaintModelParams::validate() const {
   if (!(skin_rate >= 0) || !std::isfinite(skin_rate)) fail("skin_rate must be >= 0");
   if (!(painted_rate > 0) || !std::isfinite(painted_rate)) fail("painted_rate must be positive");
   if (drying_visits < 0) fail("drying_visits must be >= 0");
+  if (downsampling_visits < 0) fail("downsampling_visits must be >= 0");
+  if (!(stroke_gap >= 0) || !std::isfinite(stroke_gap)) fail("stroke_gap must be >= 0");
+  if (journal_bytes < 0) fail("journal_bytes must be >= 0");
+  if (!(autosave_period > 0) || !std::isfinite(autosave_period)) fail("autosave_period must be positive");
+  if (!(stats_period > 0) || !std::isfinite(stats_period)) fail("stats_period must be positive");
   try {
     transfer.validate();
   } catch (const std::invalid_argument& e) {
@@ -49,6 +59,14 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
   pnh.param("pressure_per_depth", p.transfer.pressure_per_depth, p.transfer.pressure_per_depth);
   pnh.param("painted_rate", p.painted_rate, p.painted_rate);
   pnh.param("drying_visits", p.drying_visits, p.drying_visits);
+  pnh.param("downsampling_visits", p.downsampling_visits, p.downsampling_visits);
+  pnh.param("stroke_gap", p.stroke_gap, p.stroke_gap);
+  pnh.param("journal_bytes", p.journal_bytes, p.journal_bytes);
+  pnh.param("restore", p.restore, p.restore);
+  pnh.param("autosave", p.autosave, p.autosave);
+  pnh.param("autosave_period", p.autosave_period, p.autosave_period);
+  pnh.param("replace_painted", p.replace_painted, p.replace_painted);
+  pnh.param("stats_period", p.stats_period, p.stats_period);
   p.validate();
   return p;
 }
@@ -62,16 +80,25 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   contact_pub_ = nh_.advertise<relaxed_connectivity::BrushContact>("brush_contact", 10);
   skeleton_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("brush/skeleton", 2);
   skin_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("brush/skin", 2);
-  if (!params_.paint.empty()) {
-    paint_type_ = std::make_unique<PaintType>(readPaintType(params_.paint));
-    painted_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("surfels/painted", 1, true);
-    if (params_.drying_visits > 0 && paint_type_->drying_rate > 0)
-      dryer_ = std::make_unique<PaintDryer>(paint_type_->drying_rate, paint_type_->drying);
+  painted_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("surfels/painted", 1, true);
+  delta_pub_ = nh_.advertise<relaxed_connectivity::PaintDelta>("surfels/painted_delta", 100);
+  stats_pub_ = nh_.advertise<relaxed_connectivity::PaintStats>("paint_stats", 2);
+  if (!params_.paint.empty()) setPaintType(std::make_unique<PaintType>(readPaintType(params_.paint)));
+  start_ = last_autosave_ = last_stats_ = ros::WallTime::now();
+  if (!params_.restore.empty()) {
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    installSurface(loadPaintedSurface(params_.restore), "restored from " + params_.restore);
   }
-  start_ = ros::WallTime::now();
   surfels_sub_ = nh_.subscribe("surfels", 1, &PaintModel::surfelsCallback, this);
   pose_sub_ = nh_.subscribe(params_.device + "/pose", 10, &PaintModel::poseCallback, this,
                             ros::TransportHints().tcpNoDelay());
+  services_.push_back(private_nh_.advertiseService("undo", &PaintModel::undo, this));
+  services_.push_back(private_nh_.advertiseService("redo", &PaintModel::redo, this));
+  services_.push_back(private_nh_.advertiseService("clear", &PaintModel::clear, this));
+  services_.push_back(private_nh_.advertiseService("save", &PaintModel::save, this));
+  services_.push_back(private_nh_.advertiseService("load", &PaintModel::load, this));
+  services_.push_back(private_nh_.advertiseService("set_paint", &PaintModel::setPaint, this));
+  services_.push_back(private_nh_.advertiseService("set_brush", &PaintModel::setBrush, this));
   timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &PaintModel::tick, this);
   ROS_INFO_STREAM("paint_model: brush '"
                   << brush_->preset().name << "' (" << brush_->skeleton().handleCount() << " handle points, "
@@ -81,23 +108,84 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
                   << (paint_type_ ? ", paint '" + paint_type_->name + "'" : ", no paint"));
 }
 
+PaintModel::~PaintModel() {
+  timer_.stop();
+  std::lock_guard<std::mutex> lock(model_mutex_);
+  journal_.reset();  // before the surface it observes
+}
+
+void PaintModel::setPaintType(std::unique_ptr<PaintType> paint) {
+  // Checks what depends on the brush too (the imprint pattern against the buffer pixels).
+  const double pixel =
+      params_.transfer.pixel_size > 0 ? params_.transfer.pixel_size : brush_->preset().surfel_spacing;
+  if (paint->imprint_depth > 0 && paint->imprint_spacing < 2 * pixel)
+    throw std::invalid_argument("paint '" + paint->name + "': imprint spacing " +
+                                std::to_string(paint->imprint_spacing) +
+                                " m is below two paint buffer pixels (" + std::to_string(2 * pixel) + " m)");
+  paint_type_ = std::move(paint);
+  loadBrush(brush_->skin(), *paint_type_);
+  dryer_.reset();
+  if (params_.drying_visits > 0 && paint_type_->drying_rate > 0)
+    dryer_ = std::make_unique<PaintDryer>(paint_type_->drying_rate, paint_type_->drying,
+                                          (ros::WallTime::now() - start_).toSec());
+}
+
+bool PaintModel::painted() const {
+  return surface_ && (surface_->childCount() > 0 || (journal_ && journal_->undoCount() > 0));
+}
+
+void PaintModel::installSurface(std::unique_ptr<PaintSurface> surface, const std::string& what) {
+  journal_.reset();
+  surface_ = std::move(surface);
+  object_hash_ = 0;  // (set by surfelsCallback for an object from the topic)
+  object_frame_.clear();
+  journal_ = std::make_unique<PaintJournal>(*surface_, size_t(params_.journal_bytes));
+  if (paint_type_ && dryer_)
+    dryer_ = std::make_unique<PaintDryer>(paint_type_->drying_rate, paint_type_->drying,
+                                          (ros::WallTime::now() - start_).toSec());
+  downsampler_ = params_.downsampling_visits > 0 ? std::make_unique<PaintDownsampler>() : nullptr;
+  surface_->takeChangedOriginals();  // the full cloud carries this state
+  publish_now_ = true;
+  ROS_INFO_STREAM("paint_model: object of " << surface_->originalCount() << " surfels ("
+                                            << surface_->childCount() << " children), " << what);
+}
+
 void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
+  // The same object again (a latched topic re-sent, a reconnect): nothing to do.
+  const size_t hash = std::hash<std::string_view>()(
+      std::string_view(reinterpret_cast<const char*>(msg->data.data()), msg->data.size()));
+  {
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    if (surface_ && hash == object_hash_ && msg->header.frame_id == object_frame_) return;
+  }
   try {
     SurfelCloud cloud = PointCloud2Converter::fromMessage(*msg);
     const size_t dropped = cloud.removeNonFinite();
-    if (!cloud.hasNormals()) throw std::invalid_argument("the cloud has no normals (normal_x/y/z)");
+    if (!cloud.hasNormals())
+      throw std::invalid_argument("the cloud has no normals (normal_x/y/z): run it through surfel_estimator");
     if (msg->header.frame_id != params_.world_frame) {
       const auto tf = tf_buffer_.lookupTransform(params_.world_frame, msg->header.frame_id, ros::Time(0));
       cloud.transform(tf2::transformToEigen(tf));
     }
     cloud.frame_id = params_.world_frame;
-    auto surface = std::make_shared<PaintSurface>(std::move(cloud));
-    std::lock_guard<std::mutex> lock(mutex_);
-    surface_ = surface;
-    ROS_INFO_STREAM("paint_model: object of "
-                    << surface_->originalCount() << " surfels"
-                    << (dropped ? " (" + std::to_string(dropped) + " non-finite dropped)" : ""));
+    {
+      std::lock_guard<std::mutex> lock(model_mutex_);
+      if (painted() && !params_.replace_painted)
+        throw std::runtime_error(
+            "the current object holds paint: call ~clear (or ~save it) first, or set "
+            "~replace_painted");
+    }
+    auto surface = std::make_unique<PaintSurface>(std::move(cloud));  // the kd-tree, outside the lock
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    if (painted() && !params_.replace_painted)
+      throw std::runtime_error("the current object was painted meanwhile");
+    installSurface(std::move(surface),
+                   "from " + surfels_sub_.getTopic() +
+                       (dropped ? " (" + std::to_string(dropped) + " non-finite dropped)" : ""));
+    object_hash_ = hash;
+    object_frame_ = msg->header.frame_id;
   } catch (const std::exception& e) {  // keep the current object
+    ++rejected_;
     ROS_ERROR_STREAM("paint_model: rejected surfels (frame '" << msg->header.frame_id << "', "
                                                               << msg->width * msg->height
                                                               << " points): " << e.what());
@@ -110,72 +198,98 @@ void PaintModel::poseCallback(const geometry_msgs::PoseStampedConstPtr& msg) {
                                   p.orientation.z * p.orientation.z + p.orientation.w * p.orientation.w);
   if (!std::isfinite(p.position.x) || !std::isfinite(p.position.y) || !std::isfinite(p.position.z) ||
       !std::isfinite(q_norm) || std::abs(q_norm - 1) > 1e-3) {
+    ++rejected_;
     ROS_WARN_STREAM_THROTTLE(1.0,
                              "paint_model: dropped a device pose with a non-finite position or a non-unit "
                              "quaternion (|q| = "
                                  << q_norm << ")");
     return;
   }
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<std::mutex> lock(input_mutex_);
   latest_pose_ = msg;
 }
 
 void PaintModel::tick(const ros::WallTimerEvent&) {
   geometry_msgs::PoseStampedConstPtr pose;
-  std::shared_ptr<PaintSurface> surface;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<std::mutex> lock(input_mutex_);
     pose = latest_pose_;
-    surface = surface_;
   }
-  if (!pose) return;
-  // The device pose in the world (a static tf world -> haptic_base in a session).
-  Eigen::Isometry3d world_T_pose_frame = Eigen::Isometry3d::Identity();
-  if (pose->header.frame_id != params_.world_frame) {
-    try {
-      world_T_pose_frame = tf2::transformToEigen(
-          tf_buffer_.lookupTransform(params_.world_frame, pose->header.frame_id, ros::Time(0)));
-    } catch (const tf2::TransformException& e) {
-      ROS_WARN_STREAM_THROTTLE(2.0, "paint_model: no transform " << params_.world_frame << " -> "
-                                                                 << pose->header.frame_id << ": "
-                                                                 << e.what());
-      return;
-    }
-  }
-  Eigen::Isometry3d pose_frame_T_stylus;
-  tf2::fromMsg(pose->pose, pose_frame_T_stylus);
-  const Eigen::Isometry3d world_T_stylus = world_T_pose_frame * pose_frame_T_stylus;
-  const double dt = 1.0 / params_.rate;
-  try {
-    if (!brush_placed_) {
-      brush_->reset(world_T_stylus);
-      brush_placed_ = true;
-    }
-    brush_->advance(dt, world_T_stylus, surface.get());
-  } catch (const BrushInstability& e) {  // reported, then the brush restarts at rest at the device pose
-    ++instabilities_;
-    ROS_ERROR_STREAM("paint_model: " << e.what() << "; the brush restarts at rest (" << instabilities_
-                                     << " so far)");
-    brush_->reset(world_T_stylus);
-  }
-  if (paint_type_ && surface) {
-    try {
-      const PaintEventStats painted = transferPaint(*brush_, *surface, *paint_type_, dt, params_.transfer);
-      painted_dirty_ = painted_dirty_ || painted.penetrated_pixels > 0;
-      if (dryer_)  // (5.6.1) in bounded slices; what dries changes what is seen
-        painted_dirty_ = dryer_->run(*surface, (ros::WallTime::now() - start_).toSec(),
-                                     size_t(params_.drying_visits)) > 0 ||
-                         painted_dirty_;
-    } catch (const std::exception& e) {  // the event's paint is lost, the session goes on
-      ROS_ERROR_STREAM_THROTTLE(1.0, "paint_model: paint transfer failed: " << e.what());
-    }
-  }
-  contact_pub_.publish(toBrushContactMessage(*brush_, world_T_pose_frame.inverse(), pose->header.frame_id,
-                                             pose->header.stamp));
+  std::lock_guard<std::mutex> lock(model_mutex_);
+  ++ticks_;
+  const ros::WallTime wall = ros::WallTime::now();
   const ros::Time now = ros::Time::now();
+  if (pose) {
+    // The device pose in the world (a static tf world -> haptic_base in a session).
+    Eigen::Isometry3d world_T_pose_frame = Eigen::Isometry3d::Identity();
+    bool have_pose = true;
+    if (pose->header.frame_id != params_.world_frame) {
+      try {
+        world_T_pose_frame = tf2::transformToEigen(
+            tf_buffer_.lookupTransform(params_.world_frame, pose->header.frame_id, ros::Time(0)));
+      } catch (const tf2::TransformException& e) {
+        ROS_WARN_STREAM_THROTTLE(2.0, "paint_model: no transform " << params_.world_frame << " -> "
+                                                                   << pose->header.frame_id << ": "
+                                                                   << e.what());
+        have_pose = false;
+      }
+    }
+    if (have_pose) {
+      Eigen::Isometry3d pose_frame_T_stylus;
+      tf2::fromMsg(pose->pose, pose_frame_T_stylus);
+      const Eigen::Isometry3d world_T_stylus = world_T_pose_frame * pose_frame_T_stylus;
+      const double dt = 1.0 / params_.rate;
+      try {
+        if (!brush_placed_) {
+          brush_->reset(world_T_stylus);
+          brush_placed_ = true;
+        }
+        brush_->advance(dt, world_T_stylus, surface_.get());
+      } catch (const BrushInstability& e) {  // reported, then the brush restarts at rest at the device pose
+        ++instabilities_;
+        ROS_ERROR_STREAM("paint_model: " << e.what() << "; the brush restarts at rest (" << instabilities_
+                                         << " so far)");
+        brush_->reset(world_T_stylus);
+      }
+      const ros::WallTime brushed = ros::WallTime::now();
+      brush_s_ += (brushed - wall).toSec();
+      if (paint_type_ && surface_) {
+        try {
+          journal_->beginStroke();  // (no-op while one is open)
+          PaintEventStats painted;
+          {
+            const PaintJournal::Recording recording(*journal_);
+            painted = transferPaint(*brush_, *surface_, *paint_type_, dt, params_.transfer);
+          }
+          if (painted.penetrated_pixels > 0) {
+            ++events_;
+            idle_ticks_ = 0;
+            painted_dirty_ = true;
+          } else if (++idle_ticks_ >= std::max(1.0, params_.stroke_gap * params_.rate)) {
+            journal_->endStroke();
+          }
+        } catch (const std::exception& e) {  // the event's paint is lost, the session goes on
+          ROS_ERROR_STREAM_THROTTLE(1.0, "paint_model: paint transfer failed: " << e.what());
+        }
+      }
+      transfer_s_ += (ros::WallTime::now() - brushed).toSec();
+      contact_pub_.publish(toBrushContactMessage(*brush_, world_T_pose_frame.inverse(), pose->header.frame_id,
+                                                 pose->header.stamp));
+    }
+  }
+  const ros::WallTime background = ros::WallTime::now();
+  if (surface_ && dryer_)  // (5.6.1) in bounded slices; what dries changes what is seen
+    painted_dirty_ =
+        dryer_->run(*surface_, (background - start_).toSec(), size_t(params_.drying_visits)) > 0 ||
+        painted_dirty_;
+  if (surface_ && downsampler_ && !journal_->strokeOpen())  // (5.5.2), between strokes
+    painted_dirty_ =
+        downsampler_->run(*surface_, size_t(params_.downsampling_visits)).merged > 0 || painted_dirty_;
+  const ros::WallTime published = ros::WallTime::now();
+  background_s_ += (published - background).toSec();
+
   if (skeleton_pub_.getNumSubscribers() > 0)
     skeleton_pub_.publish(toSkeletonMarkers(*brush_, params_.world_frame, now));
-  const ros::WallTime wall = ros::WallTime::now();
   if (params_.skin_rate > 0 && skin_pub_.getNumSubscribers() > 0 &&
       (wall - last_skin_).toSec() >= 1.0 / params_.skin_rate) {
     SurfelCloud skin = brush_->skin().cloud();
@@ -184,13 +298,185 @@ void PaintModel::tick(const ros::WallTimerEvent&) {
     skin_pub_.publish(PointCloud2Converter::toMessage(skin));
     last_skin_ = wall;
   }
-  if (painted_dirty_ && surface && (wall - last_painted_).toSec() >= 1.0 / params_.painted_rate) {
-    SurfelCloud painted = surface->activeCloud();
-    painted.frame_id = params_.world_frame;
-    painted.stamp_ns = now.toNSec();
-    painted_pub_.publish(PointCloud2Converter::toMessage(painted));
-    painted_dirty_ = false;
-    last_painted_ = wall;
+  if (surface_) {
+    publishDelta(now);
+    if (publish_now_ || (painted_dirty_ && (wall - last_painted_).toSec() >= 1.0 / params_.painted_rate)) {
+      publishPainted(now);
+      last_painted_ = wall;
+    }
+    if (!params_.autosave.empty() && (wall - last_autosave_).toSec() >= params_.autosave_period &&
+        !journal_->strokeOpen())
+      autosave(wall);
+  }
+  publish_s_ += (ros::WallTime::now() - published).toSec();
+  if ((wall - last_stats_).toSec() >= params_.stats_period) publishStats(wall);
+}
+
+void PaintModel::publishDelta(const ros::Time& stamp) {
+  std::vector<uint32_t> changed = surface_->takeChangedOriginals();
+  if (changed.empty()) return;
+  if (delta_pub_.getNumSubscribers() == 0) return;  // (the next full cloud carries the change)
+  relaxed_connectivity::PaintDelta delta;
+  delta.header.stamp = stamp;
+  delta.header.frame_id = params_.world_frame;
+  delta.sequence = ++delta_sequence_;
+  SurfelCloud surfels = surface_->activeCloudOf(changed);
+  surfels.frame_id = params_.world_frame;
+  surfels.stamp_ns = stamp.toNSec();
+  PointCloud2Converter::toMessage(surfels, delta.surfels);
+  delta.originals = std::move(changed);
+  delta_pub_.publish(delta);
+}
+
+void PaintModel::publishPainted(const ros::Time& stamp) {
+  SurfelCloud painted = surface_->activeCloud();
+  painted.frame_id = params_.world_frame;
+  painted.stamp_ns = stamp.toNSec();
+  painted_pub_.publish(PointCloud2Converter::toMessage(painted));
+  painted_dirty_ = publish_now_ = false;
+}
+
+void PaintModel::autosave(const ros::WallTime& now) {
+  last_autosave_ = now;
+  try {
+    savePaintedSurface(params_.autosave, *surface_, true);
+  } catch (const std::exception& e) {
+    ROS_ERROR_STREAM_THROTTLE(60.0, "paint_model: autosave failed: " << e.what());
+  }
+}
+
+void PaintModel::publishStats(const ros::WallTime& now) {
+  const double period = (now - last_stats_).toSec();
+  relaxed_connectivity::PaintStats s;
+  s.header.stamp = ros::Time::now();
+  s.brush = brush_->preset().name;
+  s.paint = paint_type_ ? paint_type_->name : "";
+  s.events_per_second = events_ / period;
+  if (surface_) {
+    s.originals = uint32_t(surface_->originalCount());
+    s.children = uint32_t(surface_->childCount());
+    s.active_surfels = uint32_t(surface_->activeCount());
+    const PaintSurface& view = *surface_;
+    for (size_t i = 0; i < view.originalCount(); ++i) {
+      s.wet_surfels += view.enabled(i) && view.originalPaint(i).wet_volume > 0;
+      for (const ChildSurfel& c : view.children(i)) s.wet_surfels += c.paint.wet_volume > 0;
+    }
+    s.undo_strokes = uint32_t(journal_->undoCount());
+    s.redo_strokes = uint32_t(journal_->redoCount());
+    s.journal_bytes = journal_->bytes();
+  }
+  const double per_tick = ticks_ > 0 ? 1e3 / double(ticks_) : 0.0;
+  s.brush_ms = brush_s_ * per_tick;
+  s.transfer_ms = transfer_s_ * per_tick;
+  s.background_ms = background_s_ * per_tick;
+  s.publish_ms = publish_s_ * per_tick;
+  s.rejected_messages = uint32_t(rejected_);
+  s.instabilities = uint32_t(instabilities_);
+  stats_pub_.publish(s);
+  events_ = ticks_ = 0;
+  brush_s_ = transfer_s_ = background_s_ = publish_s_ = 0;
+  last_stats_ = now;
+}
+
+namespace {
+
+template <class Response>
+bool answer(Response& res, bool success, const std::string& message) {
+  res.success = success;
+  res.message = message;
+  if (success)
+    ROS_INFO_STREAM("paint_model: " << message);
+  else
+    ROS_WARN_STREAM("paint_model: " << message);
+  return true;
+}
+
+}  // namespace
+
+bool PaintModel::undo(Command::Request&, Command::Response& res) {
+  std::lock_guard<std::mutex> lock(model_mutex_);
+  if (!surface_ || !journal_->undo()) return answer(res, false, "undo: nothing to undo");
+  publish_now_ = true;
+  return answer(res, true,
+                "undo: " + std::to_string(journal_->undoCount()) + " more to undo, " +
+                    std::to_string(journal_->redoCount()) + " to redo");
+}
+
+bool PaintModel::redo(Command::Request&, Command::Response& res) {
+  std::lock_guard<std::mutex> lock(model_mutex_);
+  if (!surface_ || !journal_->redo()) return answer(res, false, "redo: nothing to redo");
+  publish_now_ = true;
+  return answer(res, true, "redo: " + std::to_string(journal_->redoCount()) + " more to redo");
+}
+
+bool PaintModel::clear(Command::Request&, Command::Response& res) {
+  std::lock_guard<std::mutex> lock(model_mutex_);
+  if (!surface_) return answer(res, false, "clear: no object yet");
+  journal_->clear();
+  surface_->reset();
+  publish_now_ = true;
+  return answer(res, true,
+                "clear: the object as loaded (" + std::to_string(surface_->originalCount()) +
+                    " surfels), the journal emptied");
+}
+
+bool PaintModel::save(File::Request& req, File::Response& res) {
+  std::lock_guard<std::mutex> lock(model_mutex_);
+  if (!surface_) return answer(res, false, "save: no object yet");
+  try {
+    savePaintedSurface(req.path, *surface_, true);
+  } catch (const std::exception& e) {
+    return answer(res, false, std::string("save: ") + e.what());
+  }
+  return answer(res, true,
+                "save: " + std::to_string(surface_->activeCount()) + " active surfels (" +
+                    std::to_string(surface_->childCount()) + " children) to " + req.path);
+}
+
+bool PaintModel::load(File::Request& req, File::Response& res) {
+  std::unique_ptr<PaintSurface> loaded;
+  try {
+    loaded = loadPaintedSurface(req.path);  // outside the lock: painting goes on meanwhile
+  } catch (const std::exception& e) {
+    ++rejected_;
+    return answer(res, false, std::string("load: ") + e.what());
+  }
+  std::lock_guard<std::mutex> lock(model_mutex_);
+  installSurface(std::move(loaded), "loaded from " + req.path);
+  return answer(res, true,
+                "load: " + std::to_string(surface_->activeCount()) + " active surfels from " + req.path);
+}
+
+bool PaintModel::setPaint(File::Request& req, File::Response& res) {
+  try {
+    auto paint = std::make_unique<PaintType>(readPaintType(req.path));
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    setPaintType(std::move(paint));
+    return answer(res, true, "set_paint: the brush is loaded with '" + paint_type_->name + "'");
+  } catch (const std::exception& e) {
+    ++rejected_;
+    return answer(res, false, std::string("set_paint: ") + e.what());
+  }
+}
+
+bool PaintModel::setBrush(File::Request& req, File::Response& res) {
+  try {
+    auto brush = std::make_unique<Brush>(readBrushPreset(req.path), params_.brush_options);
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    std::swap(brush_, brush);
+    try {
+      if (paint_type_) setPaintType(std::make_unique<PaintType>(*paint_type_));  // loads the new brush
+    } catch (const std::exception&) {
+      std::swap(brush_, brush);  // the paint does not suit the new brush: keep the old one
+      throw;
+    }
+    brush_placed_ = false;  // the new brush starts at rest at the next pose
+    idle_ticks_ = 0;
+    if (journal_) journal_->endStroke();
+    return answer(res, true, "set_brush: '" + brush_->preset().name + "'");
+  } catch (const std::exception& e) {
+    ++rejected_;
+    return answer(res, false, std::string("set_brush: ") + e.what());
   }
 }
 

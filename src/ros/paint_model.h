@@ -1,38 +1,53 @@
 // The paint_model node/nodelet: the object being painted (PaintSurface, thesis 5.3) and the brush the haptic
 // device holds (5.4), stepped in the main loop (Fig. 5.4) with the latest device pose. It hands the contact
 // parameters to the haptic_driver's 1 kHz force loop, which therefore never queries the surface. With a paint
-// type it also transfers paint every tick (5.5: paint buffer, exchange, resampling of the object), dries the
-// object's paint in bounded slices (5.6.1) and publishes the painted object. Diffusion, downsampling in the
-// node, undo and the services are the next pieces.
+// type it also transfers paint every tick (5.5: paint buffer, exchange, resampling of the object), dries
+// (5.6.1) and downsamples (5.5.2) the object in bounded slices, journals every stroke for undo/redo,
+// autosaves, and publishes the painted object: small deltas every tick, the full cloud at painted_rate.
 //
 // Subscribes  surfels (sensor_msgs/PointCloud2 with normals, any frame with a tf path to world_frame): the
-//             object; each message replaces it (the kd-tree is built once per object)
+//             object. While the object holds paint, another one is refused (logged, counted) unless
+//             replace_painted is set or ~clear was called: nothing painted is lost by a stray message.
 //             <device>/pose (geometry_msgs/PoseStamped, the device's stylus pose, frame e.g. haptic_base)
 // Publishes   brush_contact (relaxed_connectivity/BrushContact, in the pose frame, every main-loop tick)
 //             brush/skeleton (visualization_msgs/MarkerArray), brush/skin (PointCloud2), both in world_frame
 //             surfels/painted (PointCloud2, latched: the active surfels with visible colours, the paint
-//             columns and `father`, at most painted_rate per second while paint changes)
+//             columns and `father`, at most painted_rate per second while paint changes, and at once after
+//             a load, undo, redo or clear)
+//             surfels/painted_delta (relaxed_connectivity/PaintDelta: the originals changed this tick and
+//             their surfels)
+//             paint_stats (relaxed_connectivity/PaintStats, every stats_period seconds)
+// Services    ~undo, ~redo, ~clear (relaxed_connectivity/PaintCommand), ~save, ~load, ~set_paint, ~set_brush
+//             (relaxed_connectivity/PaintFile)
 // Parameters  (private) brush (preset file, required), device ("haptic"), world_frame ("world"), rate (main
 //             loop [Hz], 60; the brush holds still at the latest pose until a new one arrives),
 //             collision_passes (1), plane_proxy (true), proxy_reach (0.25), skin_rate ([Hz], 30; 0: off),
 //             paint (paint type file, config/paint/paints/; empty: no paint transfer), pixel_size ([m], 0:
 //             the brush's skin spacing), pressure_per_depth ([1/m], 2000), painted_rate ([Hz], 1),
-//             drying_visits (originals dried per tick, 2000; 0: no drying); see
-//             config/paint/brush_demo.yaml.
+//             drying_visits (originals dried per tick, 2000; 0: no drying), downsampling_visits (originals
+//             with children looked at per tick, 200; 0: off), stroke_gap ([s] without contact that ends a
+//             stroke, 0.25), journal_bytes (undo memory, 256 MiB), restore (a state saved by ~save to load
+//             at start, ""), autosave (file, ""), autosave_period ([s], 60), replace_painted (false),
+//             stats_period ([s], 1); see config/paint/brush_demo.yaml.
 #pragma once
 
 #include <geometry_msgs/PoseStamped.h>
+#include <relaxed_connectivity/PaintCommand.h>
+#include <relaxed_connectivity/PaintFile.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <atomic>
 #include <memory>
 #include <mutex>
 #include <string>
 
 #include "relaxed_connectivity/paint/brush.h"
+#include "relaxed_connectivity/paint/paint_downsampling.h"
 #include "relaxed_connectivity/paint/paint_dryer.h"
+#include "relaxed_connectivity/paint/paint_journal.h"
 #include "relaxed_connectivity/paint/paint_transfer.h"
 
 namespace rc {
@@ -48,6 +63,14 @@ struct PaintModelParams {
   PaintTransferOptions transfer;
   double painted_rate = 1.0;
   int drying_visits = 2000;
+  int downsampling_visits = 200;
+  double stroke_gap = 0.25;
+  int journal_bytes = 256 << 20;
+  std::string restore;
+  std::string autosave;
+  double autosave_period = 60.0;
+  bool replace_painted = false;
+  double stats_period = 1.0;
 
   /// Throws std::invalid_argument naming the parameter and the bad value.
   void validate() const;
@@ -58,34 +81,66 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& private_nh);
 
 class PaintModel {
  public:
-  /// Reads the parameters and the brush preset (throws std::invalid_argument / BrushPresetError), subscribes
-  /// and advertises, starts the main loop.
+  /// Reads the parameters, the brush preset and the paint type (throws std::invalid_argument /
+  /// BrushPresetError / PaintTypeError), restores a saved state if asked (throws IoError), subscribes and
+  /// advertises, starts the main loop.
   PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh);
+  ~PaintModel();
 
   void surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg);
   void poseCallback(const geometry_msgs::PoseStampedConstPtr& msg);
-  /// One main-loop tick: advances the brush to the latest pose, publishes contact and visuals.
+  /// One main-loop tick: advances the brush to the latest pose, paints, runs the background work, publishes.
   void tick(const ros::WallTimerEvent& event);
 
  private:
+  using Command = relaxed_connectivity::PaintCommand;
+  using File = relaxed_connectivity::PaintFile;
+  bool undo(Command::Request&, Command::Response& res);
+  bool redo(Command::Request&, Command::Response& res);
+  bool clear(Command::Request&, Command::Response& res);
+  bool save(File::Request& req, File::Response& res);
+  bool load(File::Request& req, File::Response& res);
+  bool setPaint(File::Request& req, File::Response& res);
+  bool setBrush(File::Request& req, File::Response& res);
+
+  /// Installs a new object (model_mutex_ held): a fresh journal, dryer and downsampler; publishes it whole.
+  void installSurface(std::unique_ptr<PaintSurface> surface, const std::string& what);
+  void setPaintType(std::unique_ptr<PaintType> paint);
+  void publishPainted(const ros::Time& stamp);
+  void publishDelta(const ros::Time& stamp);
+  void publishStats(const ros::WallTime& now);
+  void autosave(const ros::WallTime& now);
+  bool painted() const;
+
   ros::NodeHandle nh_, private_nh_;
   PaintModelParams params_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  std::mutex mutex_;                       // surface_, latest_pose_ (callbacks) against tick()
-  std::shared_ptr<PaintSurface> surface_;  // painted by tick() only
+  std::mutex input_mutex_;  // latest_pose_ (callbacks) against tick()
+  geometry_msgs::PoseStampedConstPtr latest_pose_;
+  // The model: tick(), the services and surfelsCallback (to install an object) under model_mutex_.
+  std::mutex model_mutex_;
+  std::unique_ptr<PaintSurface> surface_;
+  size_t object_hash_ = 0;  // of the surfels message surface_ came from (0: loaded from a file)
+  std::string object_frame_;
+  std::unique_ptr<PaintJournal> journal_;  // observes surface_ (destroyed before it)
   std::unique_ptr<PaintType> paint_type_;
   std::unique_ptr<PaintDryer> dryer_;
-  ros::WallTime start_;
-  bool painted_dirty_ = false;
-  ros::WallTime last_painted_;
+  std::unique_ptr<PaintDownsampler> downsampler_;
   std::unique_ptr<Brush> brush_;
-  geometry_msgs::PoseStampedConstPtr latest_pose_;
   bool brush_placed_ = false;
-  ros::WallTime last_skin_;
-  unsigned long instabilities_ = 0;
+  int idle_ticks_ = 0;
+  ros::WallTime start_;
+  bool painted_dirty_ = false, publish_now_ = false;
+  ros::WallTime last_painted_, last_skin_, last_autosave_, last_stats_;
+  uint64_t delta_sequence_ = 0;
+  // Stats over the current period.
+  unsigned long events_ = 0, ticks_ = 0, instabilities_ = 0;
+  std::atomic<unsigned long> rejected_{0};  // also counted by the pose callback
+  double brush_s_ = 0, transfer_s_ = 0, background_s_ = 0, publish_s_ = 0;
   ros::Subscriber surfels_sub_, pose_sub_;
-  ros::Publisher contact_pub_, skeleton_pub_, skin_pub_, painted_pub_;
+  ros::Publisher contact_pub_, skeleton_pub_, skin_pub_, painted_pub_, delta_pub_, stats_pub_;
+  std::vector<ros::ServiceServer> services_;
   ros::WallTimer timer_;
 };
 

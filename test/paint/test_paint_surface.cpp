@@ -157,5 +157,41 @@ TEST(PaintSurface, RejectsCloudsItCannotCollideWith) {
   }
 }
 
+TEST(PaintSurface, ReportsEachChangedOriginalOnceAndItsActiveSurfelsForADelta) {
+  PaintSurface s(paint_test::planeCloud(0.005, 0.001));
+  EXPECT_TRUE(s.takeChangedOriginals().empty());
+  ChildSurfel c;
+  c.position = s.originals().positions[7];
+  c.normal = Vec3::UnitZ();
+  c.radius = 5e-4;
+  s.addChild(7, c);
+  s.addChild(7, c);
+  s.originalPaint(3).wet_volume = 0.5;
+  s.keepAsChild(9);
+  EXPECT_EQ(s.takeChangedOriginals(), (std::vector<uint32_t>{7, 3, 9}));
+  EXPECT_TRUE(s.takeChangedOriginals().empty());
+  // The delta's surfels: original 3 itself, two children of 7, 9 as its own child.
+  const SurfelCloud delta = s.activeCloudOf({7, 3, 9});
+  ASSERT_EQ(delta.size(), 4u);
+  const Attribute* father = delta.attributes.find("father");
+  ASSERT_NE(father, nullptr);
+  EXPECT_EQ(father->get(0), 7);
+  EXPECT_EQ(father->get(2), 3);
+  EXPECT_EQ(father->get(3), 9);
+  EXPECT_EQ(delta.positions[3], s.originals().positions[9]);
+  EXPECT_EQ(delta.attributes.find("paint_wet_volume")->get(2), 0.5);
+  // restoreOriginal (undo, load) reports too.
+  s.restoreOriginal(7, true, s.originalPaint(7), {});
+  EXPECT_EQ(s.takeChangedOriginals(), (std::vector<uint32_t>{7}));
+  EXPECT_THROW(s.activeCloudOf({100000}), std::out_of_range);
+  // reset (the paint model's clear): the object as constructed, every original reported.
+  s.addChild(4, c);
+  s.reset();
+  EXPECT_EQ(s.childCount(), 0u);
+  EXPECT_EQ(s.activeCount(), s.originalCount());
+  EXPECT_EQ(s.originalPaint(3).wet_volume, 0.0);
+  EXPECT_EQ(s.takeChangedOriginals().size(), s.originalCount());
+}
+
 }  // namespace
 }  // namespace rc
