@@ -67,6 +67,7 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
   pnh.param("autosave_period", p.autosave_period, p.autosave_period);
   pnh.param("replace_painted", p.replace_painted, p.replace_painted);
   pnh.param("stats_period", p.stats_period, p.stats_period);
+  pnh.param("palette", p.palette, p.palette);
   p.validate();
   return p;
 }
@@ -84,6 +85,7 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   delta_pub_ = nh_.advertise<relaxed_connectivity::PaintDelta>("surfels/painted_delta", 100);
   stats_pub_ = nh_.advertise<relaxed_connectivity::PaintStats>("paint_stats", 2);
   if (!params_.paint.empty()) setPaintType(std::make_unique<PaintType>(readPaintType(params_.paint)));
+  if (!params_.palette.empty()) palette_ = std::make_unique<PaletteSpec>(readPalette(params_.palette));
   start_ = last_autosave_ = last_stats_ = ros::WallTime::now();
   if (!params_.restore.empty()) {
     std::lock_guard<std::mutex> lock(model_mutex_);
@@ -168,6 +170,8 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
       cloud.transform(tf2::transformToEigen(tf));
     }
     cloud.frame_id = params_.world_frame;
+    const size_t object_size = cloud.size();
+    if (palette_) appendPalette(cloud, *palette_);  // (Fig. 5.1) beside the object, in world_frame
     {
       std::lock_guard<std::mutex> lock(model_mutex_);
       if (painted() && !params_.replace_painted)
@@ -179,9 +183,13 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(model_mutex_);
     if (painted() && !params_.replace_painted)
       throw std::runtime_error("the current object was painted meanwhile");
-    installSurface(std::move(surface),
-                   "from " + surfels_sub_.getTopic() +
-                       (dropped ? " (" + std::to_string(dropped) + " non-finite dropped)" : ""));
+    const std::string what =
+        "from " + surfels_sub_.getTopic() +
+        (dropped ? " (" + std::to_string(dropped) + " non-finite dropped)" : "") +
+        (palette_ ? ", with the palette '" + palette_->name + "' (" +
+                        std::to_string(surface->originalCount() - object_size) + " surfels)"
+                  : "");
+    installSurface(std::move(surface), what);
     object_hash_ = hash;
     object_frame_ = msg->header.frame_id;
   } catch (const std::exception& e) {  // keep the current object

@@ -28,7 +28,8 @@
 //             with children looked at per tick, 200; 0: off), stroke_gap ([s] without contact that ends a
 //             stroke, 0.25), journal_bytes (undo memory, 256 MiB), restore (a state saved by ~save to load
 //             at start, ""), autosave (file, ""), autosave_period ([s], 60), replace_painted (false),
-//             stats_period ([s], 1); see config/paint/brush_demo.yaml.
+//             stats_period ([s], 1), palette (a palette file, config/paint/palettes/, appended beside each
+//             object from the topic; ""); see config/paint/brush_demo.yaml.
 #pragma once
 
 #include <geometry_msgs/PoseStamped.h>
@@ -48,6 +49,7 @@
 #include "relaxed_connectivity/paint/paint_downsampling.h"
 #include "relaxed_connectivity/paint/paint_dryer.h"
 #include "relaxed_connectivity/paint/paint_journal.h"
+#include "relaxed_connectivity/paint/paint_palette.h"
 #include "relaxed_connectivity/paint/paint_transfer.h"
 
 namespace rc {
@@ -71,6 +73,7 @@ struct PaintModelParams {
   double autosave_period = 60.0;
   bool replace_painted = false;
   double stats_period = 1.0;
+  std::string palette;  ///< palette file (config/paint/palettes/); empty: none
 
   /// Throws std::invalid_argument naming the parameter and the bad value.
   void validate() const;
@@ -125,6 +128,7 @@ class PaintModel {
   std::string object_frame_;
   std::unique_ptr<PaintJournal> journal_;  // observes surface_ (destroyed before it)
   std::unique_ptr<PaintType> paint_type_;
+  std::unique_ptr<PaletteSpec> palette_;
   std::unique_ptr<PaintDryer> dryer_;
   std::unique_ptr<PaintDownsampler> downsampler_;
   std::unique_ptr<Brush> brush_;

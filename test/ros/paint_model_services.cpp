@@ -15,6 +15,7 @@
 #include <mutex>
 #include <vector>
 
+#include "relaxed_connectivity/paint/paint_palette.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace rc {
@@ -95,6 +96,10 @@ TEST(PaintModelServices, DeltasUndoRedoSaveLoadClearAndASecondObject) {
     std::lock_guard<std::mutex> lock(l.mutex);
     l.object_points = m->width * m->height;
   });
+  // The object from the topic plus the palette (launch argument palette:=primaries).
+  const size_t palette_points =
+      makePaletteCloud(readPalette(std::string(RC_SOURCE_DIR) + "/config/paint/palettes/primaries.yaml"))
+          .size();
   // The straight stroke (4 s after the driver's start delay) ends as one undoable stroke.
   ASSERT_TRUE(l.waitFor([&] { return l.stats && l.stats->undo_strokes >= 1 && l.object_points > 0; }, 60.0));
   ros::WallDuration(0.5).sleep();  // deltas in flight
@@ -105,12 +110,12 @@ TEST(PaintModelServices, DeltasUndoRedoSaveLoadClearAndASecondObject) {
     painted = l.full.back();
     n_full = l.full.size();
     EXPECT_EQ(l.stats->paint, "acrylic");
-    EXPECT_EQ(l.stats->originals, l.object_points);
+    EXPECT_EQ(l.stats->originals, l.object_points + palette_points);
     EXPECT_GT(l.stats->children, 0u);
     EXPECT_GT(l.stats->journal_bytes, 0u);
     EXPECT_GT(l.stats->brush_ms, 0.0);
   }
-  const size_t object_points = l.object_points;
+  const size_t object_points = l.object_points + palette_points;
 
   // Undo: the board as loaded, published at once; the deltas since the painted full cloud lead there too.
   relaxed_connectivity::PaintCommand undo;
