@@ -66,8 +66,13 @@ void savePaintedSurface(const std::string& path, const PaintSurface& surface, bo
   }
 }
 
-std::unique_ptr<PaintSurface> loadPaintedSurface(const std::string& path) {
+std::unique_ptr<PaintSurface> loadPaintedSurface(const std::string& path, const LoadProgress& progress) {
+  const auto report = [&](double fraction, const std::string& stage) {
+    if (progress) progress(fraction, stage);
+  };
+  report(0.0, "reading");
   SurfelCloud cloud = readPlyCloud(path);
+  report(0.4, "checking the father/child structure");
   const Attribute* kind = cloud.attributes.find(kSurfelKind);
   const Attribute* father = cloud.attributes.find(kSurfelFather);
   if (!kind || !father || !hasPaintAttributes(cloud))
@@ -109,14 +114,18 @@ std::unique_ptr<PaintSurface> loadPaintedSurface(const std::string& path) {
   if (cloud.hasRadii() &&
       std::all_of(cloud.radii.begin(), cloud.radii.end(), [](double r) { return r == 0; }))
     cloud.radii.clear();  // the originals had no radii (savePaintedSurface wrote 0)
+  report(0.5, "building the collision structures");
   std::unique_ptr<PaintSurface> surface;
   try {
     surface = std::make_unique<PaintSurface>(std::move(cloud));
   } catch (const std::invalid_argument& e) {
     throw IoError(path, e.what());
   }
+  report(0.9, "restoring the children");
   for (size_t i = 0; i < n; ++i)
     surface->restoreOriginal(i, enabled[i], std::as_const(*surface).originalPaint(i), std::move(children[i]));
+  surface->takeChangedOriginals();  // a loaded state has no changes yet
+  report(1.0, "done");
   return surface;
 }
 

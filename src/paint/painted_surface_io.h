@@ -7,6 +7,7 @@
 // is byte-identical.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -21,8 +22,11 @@ constexpr const char* kSurfelFather = "father";
 /// `path`.tmp and renames it over `path`, so that an interrupted autosave never leaves half a file.
 void savePaintedSurface(const std::string& path, const PaintSurface& surface, bool atomic = false);
 
+/// Told the fraction done (0..1) and the stage of a long load.
+using LoadProgress = std::function<void(double fraction, const std::string& stage)>;
+
 /// Reads a state written by savePaintedSurface; throws IoError naming the file, the vertex and the problem
 /// (missing columns, a child before the originals, a father out of range, a bad kind).
-std::unique_ptr<PaintSurface> loadPaintedSurface(const std::string& path);
+std::unique_ptr<PaintSurface> loadPaintedSurface(const std::string& path, const LoadProgress& progress = {});
 
 }  // namespace rc

@@ -101,6 +101,10 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   services_.push_back(private_nh_.advertiseService("load", &PaintModel::load, this));
   services_.push_back(private_nh_.advertiseService("set_paint", &PaintModel::setPaint, this));
   services_.push_back(private_nh_.advertiseService("set_brush", &PaintModel::setBrush, this));
+  load_action_ =
+      std::make_unique<actionlib::SimpleActionServer<relaxed_connectivity::LoadPaintedStateAction>>(
+          private_nh_, "load_state", [this](const auto& goal) { loadState(goal); }, false);
+  load_action_->start();
   timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &PaintModel::tick, this);
   ROS_INFO_STREAM("paint_model: brush '"
                   << brush_->preset().name << "' (" << brush_->skeleton().handleCount() << " handle points, "
@@ -112,6 +116,7 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
 
 PaintModel::~PaintModel() {
   timer_.stop();
+  if (load_action_) load_action_->shutdown();
   std::lock_guard<std::mutex> lock(model_mutex_);
   journal_.reset();  // before the surface it observes
 }
@@ -441,18 +446,52 @@ bool PaintModel::save(File::Request& req, File::Response& res) {
                     std::to_string(surface_->childCount()) + " children) to " + req.path);
 }
 
-bool PaintModel::load(File::Request& req, File::Response& res) {
+bool PaintModel::loadFrom(const std::string& path, const LoadProgress& progress, std::string* message) {
   std::unique_ptr<PaintSurface> loaded;
   try {
-    loaded = loadPaintedSurface(req.path);  // outside the lock: painting goes on meanwhile
+    loaded = loadPaintedSurface(path, progress);  // outside the lock: painting goes on meanwhile
   } catch (const std::exception& e) {
     ++rejected_;
-    return answer(res, false, std::string("load: ") + e.what());
+    *message = std::string("load: ") + e.what();
+    return false;
   }
   std::lock_guard<std::mutex> lock(model_mutex_);
-  installSurface(std::move(loaded), "loaded from " + req.path);
-  return answer(res, true,
-                "load: " + std::to_string(surface_->activeCount()) + " active surfels from " + req.path);
+  installSurface(std::move(loaded), "loaded from " + path);
+  *message = "load: " + std::to_string(surface_->activeCount()) + " active surfels from " + path;
+  return true;
+}
+
+bool PaintModel::load(File::Request& req, File::Response& res) {
+  std::string message;
+  const bool ok = loadFrom(req.path, {}, &message);
+  return answer(res, ok, message);
+}
+
+void PaintModel::loadState(const relaxed_connectivity::LoadPaintedStateGoalConstPtr& goal) {
+  std::string message;
+  const bool ok = loadFrom(
+      goal->path,
+      [&](double fraction, const std::string& stage) {
+        relaxed_connectivity::LoadPaintedStateFeedback feedback;
+        feedback.progress = float(fraction);
+        feedback.stage = stage;
+        load_action_->publishFeedback(feedback);
+      },
+      &message);
+  relaxed_connectivity::LoadPaintedStateResult result;
+  result.success = ok;
+  result.message = message;
+  {
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    if (ok && surface_) result.active_surfels = uint32_t(surface_->activeCount());
+  }
+  if (ok) {
+    ROS_INFO_STREAM("paint_model: " << message);
+    load_action_->setSucceeded(result, message);
+  } else {
+    ROS_WARN_STREAM("paint_model: " << message);
+    load_action_->setAborted(result, message);
+  }
 }
 
 bool PaintModel::setPaint(File::Request& req, File::Response& res) {

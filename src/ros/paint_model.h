@@ -19,6 +19,7 @@
 //             paint_stats (relaxed_connectivity/PaintStats, every stats_period seconds)
 // Services    ~undo, ~redo, ~clear (relaxed_connectivity/PaintCommand), ~save, ~load, ~set_paint, ~set_brush
 //             (relaxed_connectivity/PaintFile)
+// Actions     ~load_state (relaxed_connectivity/LoadPaintedState: ~load with progress feedback)
 // Parameters  (private) brush (preset file, required), device ("haptic"), world_frame ("world"), rate (main
 //             loop [Hz], 60; the brush holds still at the latest pose until a new one arrives),
 //             collision_passes (1), plane_proxy (true), proxy_reach (0.25), skin_rate ([Hz], 30; 0: off),
@@ -32,7 +33,9 @@
 //             object from the topic; ""); see config/paint/brush_demo.yaml.
 #pragma once
 
+#include <actionlib/server/simple_action_server.h>
 #include <geometry_msgs/PoseStamped.h>
+#include <relaxed_connectivity/LoadPaintedStateAction.h>
 #include <relaxed_connectivity/PaintCommand.h>
 #include <relaxed_connectivity/PaintFile.h>
 #include <ros/ros.h>
@@ -51,6 +54,7 @@
 #include "relaxed_connectivity/paint/paint_journal.h"
 #include "relaxed_connectivity/paint/paint_palette.h"
 #include "relaxed_connectivity/paint/paint_transfer.h"
+#include "relaxed_connectivity/paint/painted_surface_io.h"
 
 namespace rc {
 
@@ -105,6 +109,9 @@ class PaintModel {
   bool load(File::Request& req, File::Response& res);
   bool setPaint(File::Request& req, File::Response& res);
   bool setBrush(File::Request& req, File::Response& res);
+  void loadState(const relaxed_connectivity::LoadPaintedStateGoalConstPtr& goal);
+  /// Loads a saved state (outside the model lock) and installs it; returns the message for the caller.
+  bool loadFrom(const std::string& path, const LoadProgress& progress, std::string* message);
 
   /// Installs a new object (model_mutex_ held): a fresh journal, dryer and downsampler; publishes it whole.
   void installSurface(std::unique_ptr<PaintSurface> surface, const std::string& what);
@@ -146,6 +153,7 @@ class PaintModel {
   ros::Publisher contact_pub_, skeleton_pub_, skin_pub_, painted_pub_, delta_pub_, stats_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::WallTimer timer_;
+  std::unique_ptr<actionlib::SimpleActionServer<relaxed_connectivity::LoadPaintedStateAction>> load_action_;
 };
 
 }  // namespace rc

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 
@@ -75,7 +76,13 @@ TEST(PaintedSurfaceIo, SaveLoadSaveIsByteIdenticalAndRestoresTheFatherChildStruc
     ASSERT_GT(painted->childCount(), 50u);
     const std::string first = tempPath("first.ply"), second = tempPath("second.ply");
     savePaintedSurface(first, *painted);
-    const auto loaded = loadPaintedSurface(first);
+    std::vector<double> fractions;
+    const auto loaded = loadPaintedSurface(first, [&](double f, const std::string&) { fractions.push_back(f); });
+    ASSERT_GE(fractions.size(), 4u);  // progress: from 0 to 1, never back
+    EXPECT_EQ(fractions.front(), 0.0);
+    EXPECT_EQ(fractions.back(), 1.0);
+    EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+    EXPECT_TRUE(loaded->takeChangedOriginals().empty());
     expectSameSurfels(*painted, *loaded);
     savePaintedSurface(second, *loaded, true);
     const std::string a = fileBytes(first), b = fileBytes(second);

@@ -1,6 +1,8 @@
 // paint_model's services and messages in a running session (launch/brush_demo.launch): deltas, undo/redo,
 // save/load, clear, set_paint, a second object while painted, stats.
+#include <actionlib/client/simple_action_client.h>
 #include <gtest/gtest.h>
+#include <relaxed_connectivity/LoadPaintedStateAction.h>
 #include <relaxed_connectivity/PaintCommand.h>
 #include <relaxed_connectivity/PaintDelta.h>
 #include <relaxed_connectivity/PaintFile.h>
@@ -171,6 +173,30 @@ TEST(PaintModelServices, DeltasUndoRedoSaveLoadClearAndASecondObject) {
   ASSERT_TRUE(call("paint_model/load", file)) << file.response.message;
   const sensor_msgs::PointCloud2ConstPtr loaded = l.nextFull(n);
   EXPECT_GT(loaded->width * loaded->height, object_points);
+  // The same through the action, with progress.
+  actionlib::SimpleActionClient<relaxed_connectivity::LoadPaintedStateAction> load_state(
+      "paint_model/load_state", true);
+  ASSERT_TRUE(load_state.waitForServer(ros::Duration(10.0)));
+  relaxed_connectivity::LoadPaintedStateGoal goal;
+  goal.path = path;
+  std::vector<float> progress;
+  load_state.sendGoal(goal, {}, {}, [&](const relaxed_connectivity::LoadPaintedStateFeedbackConstPtr& f) {
+    std::lock_guard<std::mutex> lock(l.mutex);
+    progress.push_back(f->progress);
+  });
+  ASSERT_TRUE(load_state.waitForResult(ros::Duration(20.0)));
+  EXPECT_EQ(load_state.getState(), actionlib::SimpleClientGoalState::SUCCEEDED);
+  EXPECT_EQ(load_state.getResult()->active_surfels, loaded->width * loaded->height);
+  {
+    std::lock_guard<std::mutex> lock(l.mutex);
+    ASSERT_GE(progress.size(), 2u);
+    EXPECT_EQ(progress.back(), 1.0f);
+  }
+  goal.path = "/nonexistent/state.ply";
+  load_state.sendGoal(goal);
+  ASSERT_TRUE(load_state.waitForResult(ros::Duration(20.0)));
+  EXPECT_EQ(load_state.getState(), actionlib::SimpleClientGoalState::ABORTED);
+  EXPECT_FALSE(load_state.getResult()->success);
   // Bad requests change nothing and say why.
   relaxed_connectivity::PaintFile bad;
   bad.request.path = "/nonexistent/state.ply";
