@@ -33,6 +33,7 @@ void PaintModelParams::validate() const {
   if (!(painted_rate > 0) || !std::isfinite(painted_rate)) fail("painted_rate must be positive");
   if (drying_visits < 0) fail("drying_visits must be >= 0");
   if (downsampling_visits < 0) fail("downsampling_visits must be >= 0");
+  if (diffusion_surfels < 0) fail("diffusion_surfels must be >= 0");
   if (!(stroke_gap >= 0) || !std::isfinite(stroke_gap)) fail("stroke_gap must be >= 0");
   if (journal_bytes < 0) fail("journal_bytes must be >= 0");
   if (!(autosave_period > 0) || !std::isfinite(autosave_period)) fail("autosave_period must be positive");
@@ -60,6 +61,7 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
   pnh.param("painted_rate", p.painted_rate, p.painted_rate);
   pnh.param("drying_visits", p.drying_visits, p.drying_visits);
   pnh.param("downsampling_visits", p.downsampling_visits, p.downsampling_visits);
+  pnh.param("diffusion_surfels", p.diffusion_surfels, p.diffusion_surfels);
   pnh.param("stroke_gap", p.stroke_gap, p.stroke_gap);
   pnh.param("journal_bytes", p.journal_bytes, p.journal_bytes);
   pnh.param("restore", p.restore, p.restore);
@@ -131,6 +133,12 @@ void PaintModel::setPaintType(std::unique_ptr<PaintType> paint) {
                                 " m is below two paint buffer pixels (" + std::to_string(2 * pixel) + " m)");
   paint_type_ = std::move(paint);
   loadBrush(brush_->skin(), *paint_type_);
+  diffusion_.reset();
+  if (params_.diffusion_surfels > 0 && paint_type_->diffusion > 0) {  // (5.14) only for paint that diffuses
+    SurfaceDiffusionOptions o;
+    o.max_surfels = size_t(params_.diffusion_surfels);
+    diffusion_ = std::make_unique<SurfaceDiffusion>(paint_type_->diffusion, o);
+  }
   dryer_.reset();
   if (params_.drying_visits > 0 && paint_type_->drying_rate > 0)
     dryer_ = std::make_unique<PaintDryer>(paint_type_->drying_rate, paint_type_->drying,
@@ -151,6 +159,11 @@ void PaintModel::installSurface(std::unique_ptr<PaintSurface> surface, const std
     dryer_ = std::make_unique<PaintDryer>(paint_type_->drying_rate, paint_type_->drying,
                                           (ros::WallTime::now() - start_).toSec());
   downsampler_ = params_.downsampling_visits > 0 ? std::make_unique<PaintDownsampler>() : nullptr;
+  if (diffusion_) {  // a fresh cursor and clock for the new object
+    SurfaceDiffusionOptions o;
+    o.max_surfels = size_t(params_.diffusion_surfels);
+    diffusion_ = std::make_unique<SurfaceDiffusion>(paint_type_->diffusion, o);
+  }
   surface_->takeChangedOriginals();  // the full cloud carries this state
   publish_now_ = true;
   ROS_INFO_STREAM("paint_model: object of " << surface_->originalCount() << " surfels ("
@@ -295,6 +308,8 @@ void PaintModel::tick(const ros::WallTimerEvent&) {
     painted_dirty_ =
         dryer_->run(*surface_, (background - start_).toSec(), size_t(params_.drying_visits)) > 0 ||
         painted_dirty_;
+  if (surface_ && diffusion_)  // (5.6.2) whole time steps of simulated time, a bounded region each
+    painted_dirty_ = diffusion_->run(*surface_, 1.0 / params_.rate).sweeps > 0 || painted_dirty_;
   if (surface_ && downsampler_ && !journal_->strokeOpen())  // (5.5.2), between strokes
     painted_dirty_ =
         downsampler_->run(*surface_, size_t(params_.downsampling_visits)).merged > 0 || painted_dirty_;

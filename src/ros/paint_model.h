@@ -2,8 +2,9 @@
 // device holds (5.4), stepped in the main loop (Fig. 5.4) with the latest device pose. It hands the contact
 // parameters to the haptic_driver's 1 kHz force loop, which therefore never queries the surface. With a paint
 // type it also transfers paint every tick (5.5: paint buffer, exchange, resampling of the object), dries
-// (5.6.1) and downsamples (5.5.2) the object in bounded slices, journals every stroke for undo/redo,
-// autosaves, and publishes the painted object: small deltas every tick, the full cloud at painted_rate.
+// (5.6.1), diffuses (5.6.2, paint types with D > 0) and downsamples (5.5.2) the object in bounded slices,
+// journals every stroke for undo/redo, autosaves, and publishes the painted object: small deltas every tick,
+// the full cloud at painted_rate.
 //
 // Subscribes  surfels (sensor_msgs/PointCloud2 with normals, any frame with a tf path to world_frame): the
 //             object. While the object holds paint, another one is refused (logged, counted) unless
@@ -26,11 +27,13 @@
 //             paint (paint type file, config/paint/paints/; empty: no paint transfer), pixel_size ([m], 0:
 //             the brush's skin spacing), pressure_per_depth ([1/m], 2000), painted_rate ([Hz], 1),
 //             drying_visits (originals dried per tick, 2000; 0: no drying), downsampling_visits (originals
-//             with children looked at per tick, 200; 0: off), stroke_gap ([s] without contact that ends a
-//             stroke, 0.25), journal_bytes (undo memory, 256 MiB), restore (a state saved by ~save to load
-//             at start, ""), autosave (file, ""), autosave_period ([s], 60), replace_painted (false),
-//             stats_period ([s], 1), palette (a palette file, config/paint/palettes/, appended beside each
-//             object from the topic; ""); see config/paint/brush_demo.yaml.
+//             with children looked at per tick, 200; 0: off), diffusion_surfels (active surfels around the
+//             wet ones diffused per time step when the paint diffuses, 20000; 0: off), stroke_gap ([s]
+//             without contact that ends a stroke, 0.25), journal_bytes (undo memory, 256 MiB), restore (a
+//             state saved by ~save to load at start, ""), autosave (file, ""), autosave_period ([s], 60),
+//             replace_painted (false), stats_period ([s], 1), palette (a palette file,
+//             config/paint/palettes/, appended beside each object from the topic; ""); see
+//             config/paint/brush_demo.yaml.
 #pragma once
 
 #include <actionlib/server/simple_action_server.h>
@@ -55,6 +58,7 @@
 #include "relaxed_connectivity/paint/paint_palette.h"
 #include "relaxed_connectivity/paint/paint_transfer.h"
 #include "relaxed_connectivity/paint/painted_surface_io.h"
+#include "relaxed_connectivity/paint/surface_diffusion.h"
 
 namespace rc {
 
@@ -70,6 +74,7 @@ struct PaintModelParams {
   double painted_rate = 1.0;
   int drying_visits = 2000;
   int downsampling_visits = 200;
+  int diffusion_surfels = 20000;
   double stroke_gap = 0.25;
   int journal_bytes = 256 << 20;
   std::string restore;
@@ -138,6 +143,7 @@ class PaintModel {
   std::unique_ptr<PaletteSpec> palette_;
   std::unique_ptr<PaintDryer> dryer_;
   std::unique_ptr<PaintDownsampler> downsampler_;
+  std::unique_ptr<SurfaceDiffusion> diffusion_;
   std::unique_ptr<Brush> brush_;
   bool brush_placed_ = false;
   int idle_ticks_ = 0;
