@@ -13,12 +13,14 @@ PaintDiffusion::PaintDiffusion(const std::vector<Vec3>& positions, PaintDiffusio
     throw std::invalid_argument("PaintDiffusion: diffusion must be >= 0");
   if (options_.diffusion > 0 && !(options_.neighbour_radius > 0))
     throw std::invalid_argument("PaintDiffusion: neighbour_radius must be positive");
-  if (!(options_.time_step > 0) || !(options_.max_exchange > 0 && options_.max_exchange <= 0.5))
-    throw std::invalid_argument("PaintDiffusion: time_step must be positive and max_exchange in (0, 0.5]");
+  if (!(options_.time_step > 0) || !std::isfinite(options_.time_step))
+    throw std::invalid_argument("PaintDiffusion: time_step must be positive");
   tree_ = std::make_unique<KdTree>(positions_);
-  coefficients_.resize(positions_.size());
+  neighbours_.resize(positions_.size());
+  area_.assign(positions_.size(), NAN);
+  kappa_.assign(positions_.size(), NAN);
   in_list_.assign(positions_.size(), 0);
-  in_sweep_.assign(positions_.size(), 0);
+  sweep_pos_.assign(positions_.size(), kNotInSweep);
 }
 
 PaintDiffusion::~PaintDiffusion() = default;
@@ -32,45 +34,53 @@ void PaintDiffusion::markWet(size_t surfel) {
   wet_.push_back(uint32_t(surfel));
 }
 
-const std::vector<std::pair<uint32_t, double>>& PaintDiffusion::coefficients(uint32_t i) {
-  std::vector<std::pair<uint32_t, double>>& c = coefficients_[i];
-  if (!c.empty()) return c;
+const std::vector<std::pair<uint32_t, double>>& PaintDiffusion::neighbours(uint32_t i) {
+  std::vector<std::pair<uint32_t, double>>& list = neighbours_[i];
+  if (!std::isnan(area_[i])) return list;
   const double r = options_.neighbour_radius;
   tree_->radius(positions_[i], r, found_, true);
-  double moment = 0;
+  // The sampling density (surfels per area, i itself included) with the kernel normalised to a unit
+  // integral over the plane: 2 pi int_0^R (1 - r/R)^2 r dr = pi R^2 / 6.
+  double density = 0;
   for (const Neighbor& n : found_) {
-    if (n.index == i || n.sq_dist <= 0) continue;
     const double k = std::pow(1.0 - std::sqrt(n.sq_dist) / r, 2);
-    c.push_back({n.index, k});
-    moment += k * n.sq_dist;
+    density += k;
+    if (n.index != i && n.sq_dist > 0) list.push_back({n.index, k});
   }
-  // c_ij per second: 4 D k_ij / sum_j k_ij d_ij^2 (second moment matched to (5.14) on a surface).
-  for (auto& [j, k] : c) k *= 4 * options_.diffusion / moment;
-  return c;
+  area_[i] = M_PI * r * r / 6.0 / std::max(density, 1.0);
+  return list;
+}
+
+double PaintDiffusion::area(uint32_t i) {
+  neighbours(i);
+  return area_[i];
+}
+
+double PaintDiffusion::kappa(uint32_t i) {
+  if (!std::isnan(kappa_[i])) return kappa_[i];
+  double moment = 0;  // sum_j k_ij A_j |d_ij|^2
+  for (const auto& [j, k] : neighbours(i))
+    moment += k * area(j) * (positions_[j] - positions_[i]).squaredNorm();
+  kappa_[i] = moment > 0 ? 4.0 / moment : 0.0;
+  return kappa_[i];
 }
 
 void PaintDiffusion::visit(uint32_t i, std::vector<PaintState>& paint) {
-  const std::vector<std::pair<uint32_t, double>>& c = coefficients(i);
-  const double dt = options_.time_step;
-  double total = 0;
-  for (const auto& [j, rate] : c) total += (in_sweep_[j] ? 0.5 : 1.0) * rate * dt;
-  // Sub-visits keep every exchange below max_exchange of the difference (explicit stability).
-  const int parts = std::max(1, int(std::ceil(total / options_.max_exchange)));
-  for (int part = 0; part < parts; ++part) {
-    for (const auto& [j, rate] : c) {
-      PaintState& a = paint[i];
-      PaintState& b = paint[j];
-      // Both wet at the sweep's start: each side's visit moves half (the 1/2 of (5.15)).
-      const double share = (in_sweep_[j] ? 0.5 : 1.0) * rate * dt / parts;
-      const double moved = share * (a.wet_volume - b.wet_volume);
-      if (moved == 0) continue;
-      PaintState& giver = moved > 0 ? a : b;
-      PaintState& taker = moved > 0 ? b : a;
-      const double v = std::abs(moved);
-      giver.wet_volume -= v;
-      addWetPaint(taker, giver, v);  // (5.11)
-      if (moved > 0) markWet(j);
-    }
+  const double dt = options_.time_step, a_i = area(i), kappa_i = kappa(i);
+  for (const auto& [j, k] : neighbours(i)) {
+    if (sweep_pos_[j] < sweep_pos_[i]) continue;  // the pair was exchanged when j was visited
+    const double a_j = area(j);
+    const double c_i = paint[i].wet_volume / a_i, c_j = paint[j].wet_volume / a_j;
+    if (c_i == c_j) continue;
+    const double rate = options_.diffusion * 0.5 * (kappa_i + kappa(j)) * k * (a_i + a_j);
+    const double moved = -std::expm1(-rate * dt) * (c_i - c_j) * a_i * a_j / (a_i + a_j);  // (5.15)
+    if (moved == 0) continue;
+    PaintState& giver = moved > 0 ? paint[i] : paint[j];
+    PaintState& taker = moved > 0 ? paint[j] : paint[i];
+    const double v = std::abs(moved);
+    giver.wet_volume -= v;
+    addWetPaint(taker, giver, v);  // (5.11)
+    if (moved > 0) markWet(j);
   }
 }
 
@@ -89,15 +99,19 @@ size_t PaintDiffusion::run(std::vector<PaintState>& paint, size_t max_visits) {
                                 [&](uint32_t i) { return paint[i].wet_volume <= 0 && !(in_list_[i] = 0); }),
                  wet_.end());
       if (wet_.empty()) break;
-      sweep_ = wet_;  // the surfels wet at the start; those that get wet now join the next sweep
-      for (uint32_t i : sweep_) in_sweep_[i] = 1;
+      // The surfels wet at the start (those that get wet now join the next sweep), in ascending and
+      // descending index order in turn.
+      sweep_ = wet_;
+      std::sort(sweep_.begin(), sweep_.end());
+      if (sweeps_ % 2 == 1) std::reverse(sweep_.begin(), sweep_.end());
+      for (size_t k = 0; k < sweep_.size(); ++k) sweep_pos_[sweep_[k]] = uint32_t(k);
       cursor_ = 0;
       sweeping_ = true;
     }
     visit(sweep_[cursor_++], paint);
     ++visits;
     if (cursor_ == sweep_.size()) {
-      for (uint32_t i : sweep_) in_sweep_[i] = 0;
+      for (uint32_t i : sweep_) sweep_pos_[i] = kNotInSweep;
       sweeping_ = false;
       ++sweeps_;
     }

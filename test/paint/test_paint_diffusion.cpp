@@ -55,10 +55,9 @@ TEST(PaintDiffusion, APointDepositSpreadsAsTheDiffusionEquationPredicts) {
     const auto [variance, total] = spread(p, paint);
     std::printf("t = %.0f s: variance per axis %.4g m^2, 2 D t = %.4g m^2\n", t, variance, 2 * d * t);
     // (5.14): sigma^2 = 2 D t per axis; the growth per second is 2 D (the rate, after the first second).
-    // Measured 1-2 % high at this time step: a surfel visited later in a sweep passes on paint it received
-    // earlier in the same sweep (an O(time_step) excess; 5 % at 0.05 s).
-    EXPECT_NEAR(variance, 2 * d * t, 0.03 * 2 * d * t) << "t = " << t;
-    if (t > 1) EXPECT_NEAR(variance - previous, 2 * d, 0.03 * 2 * d);
+    // Measured 0.05 % low at this time step (D dt / h^2 = 0.04).
+    EXPECT_NEAR(variance, 2 * d * t, 0.005 * 2 * d * t) << "t = " << t;
+    if (t > 1) EXPECT_NEAR(variance - previous, 2 * d, 0.005 * 2 * d);
     previous = variance;
     EXPECT_NEAR(total, 1.0, 1e-12);  // volume conserved
   }
@@ -107,7 +106,7 @@ TEST(PaintDiffusion, ColoursMixAndStayBetweenThePaints) {
   // Next to the border the blue takes in red; far from it the colours stay.
   EXPECT_GT(paint[centre() + 1].wet.rgb.x(), 0.05);
   EXPECT_LT(paint[centre() + 1].wet.rgb.x(), 0.95);
-  EXPECT_EQ(paint[size_t(kHalf * (2 * kHalf + 1))].wet.rgb, Vec3(1, 0, 0));  // x = -2 cm
+  EXPECT_LT((paint[size_t(kHalf * (2 * kHalf + 1))].wet.rgb - Vec3(1, 0, 0)).norm(), 1e-12);  // x = -1.5 cm
 }
 
 TEST(PaintDiffusion, OffCostsNothingAndBadOptionsAreRefused) {
@@ -128,6 +127,42 @@ TEST(PaintDiffusion, OffCostsNothingAndBadOptionsAreRefused) {
   EXPECT_THROW(ok.markWet(p.size()), std::out_of_range);
   std::vector<PaintState> short_paint(3);
   EXPECT_THROW(ok.run(short_paint, 1), std::invalid_argument);
+}
+
+TEST(PaintDiffusion, TheRateHoldsAcrossASamplingChange) {
+  // Left half sampled at 0.5 mm, right half at 1 mm (as children beside originals): paint per area diffuses
+  // at the rate of (5.14) whatever the sampling, so a deposit at the border spreads by 2 D t per axis.
+  std::vector<Vec3> p;
+  for (int y = -30; y <= 30; ++y)
+    for (int x = -30; x < 0; ++x) p.push_back(Vec3(x * kSpacing, y * kSpacing, 0));
+  for (int y = -15; y <= 15; ++y)
+    for (int x = 0; x <= 15; ++x) p.push_back(Vec3(x * 2 * kSpacing, y * 2 * kSpacing, 0));
+  PaintDiffusionOptions o = options(1e-6);
+  o.neighbour_radius = 5 * kSpacing;  // 2.5 of the coarse spacing
+  PaintDiffusion diffusion(p, o);
+  std::vector<PaintState> paint(p.size());
+  size_t origin = 0;
+  for (size_t i = 0; i < p.size(); ++i)
+    if (p[i].norm() < p[origin].norm()) origin = i;
+  paint[origin].wet_volume = 1.0;
+  diffusion.markWet(origin);
+  diffusion.addTime(2.0);
+  while (diffusion.run(paint, 100000) > 0) {
+  }
+  double total = 0, mx = 0, vx = 0, vy = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const double v = paint[i].wet_volume;
+    total += v, mx += v * p[i].x(), vx += v * p[i].x() * p[i].x(), vy += v * p[i].y() * p[i].y();
+  }
+  EXPECT_NEAR(total, 1.0, 1e-12);
+  mx /= total;
+  std::printf("sampling change: var x %.4g, var y %.4g (2 D t = 4e-6), mean x %.3g m\n", vx / total - mx * mx,
+              vy / total, mx);
+  // Measured: variance 0.15 % low along the border (y), 3.3 % high across it (x); the centre of the paint
+  // drifts 0.27 mm towards the fine side (the area estimates blur over the kernel's reach at the change).
+  EXPECT_NEAR(vy / total, 2 * 1e-6 * 2.0, 0.01 * 4e-6);
+  EXPECT_NEAR(vx / total - mx * mx, 2 * 1e-6 * 2.0, 0.06 * 4e-6);
+  EXPECT_LT(std::abs(mx), 0.4e-3);
 }
 
 }  // namespace
