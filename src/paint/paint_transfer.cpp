@@ -201,13 +201,12 @@ PaintEventStats transferPaint(Brush& brush, PaintSurface& surface, const PaintTy
                               const PaintTransferOptions& options) {
   options.validate();
   if (!(dt >= 0)) throw std::invalid_argument("transferPaint: dt must be >= 0");
+  PaintType effective = paint;
   const double pixel = options.pixel_size > 0 ? options.pixel_size : brush.preset().surfel_spacing;
-  if (paint.imprint_depth > 0 && !(paint.imprint_spacing >= 2 * pixel))
-    throw std::invalid_argument("paint '" + paint.name + "': imprint spacing " +
-                                std::to_string(paint.imprint_spacing) +
-                                " m is below two paint buffer pixels (" + std::to_string(2 * pixel) +
-                                " m): the pattern would alias; raise imprint.spacing or lower pixel_size");
+  const bool aliased = paint.imprint_depth > 0 && !(paint.imprint_spacing >= 2 * pixel);
+  if (aliased) effective.imprint_depth = 0;  // the pattern cannot be sampled by these pixels
   PaintEventStats stats;
+  stats.imprint_aliased = aliased;
   const BrushSplit& split = brush.split();
   if (split.tips.empty()) return stats;
   const BrushSkeleton& skeleton = brush.skeleton();
@@ -229,7 +228,7 @@ PaintEventStats transferPaint(Brush& brush, PaintSurface& surface, const PaintTy
     samples[best].push_back(int(i));
   }
   for (size_t t = 0; t < tips.size(); ++t)
-    transferAtTip(samples[t], tips[t], split.tip_normals[t], brush, surface, paint, dt, options, &stats);
+    transferAtTip(samples[t], tips[t], split.tip_normals[t], brush, surface, effective, dt, options, &stats);
   return stats;
 }
 

@@ -30,6 +30,7 @@ struct PaintEventStats {
   int penetrated_pixels = 0;
   size_t originals_disabled = 0, children_removed = 0, children_added = 0;
   size_t children_imprinted = 0;
+  bool imprint_aliased = false;  ///< imprints skipped: the pattern's spacing is below two buffer pixels
   double moved_to_surface = 0, moved_to_brush = 0;  ///< wet volume
 };
 
@@ -38,8 +39,8 @@ struct PaintEventStats {
 /// The eraser (paint.eraser) deposits nothing: it takes wet paint up at transfer_to_brush and moves the dry
 /// colour of the surfels it presses on towards the object's own colour at transfer_to_surface (the (5.9)
 /// rate). Viscous paint (imprint_depth > 0) raises the new surfels by the bristle pattern of 5.6.3:
-/// depth (1 + cos(2 pi u / spacing)) / 2 above the father's tangent plane, u across the stroke; throws
-/// std::invalid_argument when the spacing is below two buffer pixels (the pattern would alias).
+/// depth (1 + cos(2 pi u / spacing)) / 2 above the father's tangent plane, u across the stroke; not when the
+/// spacing is below two buffer pixels (the pattern would alias: imprint_aliased is set instead).
 PaintEventStats transferPaint(Brush& brush, PaintSurface& surface, const PaintType& paint, double dt,
                               const PaintTransferOptions& options = {});
 

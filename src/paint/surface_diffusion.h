@@ -14,7 +14,7 @@ namespace rc {
 struct SurfaceDiffusionOptions {
   double neighbour_radii = 3.0;  ///< exchange partners within this many typical surfel radii
   double time_step = 0.05;       ///< simulated time of one sweep [s]
-  size_t max_surfels = 20000;    ///< active surfels per call (the region around the wet ones)
+  size_t max_surfels = 4000;     ///< active surfels per call (the region around the wet ones)
 
   /// Throws std::invalid_argument naming the bad option.
   void validate() const;

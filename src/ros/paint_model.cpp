@@ -124,13 +124,13 @@ PaintModel::~PaintModel() {
 }
 
 void PaintModel::setPaintType(std::unique_ptr<PaintType> paint) {
-  // Checks what depends on the brush too (the imprint pattern against the buffer pixels).
+  // What depends on the brush too: the imprint pattern against the buffer pixels.
   const double pixel =
       params_.transfer.pixel_size > 0 ? params_.transfer.pixel_size : brush_->preset().surfel_spacing;
   if (paint->imprint_depth > 0 && paint->imprint_spacing < 2 * pixel)
-    throw std::invalid_argument("paint '" + paint->name + "': imprint spacing " +
-                                std::to_string(paint->imprint_spacing) +
-                                " m is below two paint buffer pixels (" + std::to_string(2 * pixel) + " m)");
+    ROS_WARN_STREAM("paint_model: paint '" << paint->name << "': imprint spacing " << paint->imprint_spacing
+                                           << " m is below two paint buffer pixels (" << 2 * pixel
+                                           << " m): no imprints (lower ~pixel_size to get them)");
   paint_type_ = std::move(paint);
   loadBrush(brush_->skin(), *paint_type_);
   diffusion_.reset();
@@ -525,13 +525,8 @@ bool PaintModel::setBrush(File::Request& req, File::Response& res) {
   try {
     auto brush = std::make_unique<Brush>(readBrushPreset(req.path), params_.brush_options);
     std::lock_guard<std::mutex> lock(model_mutex_);
-    std::swap(brush_, brush);
-    try {
-      if (paint_type_) setPaintType(std::make_unique<PaintType>(*paint_type_));  // loads the new brush
-    } catch (const std::exception&) {
-      std::swap(brush_, brush);  // the paint does not suit the new brush: keep the old one
-      throw;
-    }
+    brush_ = std::move(brush);
+    if (paint_type_) setPaintType(std::make_unique<PaintType>(*paint_type_));  // loads the new brush
     brush_placed_ = false;  // the new brush starts at rest at the next pose
     idle_ticks_ = 0;
     if (journal_) journal_->endStroke();

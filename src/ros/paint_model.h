@@ -28,7 +28,7 @@
 //             the brush's skin spacing), pressure_per_depth ([1/m], 2000), painted_rate ([Hz], 1),
 //             drying_visits (originals dried per tick, 2000; 0: no drying), downsampling_visits (originals
 //             with children looked at per tick, 200; 0: off), diffusion_surfels (active surfels around the
-//             wet ones diffused per time step when the paint diffuses, 20000; 0: off), stroke_gap ([s]
+//             wet ones diffused per time step when the paint diffuses, 4000; 0: off), stroke_gap ([s]
 //             without contact that ends a stroke, 0.25), journal_bytes (undo memory, 256 MiB), restore (a
 //             state saved by ~save to load at start, ""), autosave (file, ""), autosave_period ([s], 60),
 //             replace_painted (false), stats_period ([s], 1), palette (a palette file,
@@ -74,7 +74,7 @@ struct PaintModelParams {
   double painted_rate = 1.0;
   int drying_visits = 2000;
   int downsampling_visits = 200;
-  int diffusion_surfels = 20000;
+  int diffusion_surfels = 4000;
   double stroke_gap = 0.25;
   int journal_bytes = 256 << 20;
   std::string restore;
