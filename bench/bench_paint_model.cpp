@@ -46,7 +46,7 @@ double median(std::vector<double> v) {
 }
 
 struct Run {
-  std::vector<double> brush_us, paint_us;
+  std::vector<double> brush_us, paint_us, buffer_us, exchange_us, resample_us;
   size_t children = 0, pixels = 0;
 };
 
@@ -65,6 +65,9 @@ Run stroke(const rc::BrushPreset& preset, const rc::PaintType& paint, const rc::
     if (e <= 30) continue;
     run.brush_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
     run.paint_us.push_back(std::chrono::duration<double, std::micro>(t2 - t1).count());
+    run.buffer_us.push_back(1e6 * s.buffer_seconds);
+    run.exchange_us.push_back(1e6 * s.exchange_seconds);
+    run.resample_us.push_back(1e6 * s.resample_seconds);
     run.pixels += size_t(s.penetrated_pixels);
   }
   run.children = surface.childCount();
@@ -209,13 +212,16 @@ void backgroundWork(const std::string& config, const rc::SurfelCloud& sphere) {
   };
   rc::PaintDryer dryer(water.drying_rate, water.drying);
   const double dry_ms = timeOf([&](int k) { dryer.run(surface, 0.1 * k, 2000); });
-  size_t wet_total = 0;
-  for (size_t i = 0; i < surface.originalCount(); ++i) {
-    wet_total += surface.enabled(i) && surface.originalPaint(i).wet_volume > 0;
-    for (const rc::ChildSurfel& c : surface.children(i)) wet_total += c.paint.wet_volume > 0;
-  }
+  const auto wetCount = [&] {
+    size_t wet = 0;
+    for (size_t i = 0; i < surface.originalCount(); ++i) {
+      wet += surface.enabled(i) && surface.originalPaint(i).wet_volume > 0;
+      for (const rc::ChildSurfel& c : surface.children(i)) wet += c.paint.wet_volume > 0;
+    }
+    return wet;
+  };
   struct DiffusionRow {
-    size_t max_surfels, region = 0, wet = 0;
+    size_t max_surfels, region = 0, wet = 0, wet_total = 0;
     double ms = 0;
   };
   std::vector<DiffusionRow> diffusion_rows;
@@ -224,6 +230,7 @@ void backgroundWork(const std::string& config, const rc::SurfelCloud& sphere) {
     o.max_surfels = max_surfels;
     rc::SurfaceDiffusion diffusion(water.diffusion, o);
     DiffusionRow row{max_surfels};
+    row.wet_total = wetCount();  // (the rows run one after the other: the wet area grows)
     row.ms = timeOf([&](int) {
       const rc::SurfaceDiffusionStats st = diffusion.run(surface, o.time_step);
       row.region = std::max(row.region, st.surfels), row.wet = std::max(row.wet, st.wet_surfels);
@@ -237,7 +244,7 @@ void backgroundWork(const std::string& config, const rc::SurfelCloud& sphere) {
   for (const DiffusionRow& r : diffusion_rows)
     std::printf("%-34s %10.3f %12.1f   (%zu surfels, %zu of the %zu wet ones per sweep)\n",
                 ("diffusion sweep, max_surfels " + std::to_string(r.max_surfels)).c_str(), r.ms, 20 * r.ms,
-                r.region, r.wet, wet_total);
+                r.region, r.wet, r.wet_total);
   std::printf("%-34s %10.3f %12.1f\n", "downsampling, 200 fathers per tick", down_ms, 60 * down_ms);
   std::printf(
       "\nDiffusion runs one sweep per 0.05 s of simulated time over at most max_surfels surfels around the "
@@ -270,8 +277,8 @@ int main(int argc, char** argv) {
       "median over %d events after 30 warm-up events. Thesis (Pentium 4): 30 events/s; target >= 120 "
       "events/s.\n\n",
       kSpeed, events);
-  std::printf("%-8s %-6s %8s %11s %11s %11s %10s %14s %12s\n", "surfels", "brush", "pixel", "brush us",
-              "paint us", "event us", "events/s", "pixels/event", "children");
+  std::printf("%-8s %-6s %8s %9s %9s %9s %9s %9s %9s %9s %8s %8s\n", "surfels", "brush", "pixel", "brush us",
+              "buffer", "exchange", "resample", "paint us", "event us", "events/s", "px/event", "children");
   for (const size_t count : {size_t(300000), size_t(750000)}) {
     rc::SurfelCloud sphere = rc::AnalyticSphere(Vec3::Zero(), kRadius).sample(count);
     sphere.radii.assign(count, kRadius * std::sqrt(4.0 / count));
@@ -282,9 +289,10 @@ int main(int argc, char** argv) {
         options.pixel_size = pixels_per_surfel * preset.surfel_spacing;
         const Run r = stroke(preset, paint, sphere, options, events);
         const double event = median(r.brush_us) + median(r.paint_us);
-        std::printf("%-8zu %-6s %6.2f mm %11.1f %11.1f %11.1f %10.0f %14.0f %12zu\n", count, name,
-                    1e3 * options.pixel_size, median(r.brush_us), median(r.paint_us), event, 1e6 / event,
-                    double(r.pixels) / events, r.children);
+        std::printf("%-8zu %-6s %5.2f mm %9.1f %9.1f %9.1f %9.1f %9.1f %9.1f %9.0f %8.0f %8zu\n", count, name,
+                    1e3 * options.pixel_size, median(r.brush_us), median(r.buffer_us), median(r.exchange_us),
+                    median(r.resample_us), median(r.paint_us), event, 1e6 / event, double(r.pixels) / events,
+                    r.children);
       }
     }
   }

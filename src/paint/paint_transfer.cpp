@@ -1,6 +1,7 @@
 #include "relaxed_connectivity/paint/paint_transfer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -11,6 +12,12 @@
 namespace rc {
 
 namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 /// Where a splatted surface sample lives in the PaintSurface.
 struct SurfaceRef {
@@ -64,6 +71,7 @@ void carve(const Imprint& imprint, const Vec3& father_position, const Vec3& fath
 void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const Vec3& tip_normal,
                    Brush& brush, PaintSurface& surface, const PaintType& paint, double dt,
                    const PaintTransferOptions& o, PaintEventStats* stats) {
+  const Clock::time_point start = Clock::now();
   BrushSkin& skin = brush.skin();
   const double pixel = o.pixel_size > 0 ? o.pixel_size : brush.preset().surfel_spacing;
   const double reach = brush.preset().bristle_length;
@@ -123,9 +131,13 @@ void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const 
 
   buffer.splat(PaintBuffer::kSurface, surface_samples);
   buffer.splat(PaintBuffer::kBrush, brush_samples);
+  const Clock::time_point splatted = Clock::now();
+  stats->buffer_seconds += std::chrono::duration<double>(splatted - start).count();
   // The eraser deposits nothing; its transfer_to_surface restores the object's colour below.
   const PaintTransferStats t = buffer.transfer(paint.eraser ? 0.0 : paint.transfer_to_surface,
                                                paint.transfer_to_brush, o.pressure_per_depth, dt);
+  const Clock::time_point exchanged = Clock::now();
+  stats->exchange_seconds += std::chrono::duration<double>(exchanged - splatted).count();
   ++stats->buffers;
   stats->penetrated_pixels += t.penetrated_pixels;
   stats->moved_to_surface += t.moved_to_surface;
@@ -178,6 +190,7 @@ void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const 
     surface.addChild(father, child);
     ++stats->children_added;
   }
+  stats->resample_seconds += secondsSince(exchanged);
 }
 
 }  // namespace

@@ -31,6 +31,9 @@ struct PaintEventStats {
   size_t originals_disabled = 0, children_removed = 0, children_added = 0;
   size_t children_imprinted = 0;
   bool imprint_aliased = false;  ///< imprints skipped: the pattern's spacing is below two buffer pixels
+  /// Wall time of the stages [s]: the buffer (plane fit, gathering and splatting the samples), the exchange
+  /// (5.9-5.11), the resampling (gather to the skin, pixel surfels, the surface's lists).
+  double buffer_seconds = 0, exchange_seconds = 0, resample_seconds = 0;
   double moved_to_surface = 0, moved_to_brush = 0;  ///< wet volume
 };
 

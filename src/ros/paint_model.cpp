@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "relaxed_connectivity/io/cloud_io.h"
 #include "relaxed_connectivity/paint/brush_preset_reader.h"
 #include "relaxed_connectivity/paint/paint_type_reader.h"
 #include "relaxed_connectivity/paint/painted_surface_io.h"
@@ -70,6 +71,7 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
   pnh.param("replace_painted", p.replace_painted, p.replace_painted);
   pnh.param("stats_period", p.stats_period, p.stats_period);
   pnh.param("palette", p.palette, p.palette);
+  pnh.param("object", p.object, p.object);
   p.validate();
   return p;
 }
@@ -92,6 +94,18 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   if (!params_.restore.empty()) {
     std::lock_guard<std::mutex> lock(model_mutex_);
     installSurface(loadPaintedSurface(params_.restore), "restored from " + params_.restore);
+  } else if (!params_.object.empty()) {  // an object file instead of the topic (a file error is fatal)
+    SurfelCloud cloud = readCloud(params_.object);
+    const size_t dropped = cloud.removeNonFinite();
+    if (!cloud.hasNormals())
+      throw std::invalid_argument("paint_model: ~object " + params_.object +
+                                  " has no normals (estimate them with rc_surface or surfel_estimator)");
+    if (palette_) appendPalette(cloud, *palette_);
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    dropped_surfels_ += dropped;
+    installSurface(
+        std::make_unique<PaintSurface>(std::move(cloud)),
+        "from " + params_.object + (dropped ? " (" + std::to_string(dropped) + " non-finite dropped)" : ""));
   }
   surfels_sub_ = nh_.subscribe("surfels", 1, &PaintModel::surfelsCallback, this);
   pose_sub_ = nh_.subscribe(params_.device + "/pose", 10, &PaintModel::poseCallback, this,
@@ -210,6 +224,7 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
     installSurface(std::move(surface), what);
     object_hash_ = hash;
     object_frame_ = msg->header.frame_id;
+    dropped_surfels_ += dropped;
   } catch (const std::exception& e) {  // keep the current object
     ++rejected_;
     ROS_ERROR_STREAM("paint_model: rejected surfels (frame '" << msg->header.frame_id << "', "
@@ -399,6 +414,7 @@ void PaintModel::publishStats(const ros::WallTime& now) {
   s.background_ms = background_s_ * per_tick;
   s.publish_ms = publish_s_ * per_tick;
   s.rejected_messages = uint32_t(rejected_);
+  s.dropped_surfels = uint32_t(dropped_surfels_);
   s.instabilities = uint32_t(instabilities_);
   stats_pub_.publish(s);
   events_ = ticks_ = 0;

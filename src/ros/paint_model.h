@@ -83,6 +83,7 @@ struct PaintModelParams {
   bool replace_painted = false;
   double stats_period = 1.0;
   std::string palette;  ///< palette file (config/paint/palettes/); empty: none
+  std::string object;   ///< a surfel file (.ply, .pcd, .xyz with normals) painted instead of the topic's
 
   /// Throws std::invalid_argument naming the parameter and the bad value.
   void validate() const;
@@ -154,6 +155,7 @@ class PaintModel {
   // Stats over the current period.
   unsigned long events_ = 0, ticks_ = 0, instabilities_ = 0;
   std::atomic<unsigned long> rejected_{0};  // also counted by the pose callback
+  unsigned long dropped_surfels_ = 0;
   double brush_s_ = 0, transfer_s_ = 0, background_s_ = 0, publish_s_ = 0;
   ros::Subscriber surfels_sub_, pose_sub_;
   ros::Publisher contact_pub_, skeleton_pub_, skin_pub_, painted_pub_, delta_pub_, stats_pub_;
