@@ -213,6 +213,12 @@ TEST(PaintModelServices, DeltasUndoRedoSaveLoadClearAndASecondObject) {
   oil.request.path = std::string(RC_SOURCE_DIR) + "/config/paint/paints/oil.yaml";
   EXPECT_TRUE(call("paint_model/set_paint", oil)) << oil.response.message;
   EXPECT_TRUE(l.waitFor([&] { return l.stats->paint == "oil"; }, 5.0));
+  relaxed_connectivity::PaintFile flat;
+  flat.request.path = std::string(RC_SOURCE_DIR) + "/config/paint/brushes/flat.yaml";
+  EXPECT_TRUE(call("paint_model/set_brush", flat)) << flat.response.message;
+  EXPECT_TRUE(l.waitFor([&] { return l.stats->brush == "flat" && l.stats->paint == "oil"; }, 5.0));
+  bad.request.path = std::string(RC_SOURCE_DIR) + "/config/paint/paints/oil.yaml";  // not a brush
+  EXPECT_FALSE(call("paint_model/set_brush", bad));
 
   // After ~clear a new object is taken: one without normals is refused with the reason (counted), one with
   // a NaN surfel is taken without it (the drop counted), the palette beside it again.
