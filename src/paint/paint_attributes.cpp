@@ -33,6 +33,8 @@ void addPaintAttributes(SurfelCloud& cloud, const PaintState& initial, bool dry_
     if (cloud.attributes.has(c.name)) cloud.attributes.remove(c.name);
     cloud.attributes.add(c.name, ScalarType::kFloat64, c.count, cloud.size());
   }
+  if (cloud.attributes.has(kPaintTransferRate)) cloud.attributes.remove(kPaintTransferRate);
+  cloud.attributes.add(kPaintTransferRate, ScalarType::kFloat64, 1, cloud.size());
   PaintColumns columns(cloud);
   for (size_t i = 0; i < cloud.size(); ++i) {
     PaintState p = initial;
@@ -53,6 +55,10 @@ PaintColumns::PaintColumns(SurfelCloud& cloud) {
                                   kColumns[c].name + "' column of " + std::to_string(kColumns[c].count));
     *targets[c] = a;
   }
+  transfer_rate_ = cloud.attributes.find(kPaintTransferRate);
+  if (transfer_rate_ && (transfer_rate_->type != ScalarType::kFloat64 || transfer_rate_->count != 1))
+    throw std::invalid_argument(std::string("paint attributes: '") + kPaintTransferRate +
+                                "' must be one float64 per surfel");
   size_ = wet_volume_->size();
 }
 
@@ -74,6 +80,7 @@ PaintState PaintColumns::read(size_t i) const {
   p.wet_volume = get(wet_volume_, 0);
   p.dry_volume = get(dry_volume_, 0);
   p.optical_density = get(optical_density_, 0);
+  if (transfer_rate_) p.transfer_rate = get(transfer_rate_, 0);
   return p;
 }
 
@@ -92,6 +99,7 @@ void PaintColumns::write(size_t i, const PaintState& p) {
   set(wet_volume_, 0, p.wet_volume);
   set(dry_volume_, 0, p.dry_volume);
   set(optical_density_, 0, p.optical_density);
+  if (transfer_rate_) set(transfer_rate_, 0, p.transfer_rate);
 }
 
 PaintState readPaint(const SurfelCloud& cloud, size_t i) {

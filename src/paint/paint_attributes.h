@@ -17,8 +17,11 @@ constexpr const char* kPaintDryShininess = "paint_dry_shininess";        ///< of
 constexpr const char* kPaintWetVolume = "paint_wet_volume";              ///< V_w
 constexpr const char* kPaintDryVolume = "paint_dry_volume";              ///< V_d
 constexpr const char* kPaintOpticalDensity = "paint_optical_density";    ///< rho
+/// tau of the surfel (PaintState::transfer_rate); optional: without it every surfel reads -1 (not set).
+constexpr const char* kPaintTransferRate = "paint_transfer_rate";
 
-/// Whether the cloud carries every paint column (with the right type and size).
+/// Whether the cloud carries every paint column (with the right type and size; paint_transfer_rate is
+/// optional).
 bool hasPaintAttributes(const SurfelCloud& cloud);
 /// Adds the paint columns (or overwrites them) with `initial` for every surfel; a surfel's own colour, when
 /// the cloud has colours and `dry_from_colours` is set, becomes its dry colour.
@@ -37,7 +40,7 @@ class PaintColumns {
 
  private:
   Attribute *wet_rgb_, *wet_reflectivity_, *wet_shininess_, *dry_rgb_, *dry_reflectivity_, *dry_shininess_,
-      *wet_volume_, *dry_volume_, *optical_density_;
+      *wet_volume_, *dry_volume_, *optical_density_, *transfer_rate_;
   size_t size_;
 };
 

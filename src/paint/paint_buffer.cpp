@@ -60,6 +60,8 @@ void PaintBuffer::splat(Layer layer, const std::vector<PaintSample>& samples) {
   contributed_[layer].assign(n, 0.0);
   shares_[layer].clear();
   sample_volume_[layer].assign(samples.size(), 0.0);
+  rate_sum_[layer].assign(n, 0.0);
+  rate_weight_[layer].assign(n, 0.0);
   if (layer == kSurface) {
     normal_sum_.assign(n, Vec3::Zero());
     dry_.assign(n, PaintState());
@@ -103,6 +105,8 @@ void PaintBuffer::splat(Layer layer, const std::vector<PaintSample>& samples) {
       }
       height_sum_[layer][p] += w * h;
       weight_[layer][p] += w;
+      if (s.paint.transfer_rate >= 0)
+        rate_sum_[layer][p] += w * s.paint.transfer_rate, rate_weight_[layer][p] += w;
       total += w;
     });
     if (!(total > 0)) continue;
@@ -133,7 +137,12 @@ PaintTransferStats PaintBuffer::transfer(double tau_brush_to_surface, double tau
       PaintState& brush = pixel_[kBrush][index(x, y)];
       PaintState& surface = pixel_[kSurface][index(x, y)];
       const double surface_before = surface.wet_volume, brush_before = brush.wet_volume;
-      exchangePaint(brush, surface, tau_brush_to_surface, tau_surface_to_brush, pressure_[index(x, y)], dt);
+      const size_t p = index(x, y);
+      const auto rate = [&](Layer layer, double unset) {
+        return rate_weight_[layer][p] > 0 ? rate_sum_[layer][p] / rate_weight_[layer][p] : unset;
+      };
+      exchangePaint(brush, surface, rate(kBrush, tau_brush_to_surface), rate(kSurface, tau_surface_to_brush),
+                    pressure_[p], dt);
       stats.moved_to_surface += std::max(0.0, surface.wet_volume - surface_before);
       stats.moved_to_brush += std::max(0.0, brush.wet_volume - brush_before);
     }
@@ -214,6 +223,8 @@ void PaintBuffer::resample(const std::vector<uint8_t>& replace, std::vector<Pain
       s.pressure = pressure_.empty() ? 0.0 : pressure_[p];
       s.paint = dry_[p];
       s.paint.wet_volume = 0;
+      s.paint.transfer_rate =
+          rate_weight_[kSurface][p] > 0 ? rate_sum_[kSurface][p] / rate_weight_[kSurface][p] : -1.0;
       at_pixel[p].writeTo(s.paint);
       surfels.push_back(s);
     }

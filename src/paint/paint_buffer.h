@@ -70,7 +70,8 @@ class PaintBuffer {
 
   /// The per-pixel exchange (5.9)-(5.11) where both layers cover a pixel and the brush is below the
   /// surface (the depth test): pressure = pressure_per_depth x penetration depth, for dt seconds; tau from
-  /// brush to surface and back.
+  /// brush to surface and back, where the layer's samples there set none (PaintState::transfer_rate < 0);
+  /// else their footprint-weighted mean.
   PaintTransferStats transfer(double tau_brush_to_surface, double tau_surface_to_brush,
                               double pressure_per_depth, double dt);
 
@@ -108,6 +109,8 @@ class PaintBuffer {
   std::vector<PaintState> dry_;      // surface layer: footprint-weighted dry paint (colour, volume)
   std::vector<uint8_t> penetrated_;  // pixels of the last transfer
   std::vector<double> pressure_;     // and their pressure
+  std::vector<double> rate_sum_[2],
+      rate_weight_[2];  // footprint-weighted transfer_rate of the samples that set one
   /// The parts each splatted sample takes back from the pixels: calls take(sample, pixel, volume).
   template <class Take>
   void forEachPart(Layer layer, Take&& take) const;

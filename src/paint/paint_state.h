@@ -25,10 +25,14 @@ struct PaintState {
   double wet_volume = 0;       ///< V_w
   double dry_volume = 0;       ///< V_d
   double optical_density = 1;  ///< rho of the wet paint: alpha = min(rho V_w, 1)
+  /// tau of (5.9)/(5.10) with which wet paint leaves this surfel [1/(pressure s)]; a property of the surfel
+  /// (its side: the brush, or a region of the object that holds its paint, tau = 0), not of the paint, so
+  /// it does not mix. Negative: not set, the paint type's rate for the side applies.
+  double transfer_rate = -1;
 
   bool operator==(const PaintState& o) const {
     return wet == o.wet && dry == o.dry && wet_volume == o.wet_volume && dry_volume == o.dry_volume &&
-           optical_density == o.optical_density;
+           optical_density == o.optical_density && transfer_rate == o.transfer_rate;
   }
 };
 

@@ -128,6 +128,8 @@ void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const 
   for (int i : skin_samples)
     brush_samples.push_back(
         {skin.positions()[size_t(i)], skin.normals()[size_t(i)], skin.radius(), skin.paint[size_t(i)]});
+  if (paint.eraser)  // deposits nothing, whatever rate the skin's surfels carry
+    for (PaintSample& b : brush_samples) b.paint.transfer_rate = 0;
 
   buffer.splat(PaintBuffer::kSurface, surface_samples);
   buffer.splat(PaintBuffer::kBrush, brush_samples);
@@ -148,7 +150,11 @@ void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const 
   std::vector<PaintState> brush_states;
   for (const PaintSample& s : brush_samples) brush_states.push_back(s.paint);
   buffer.gather(PaintBuffer::kBrush, brush_states);
-  for (size_t k = 0; k < skin_samples.size(); ++k) skin.paint[size_t(skin_samples[k])] = brush_states[k];
+  for (size_t k = 0; k < skin_samples.size(); ++k) {
+    PaintState& kept = skin.paint[size_t(skin_samples[k])];
+    brush_states[k].transfer_rate = kept.transfer_rate;  // (the eraser's 0 was for this event only)
+    kept = brush_states[k];
+  }
 
   // Surface: kept samples take their paint back; the penetrated ones are replaced by pixel surfels.
   const std::vector<uint8_t> replace = buffer.penetratedSurfaceSamples();

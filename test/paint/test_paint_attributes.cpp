@@ -28,6 +28,7 @@ TEST(PaintAttributes, SurviveAPlyRoundTripBitwise) {
     p.optical_density = 1.0 / (i + 3.0);
     p.wet.shininess = 40.0 / 3.0;
     p.dry.reflectivity = 0.1 * std::sqrt(double(i));
+    p.transfer_rate = i % 3 == 0 ? -1.0 : 4.0 / 3.0;  // set on some surfels (tau), not on others
     writePaint(cloud, i, p);
   }
   const std::string path = (std::filesystem::temp_directory_path() /
@@ -39,6 +40,12 @@ TEST(PaintAttributes, SurviveAPlyRoundTripBitwise) {
   ASSERT_TRUE(hasPaintAttributes(back));
   for (size_t i = 0; i < cloud.size(); ++i)
     EXPECT_EQ(readPaint(back, i), readPaint(cloud, i)) << "surfel " << i;
+  EXPECT_EQ(readPaint(back, 1).transfer_rate, 4.0 / 3.0);
+  // The transfer rate column is optional: without it every surfel reads "not set".
+  SurfelCloud without = back;
+  without.attributes.remove(kPaintTransferRate);
+  ASSERT_TRUE(hasPaintAttributes(without));
+  EXPECT_EQ(readPaint(without, 1).transfer_rate, -1.0);
 }
 
 TEST(PaintAttributes, MissingColumnsAndBadIndicesAreNamed) {

@@ -57,7 +57,9 @@ TEST(PaintDiffusion, APointDepositSpreadsAsTheDiffusionEquationPredicts) {
     // (5.14): sigma^2 = 2 D t per axis; the growth per second is 2 D (the rate, after the first second).
     // Measured 0.05 % low at this time step (D dt / h^2 = 0.04).
     EXPECT_NEAR(variance, 2 * d * t, 0.005 * 2 * d * t) << "t = " << t;
-    if (t > 1) EXPECT_NEAR(variance - previous, 2 * d, 0.005 * 2 * d);
+    if (t > 1) {
+      EXPECT_NEAR(variance - previous, 2 * d, 0.005 * 2 * d);
+    }
     previous = variance;
     EXPECT_NEAR(total, 1.0, 1e-12);  // volume conserved
   }
