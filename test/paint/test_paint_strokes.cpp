@@ -3,7 +3,6 @@
 // spiral stroke on the Stanford bunny (../shared/data/bunny.ply) leaves the expected surfels and colours.
 #include <gtest/gtest.h>
 
-#include <cstdio>
 #include <fstream>
 #include <iterator>
 
