@@ -1,9 +1,10 @@
 // Paint events (thesis 5.5): one main-loop event of the brush (advance) and the paint transfer (one paint
 // buffer per tip, splats, exchange, resampling, gather) along a stroke over a sphere of 300k and 750k
 // surfels, the time split into the two; the paint buffer's pixel size against the work and the surfels it
-// creates; the speed/accuracy curve of the pixel size (colour error across a painted stripe against a
-// reference at 1/16 of a brush surfel); the background work (drying, diffusion, downsampling) and memory
-// per surfel. Single-threaded. Prints tables; `--quick` uses fewer events; `--csv FILE` writes the curve.
+// creates; the speed/accuracy curve of the pixel size (wet paint per unit area across a straight stroke on a
+// board against a reference at 1/16 of a brush surfel: RMS error, 10-90 % edge width, time, surfels); the
+// background work (drying, diffusion, downsampling) and memory per surfel. Single-threaded. Prints tables;
+// `--quick` uses fewer events; `--curve` runs only the curve; `--csv FILE` writes the curve.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -85,25 +86,36 @@ rc::SurfelCloud board(double half, double h) {
   return c;
 }
 
-/// A straight stroke along +x over the board (the stylus leaning 30 degrees back, pressed 4 mm).
+/// A straight stroke along +x over the board, the stylus leaning 30 degrees back, pressed `press`; the
+/// brush turned about its axis so that the flat brush's width lies across the stroke (along y).
 Eigen::Isometry3d boardPose(double x, double bristle_length, double press) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = Eigen::Quaterniond::FromTwoVectors(Vec3(0, 0, -1), Vec3(-std::sin(kLean), 0, -std::cos(kLean)))
-                   .toRotationMatrix();
+  t.linear() =
+      (Eigen::Quaterniond::FromTwoVectors(Vec3(0, 0, -1), Vec3(-std::sin(kLean), 0, -std::cos(kLean))) *
+       Eigen::AngleAxisd(0.5 * M_PI, Vec3::UnitZ()))
+          .toRotationMatrix();
   t.translation() = Vec3(x, 0, bristle_length - press);
   return t;
 }
 
+constexpr double kBoardSpacing = 0.001, kProbeHalf = 0.01, kProbeStep = 5e-5, kBandHalf = 0.005,
+                 kBandStep = 1e-4;
+
 struct StripeRun {
-  std::vector<double> profile;  // visible red across the stripe at the probes
-  double event_us = 0;          // median paint transfer per event
-  size_t children = 0;
+  std::vector<double> thickness;  // wet volume per unit area [per mm^2] across the stripe, mean along it
+  double centre_alpha = 0;        // alpha of (5.8) at the probe on the stroke's axis
+  double probe_x = 0;             // where the probe line crosses the stroke
+  double event_us = 0;            // median paint transfer per event
+  size_t children = 0, active = 0;
 };
 
-/// Paints a 2 cm stroke with `preset` on a 1 mm board at `pixel` and reads the visible colour (of the
-/// active surfel nearest each probe) on a line across the stroke at its middle, every 0.05 mm over +-8 mm.
-StripeRun stripe(const rc::BrushPreset& preset, const rc::PaintType& paint, double pixel) {
-  rc::PaintSurface surface(board(0.03, 0.001));
+/// Paints a 2 cm stroke along +x with `preset` loaded with `paint` on a white board sampled every 1 mm, with
+/// buffer pixels of `pixel`, and reads the wet paint per unit area (the volume of the active surfel nearest
+/// each probe over its area: a child's pixel squared, an original's 1 mm squared) across the stroke every
+/// 0.05 mm over +-10 mm, each the mean of the probes every 0.1 mm along the stroke over +-5 mm around
+/// `probe_x` (NaN: the middle of the painted children's x range).
+StripeRun stripe(const rc::BrushPreset& preset, const rc::PaintType& paint, double pixel, double probe_x) {
+  rc::PaintSurface surface(board(0.03, kBoardSpacing));
   rc::Brush brush(preset);
   rc::loadBrush(brush.skin(), paint);
   const double l = preset.bristle_length;
@@ -121,21 +133,64 @@ StripeRun stripe(const rc::BrushPreset& preset, const rc::PaintType& paint, doub
   StripeRun run;
   run.event_us = median(us);
   run.children = surface.childCount();
-  const rc::SurfelCloud active = surface.activeCloud();
-  const rc::KdTree tree(active.positions);
-  // The stripe lies behind the ferrule's path (the bristles trail): probe across y at the painted middle.
+  run.active = surface.activeCount();
+  std::vector<Vec3> positions;
+  std::vector<const rc::PaintState*> states;
+  std::vector<double> areas;
   double xmin = 1, xmax = -1;
-  for (size_t i = 0; i < surface.originalCount(); ++i)
-    for (const rc::ChildSurfel& c : surface.children(i))
+  const rc::PaintSurface& painted = surface;  // (const: reading the children notifies no observer)
+  for (size_t i = 0; i < painted.originalCount(); ++i) {
+    if (painted.enabled(i)) {
+      positions.push_back(painted.originals().positions[i]);
+      states.push_back(&painted.originalPaint(i));
+      areas.push_back(kBoardSpacing * kBoardSpacing);
+    }
+    for (const rc::ChildSurfel& c : painted.children(i)) {
+      positions.push_back(c.position);
+      states.push_back(&c.paint);
+      areas.push_back(c.radius * c.radius);  // one child per pixel, its radius one pixel
       if (c.paint.wet_volume > 0)
         xmin = std::min(xmin, c.position.x()), xmax = std::max(xmax, c.position.x());
-  const double x = 0.5 * (xmin + xmax);
-  for (double y = -0.008; y <= 0.008 + 1e-12; y += 5e-5) {
-    rc::Neighbor n;
-    tree.knn(Vec3(x, y, 0), 1, &n);
-    run.profile.push_back(active.colors[n.index][1] / 255.0);  // green: 1 on white, low under the paint
+    }
+  }
+  run.probe_x = std::isnan(probe_x) ? 0.5 * (xmin + xmax) : probe_x;
+  const rc::KdTree tree(positions);
+  const int n = int(std::lround(kProbeHalf / kProbeStep)), m = int(std::lround(kBandHalf / kBandStep));
+  for (int k = -n; k <= n; ++k) {
+    double sum = 0;
+    for (int j = -m; j <= m; ++j) {
+      rc::Neighbor nb;
+      tree.knn(Vec3(run.probe_x + j * kBandStep, k * kProbeStep, 0), 1, &nb);
+      sum += states[nb.index]->wet_volume / (1e6 * areas[nb.index]);
+      if (k == 0 && j == 0)
+        run.centre_alpha = std::min(1.0, states[nb.index]->optical_density * states[nb.index]->wet_volume);
+    }
+    run.thickness.push_back(sum / (2 * m + 1));
   }
   return run;
+}
+
+/// The profile's plateau: the median of the probes above half its largest value.
+double plateau(const std::vector<double>& t) {
+  const double top = *std::max_element(t.begin(), t.end());
+  std::vector<double> in;
+  for (double v : t)
+    if (v > 0.5 * top) in.push_back(v);
+  return median(in);
+}
+
+/// The 10-90 % width of the stripe's two edges (mean of both) [m], levels relative to the profile's plateau:
+/// from each end of the probe line, the distance between the first probes at 10 % and at 90 %.
+double edgeWidth(const std::vector<double>& t) {
+  const double p = plateau(t);
+  const auto first = [&](double level, bool from_left) {
+    for (size_t k = 0; k < t.size(); ++k) {
+      const size_t i = from_left ? k : t.size() - 1 - k;
+      if (t[i] >= level * p) return double(k);
+    }
+    return double(t.size());
+  };
+  return 0.5 * kProbeStep * ((first(0.9, true) - first(0.1, true)) + (first(0.9, false) - first(0.1, false)));
 }
 
 /// Resident memory of this process [bytes].
@@ -149,40 +204,66 @@ double residentBytes() {
 }
 
 void speedAccuracyCurve(const std::string& config, const char* csv_path) {
-  const rc::PaintType paint = rc::readPaintType(config + "paints/acrylic.yaml");
+  rc::PaintType paint = rc::readPaintType(config + "paints/acrylic.yaml");
+  paint.imprint_depth = 0;  // no bristle ridges: they would pattern the stripe (and alias at coarse pixels)
+  constexpr int kRuns = 3;
   std::printf(
-      "\nSpeed/accuracy of the paint buffer's pixel size: a 2 cm stroke on a white 1 mm board, acrylic; the "
-      "visible\ncolour (green channel) on a line across the stripe, every 0.05 mm over +-8 mm, against a "
-      "reference run at\n1/16 of a brush surfel (0.03 mm); error = RMS over the probes and the largest "
-      "difference (at the edges).\n\n");
-  std::printf("%-6s %10s %14s %11s %11s %11s %11s\n", "brush", "pixel", "px/brush sf", "RMS error",
-              "max error", "paint us", "children");
+      "\nSpeed/accuracy of the paint buffer's pixel size: a 2 cm stroke along +x on a white board sampled\n"
+      "every 1 mm, acrylic without imprints, the flat brush's width across the stroke. Measured: the wet "
+      "paint\n"
+      "per unit area (volume of the active surfel nearest a probe over its area) across the stroke every\n"
+      "0.05 mm over +-10 mm, each the mean of probes every 0.1 mm along 1 cm of the stroke's middle, "
+      "against\n"
+      "a reference run at 1/16 of a brush surfel (0.031 mm). RMS error: over the probes, relative to the\n"
+      "reference's plateau. Edge: the 10-90 %% width of the stripe's edges (mean of both; levels relative "
+      "to\n"
+      "each run's own plateau). Alpha: (5.8)'s min(rho V_w, 1) at the stroke's centre. Paint us: median "
+      "over\n"
+      "%d runs of the median of 30 events' paint transfer. Surfels: active surfels on the board after the\n"
+      "stroke (of them children).\n\n",
+      kRuns);
+  std::printf("%-6s %9s %11s %10s %10s %9s %9s %8s %9s\n", "brush", "pixel", "px/brush sf", "RMS error",
+              "edge mm", "alpha", "paint us", "surfels", "children");
   FILE* csv = csv_path ? std::fopen(csv_path, "w") : nullptr;
   if (csv)
-    std::fprintf(csv, "brush,pixel_mm,pixels_per_brush_surfel,rms_error,max_error,paint_us,children\n");
+    std::fprintf(csv,
+                 "brush,pixel_mm,pixels_per_brush_surfel,rms_error,edge_width_mm,reference_edge_width_mm,"
+                 "centre_alpha,paint_us,surfels,children\n");
   for (const char* name : {"round", "flat"}) {
     const rc::BrushPreset preset = rc::readBrushPreset(config + "brushes/" + name + ".yaml");
-    const StripeRun reference = stripe(preset, paint, preset.surfel_spacing / 16);
+    const StripeRun reference = stripe(preset, paint, preset.surfel_spacing / 16, std::nan(""));
+    const double reference_plateau = plateau(reference.thickness),
+                 reference_edge = edgeWidth(reference.thickness);
+    std::printf("%-6s %6.3f mm %11.0f %10s %10.2f %9.3f %9.0f %8zu %9zu   (reference, 1 run)\n", name,
+                1e3 * preset.surfel_spacing / 16, 16.0, "-", 1e3 * reference_edge, reference.centre_alpha,
+                reference.event_us, reference.active, reference.children);
     for (const double fraction : {2.0, 1.0, 0.75, 0.5, 0.35, 0.25, 0.125}) {
       const double pixel = fraction * preset.surfel_spacing;
-      const StripeRun r = stripe(preset, paint, pixel);
-      double sum = 0, worst = 0;
-      for (size_t k = 0; k < r.profile.size(); ++k) {
-        const double d = r.profile[k] - reference.profile[k];
-        sum += d * d, worst = std::max(worst, std::abs(d));
+      StripeRun r;
+      std::vector<double> us;
+      for (int k = 0; k < kRuns; ++k) {
+        r = stripe(preset, paint, pixel, reference.probe_x);
+        us.push_back(r.event_us);
       }
-      const double rms = std::sqrt(sum / double(r.profile.size()));
-      std::printf("%-6s %7.3f mm %14.1f %11.4f %11.4f %11.0f %11zu\n", name, 1e3 * pixel, 1.0 / fraction, rms,
-                  worst, r.event_us, r.children);
+      double sum = 0;
+      for (size_t k = 0; k < r.thickness.size(); ++k)
+        sum += (r.thickness[k] - reference.thickness[k]) * (r.thickness[k] - reference.thickness[k]);
+      const double rms = std::sqrt(sum / double(r.thickness.size())) / reference_plateau,
+                   edge = edgeWidth(r.thickness);
+      std::printf("%-6s %6.3f mm %11.2f %10.4f %10.2f %9.3f %9.0f %8zu %9zu\n", name, 1e3 * pixel,
+                  1.0 / fraction, rms, 1e3 * edge, r.centre_alpha, median(us), r.active, r.children);
       if (csv)
-        std::fprintf(csv, "%s,%.4f,%.3f,%.6f,%.6f,%.1f,%zu\n", name, 1e3 * pixel, 1.0 / fraction, rms, worst,
-                     r.event_us, r.children);
+        std::fprintf(csv, "%s,%.4f,%.3f,%.6f,%.4f,%.4f,%.4f,%.1f,%zu,%zu\n", name, 1e3 * pixel,
+                     1.0 / fraction, rms, 1e3 * edge, 1e3 * reference_edge, r.centre_alpha, median(us),
+                     r.active, r.children);
     }
   }
   if (csv) std::fclose(csv);
   std::printf(
-      "Left out: the reference is this model at a finer buffer, not an analytic stripe (the brush's own "
-      "sampling sets\nthe edge); the probe reads the nearest surfel, not a rendered image.\n");
+      "Left out: the reference is this model at a finer buffer, not an analytic stripe (the brush's own\n"
+      "sampling sets the edge); probes read the nearest surfel, not a rendered image; the brush's advance\n"
+      "(not timed here); the visible colour: (5.8) takes the wet volume per surfel, which falls with the\n"
+      "pixel's area (the alpha column), so it is not compared across pixel sizes.\n");
 }
 
 void backgroundWork(const std::string& config, const rc::SurfelCloud& sphere) {
@@ -262,14 +343,19 @@ void backgroundWork(const std::string& config, const rc::SurfelCloud& sphere) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool quick = false;
+  bool quick = false, curve_only = false;
   const char* csv_path = nullptr;
   for (int a = 1; a < argc; ++a) {
     if (!std::strcmp(argv[a], "--quick")) quick = true;
+    if (!std::strcmp(argv[a], "--curve")) curve_only = true;
     if (!std::strcmp(argv[a], "--csv") && a + 1 < argc) csv_path = argv[++a];
   }
   const int events = quick ? 60 : 300;
   const std::string config = std::string(RC_SOURCE_DIR) + "/config/paint/";
+  if (curve_only) {
+    speedAccuracyCurve(config, csv_path);
+    return 0;
+  }
   const rc::PaintType paint = rc::readPaintType(config + "paints/acrylic.yaml");
   std::printf(
       "Paint events along a stroke over a 10 cm sphere at %.2f m/s (1/30 s per event), acrylic paint, one "

@@ -1,9 +1,11 @@
 #!/usr/bin/python3
-"""Plot the paint buffer's speed/accuracy CSV written by `bench_paint_model --csv PATH`.
+"""Plot the paint buffer's speed/accuracy CSV written by `bench_paint_model --csv PATH` (or `--curve --csv PATH`).
 
 Usage: /usr/bin/python3 scripts/plot_paint_tradeoff.py PATH.csv [docs/paint_buffer_tradeoff.png]
-Colour error across a painted stripe (RMS over the probes, against a reference at 1/16 of a brush surfel) over
-the paint transfer time per event, one line per brush, markers labelled with the pixels per brush surfel.
+Left: RMS error of the wet paint per unit area across a straight stroke (relative to the reference's plateau,
+reference at 1/16 of a brush surfel) over the paint transfer time per event; right: the stripe's 10-90 % edge
+width over the same time, the reference's as a dashed line. One line per brush, markers labelled with the
+pixels per brush surfel.
 """
 import csv
 import sys
@@ -25,23 +27,30 @@ def main():
     lines = defaultdict(list)
     for r in rows:
         lines[r["brush"]].append(r)
-    fig, ax = plt.subplots(figsize=(7, 4.4))
-    for brush, rs in sorted(lines.items()):
+    fig, (ax, ax_edge) = plt.subplots(1, 2, figsize=(10, 4.4))
+    for k, (brush, rs) in enumerate(sorted(lines.items())):
+        colour = "C%d" % k
         rs.sort(key=lambda r: float(r["pixels_per_brush_surfel"]))
         x = [float(r["paint_us"]) / 1000.0 for r in rs]
-        y = [max(float(r["rms_error"]), 1e-4) for r in rs]
-        ax.plot(x, y, marker="o", label="%s brush" % brush)
-        for r, xi, yi in zip(rs, x, y):
-            ax.annotate("%s px" % r["pixels_per_brush_surfel"], (xi, yi), fontsize=6, xytext=(3, 3),
-                        textcoords="offset points")
-    ax.axvline(1000.0 / 120.0, color="grey", linestyle="--", linewidth=1)
-    ax.text(1000.0 / 120.0, 0.95, " 120 events/s", fontsize=7, color="grey", transform=ax.get_xaxis_transform())
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("paint transfer per event [ms] (buffer, exchange, resampling; 1 core, median)")
-    ax.set_ylabel("RMS colour error across the stripe (0..1)")
-    ax.set_title("Paint buffer pixels per brush surfel: speed against colour accuracy", fontsize=10)
-    ax.legend(fontsize=8)
+        for axis, column in ((ax, "rms_error"), (ax_edge, "edge_width_mm")):
+            y = [max(float(r[column]), 1e-3) for r in rs]
+            axis.plot(x, y, marker="o", color=colour, label="%s brush" % brush)
+            for r, xi, yi in zip(rs, x, y):
+                axis.annotate("%.3g px" % float(r["pixels_per_brush_surfel"]), (xi, yi), fontsize=6, xytext=(3, 3),
+                              textcoords="offset points")
+        ax_edge.axhline(float(rs[0]["reference_edge_width_mm"]), color=colour, linestyle="--", linewidth=1,
+                        label="%s reference (16 px)" % brush)
+    for axis, where in ((ax, "lower left"), (ax_edge, "center right")):
+        axis.axvline(1000.0 / 120.0, color="grey", linestyle="--", linewidth=1)
+        axis.text(1000.0 / 120.0, 0.95, " 120 events/s", fontsize=7, color="grey",
+                  transform=axis.get_xaxis_transform())
+        axis.set_xscale("log")
+        axis.set_yscale("log")
+        axis.set_xlabel("paint transfer per event [ms] (1 core, median of 3 runs)")
+        axis.legend(fontsize=7, loc=where)
+    ax.set_ylabel("RMS error of paint per area across the stroke\n(relative to the reference's plateau)")
+    ax_edge.set_ylabel("10-90 % edge width of the stripe [mm]")
+    fig.suptitle("Paint buffer pixels per brush surfel: speed against accuracy of a straight stroke", fontsize=10)
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     print("wrote", out)
