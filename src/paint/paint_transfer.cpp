@@ -73,7 +73,7 @@ void transferAtTip(const std::vector<int>& skin_samples, const Vec3& tip, const 
                    const PaintTransferOptions& o, PaintEventStats* stats) {
   const Clock::time_point start = Clock::now();
   BrushSkin& skin = brush.skin();
-  const double pixel = o.pixel_size > 0 ? o.pixel_size : brush.preset().surfel_spacing;
+  const double pixel = paintBufferPixel(o, brush.preset());
   const double reach = brush.preset().bristle_length;
   // (5.5) The least-squares plane of the object around the tip.
   std::vector<uint32_t> near;
@@ -216,13 +216,20 @@ void PaintTransferOptions::validate() const {
     throw std::invalid_argument("paint transfer: imprint_min_speed must be >= 0");
 }
 
+double paintBufferPixel(const PaintTransferOptions& options, const BrushPreset& brush) {
+  return options.pixel_size > 0 ? options.pixel_size : brush.surfel_spacing;
+}
+
+bool imprintAliases(const PaintType& paint, double pixel) {
+  return paint.imprint_depth > 0 && !(paint.imprint_spacing >= 2 * pixel);
+}
+
 PaintEventStats transferPaint(Brush& brush, PaintSurface& surface, const PaintType& paint, double dt,
                               const PaintTransferOptions& options) {
   options.validate();
   if (!(dt >= 0)) throw std::invalid_argument("transferPaint: dt must be >= 0");
   PaintType effective = paint;
-  const double pixel = options.pixel_size > 0 ? options.pixel_size : brush.preset().surfel_spacing;
-  const bool aliased = paint.imprint_depth > 0 && !(paint.imprint_spacing >= 2 * pixel);
+  const bool aliased = imprintAliases(paint, paintBufferPixel(options, brush.preset()));
   if (aliased) effective.imprint_depth = 0;  // the pattern cannot be sampled by these pixels
   PaintEventStats stats;
   stats.imprint_aliased = aliased;

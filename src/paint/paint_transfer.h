@@ -37,6 +37,12 @@ struct PaintEventStats {
   double moved_to_surface = 0, moved_to_brush = 0;  ///< wet volume
 };
 
+/// The paint buffer's pixel [m]: options.pixel_size, or the brush's skin spacing when that is 0 (5.5).
+double paintBufferPixel(const PaintTransferOptions& options, const BrushPreset& brush);
+/// Whether `paint`'s imprint pattern is finer than two buffer pixels (it would alias; transferPaint skips
+/// it).
+bool imprintAliases(const PaintType& paint, double pixel);
+
 /// Transfers paint between `brush` (after its advance() for this event) and `surface` for `dt` seconds with
 /// the rates of `paint`. Wet volume summed over the brush skin and the surface's active surfels is conserved.
 /// The eraser (paint.eraser) deposits nothing: it takes wet paint up at transfer_to_brush and moves the dry

@@ -88,9 +88,9 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   painted_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("surfels/painted", 1, true);
   delta_pub_ = nh_.advertise<relaxed_connectivity::PaintDelta>("surfels/painted_delta", 100);
   stats_pub_ = nh_.advertise<relaxed_connectivity::PaintStats>("paint_stats", 2);
+  start_ = last_autosave_ = last_stats_ = ros::WallTime::now();  // (the dryer's clock starts here)
   if (!params_.paint.empty()) setPaintType(std::make_unique<PaintType>(readPaintType(params_.paint)));
   if (!params_.palette.empty()) palette_ = std::make_unique<PaletteSpec>(readPalette(params_.palette));
-  start_ = last_autosave_ = last_stats_ = ros::WallTime::now();
   if (!params_.restore.empty()) {
     std::lock_guard<std::mutex> lock(model_mutex_);
     installSurface(loadPaintedSurface(params_.restore), "restored from " + params_.restore);
@@ -138,22 +138,25 @@ PaintModel::~PaintModel() {
 }
 
 void PaintModel::setPaintType(std::unique_ptr<PaintType> paint) {
-  // What depends on the brush too: the imprint pattern against the buffer pixels.
-  const double pixel =
-      params_.transfer.pixel_size > 0 ? params_.transfer.pixel_size : brush_->preset().surfel_spacing;
-  if (paint->imprint_depth > 0 && paint->imprint_spacing < 2 * pixel)
+  const double pixel = paintBufferPixel(params_.transfer, brush_->preset());
+  if (imprintAliases(*paint, pixel))
     ROS_WARN_STREAM("paint_model: paint '" << paint->name << "': imprint spacing " << paint->imprint_spacing
                                            << " m is below two paint buffer pixels (" << 2 * pixel
                                            << " m): no imprints (lower ~pixel_size to get them)");
   paint_type_ = std::move(paint);
   loadBrush(brush_->skin(), *paint_type_);
+  restartBackgroundWork();
+}
+
+void PaintModel::restartBackgroundWork() {
   diffusion_.reset();
+  dryer_.reset();
+  if (!paint_type_) return;
   if (params_.diffusion_surfels > 0 && paint_type_->diffusion > 0) {  // (5.14) only for paint that diffuses
     SurfaceDiffusionOptions o;
     o.max_surfels = size_t(params_.diffusion_surfels);
     diffusion_ = std::make_unique<SurfaceDiffusion>(paint_type_->diffusion, o);
   }
-  dryer_.reset();
   if (params_.drying_visits > 0 && paint_type_->drying_rate > 0)
     dryer_ = std::make_unique<PaintDryer>(paint_type_->drying_rate, paint_type_->drying,
                                           (ros::WallTime::now() - start_).toSec());
@@ -169,15 +172,8 @@ void PaintModel::installSurface(std::unique_ptr<PaintSurface> surface, const std
   object_hash_ = 0;  // (set by surfelsCallback for an object from the topic)
   object_frame_.clear();
   journal_ = std::make_unique<PaintJournal>(*surface_, size_t(params_.journal_bytes));
-  if (paint_type_ && dryer_)
-    dryer_ = std::make_unique<PaintDryer>(paint_type_->drying_rate, paint_type_->drying,
-                                          (ros::WallTime::now() - start_).toSec());
+  restartBackgroundWork();  // fresh cursors and clocks for the new object
   downsampler_ = params_.downsampling_visits > 0 ? std::make_unique<PaintDownsampler>() : nullptr;
-  if (diffusion_) {  // a fresh cursor and clock for the new object
-    SurfaceDiffusionOptions o;
-    o.max_surfels = size_t(params_.diffusion_surfels);
-    diffusion_ = std::make_unique<SurfaceDiffusion>(paint_type_->diffusion, o);
-  }
   surface_->takeChangedOriginals();  // the full cloud carries this state
   publish_now_ = true;
   ROS_INFO_STREAM("paint_model: object of " << surface_->originalCount() << " surfels ("

@@ -122,6 +122,8 @@ class PaintModel {
   /// Installs a new object (model_mutex_ held): a fresh journal, dryer and downsampler; publishes it whole.
   void installSurface(std::unique_ptr<PaintSurface> surface, const std::string& what);
   void setPaintType(std::unique_ptr<PaintType> paint);
+  /// (Re)creates the dryer and the diffusion for paint_type_ (what the paint does not need stays off).
+  void restartBackgroundWork();
   void publishPainted(const ros::Time& stamp);
   void publishDelta(const ros::Time& stamp);
   void publishStats(const ros::WallTime& now);

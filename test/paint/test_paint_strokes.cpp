@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <iterator>
 
 #include "../shared_data.h"
@@ -26,9 +27,11 @@ struct PaintRun {
   size_t events = 0, painting_events = 0;
 };
 
-/// Plays a stroke file at 60 events per second, the stroke's frame placed at `world_T_stroke`.
+/// Plays a stroke file at 60 events per second, the stroke's frame placed at `world_T_stroke`; `each` sees
+/// the brush and the paint event after every event.
 PaintRun paintStroke(const std::string& stroke, const std::string& brush_name, const std::string& paint_name,
-                     const Eigen::Isometry3d& world_T_stroke, PaintSurface& surface) {
+                     const Eigen::Isometry3d& world_T_stroke, PaintSurface& surface,
+                     const std::function<void(const Brush&, const PaintEventStats&)>& each = {}) {
   const StrokeSampler sampler(readStrokeFile(configPath("strokes/" + stroke)));
   Brush brush(readBrushPreset(configPath("brushes/" + brush_name)));
   const PaintType paint = readPaintType(configPath("paints/" + paint_name + ".yaml"));
@@ -45,8 +48,10 @@ PaintRun paintStroke(const std::string& stroke, const std::string& brush_name, c
   brush.reset(pose(sampler.startTime()));
   for (double t = sampler.startTime() + dt; t <= sampler.startTime() + sampler.duration() + 1e-9; t += dt) {
     brush.advance(dt, pose(t), &surface);
-    run.painting_events += transferPaint(brush, surface, paint, dt).penetrated_pixels > 0;
+    const PaintEventStats e = transferPaint(brush, surface, paint, dt);
+    run.painting_events += e.penetrated_pixels > 0;
     ++run.events;
+    if (each) each(brush, e);
   }
   return run;
 }
@@ -144,31 +149,17 @@ TEST(PaintStrokes, ASplitBrushPaintsWithOneBufferPerTipOnBothFacesOfAnEdge) {
   // The edge stroke with the flat brush over a convex 90-degree edge (top z = 0, side x = 0): where the
   // brush splits (5.4.3) each tip gets its own paint buffer (5.5.1) and both faces receive paint.
   PaintSurface block(paint_test::edgeCloud(0.1, 0.001));
-  const StrokeSampler sampler(readStrokeFile(configPath("strokes/edge.csv")));
-  Brush brush(readBrushPreset(configPath("brushes/flat.yaml")));
-  const PaintType paint = readPaintType(configPath("paints/acrylic.yaml"));
-  loadBrush(brush.skin(), paint);
-  const auto pose = [&](double t) {
-    const StrokeSample s = sampler.at(t);
-    Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
-    p.linear() = s.orientation.toRotationMatrix();
-    p.translation() = s.position;
-    return p;
-  };
-  const double dt = 1.0 / 60;
-  brush.reset(pose(sampler.startTime()));
   size_t split_events = 0, two_buffer_events = 0;
-  for (double t = sampler.startTime() + dt; t <= sampler.startTime() + sampler.duration() + 1e-9; t += dt) {
-    brush.advance(dt, pose(t), &block);
-    const PaintEventStats e = transferPaint(brush, block, paint, dt);
-    if (brush.split().tips.size() == 2) {
-      ++split_events;
-      EXPECT_LE(e.buffers, 2);
-      two_buffer_events += e.buffers == 2;
-    } else {
-      EXPECT_LE(e.buffers, 1);
-    }
-  }
+  paintStroke("edge.csv", "flat.yaml", "acrylic", Eigen::Isometry3d::Identity(), block,
+              [&](const Brush& brush, const PaintEventStats& e) {
+                if (brush.split().tips.size() == 2) {
+                  ++split_events;
+                  EXPECT_LE(e.buffers, 2);
+                  two_buffer_events += e.buffers == 2;
+                } else {
+                  EXPECT_LE(e.buffers, 1);
+                }
+              });
   EXPECT_GT(split_events, 10u);
   EXPECT_GT(two_buffer_events, split_events / 2);
   double top = 0, side = 0;

@@ -77,7 +77,8 @@ TEST(PaintedSurfaceIo, SaveLoadSaveIsByteIdenticalAndRestoresTheFatherChildStruc
     const std::string first = tempPath("first.ply"), second = tempPath("second.ply");
     savePaintedSurface(first, *painted);
     std::vector<double> fractions;
-    const auto loaded = loadPaintedSurface(first, [&](double f, const std::string&) { fractions.push_back(f); });
+    const auto loaded =
+        loadPaintedSurface(first, [&](double f, const std::string&) { fractions.push_back(f); });
     ASSERT_GE(fractions.size(), 4u);  // progress: from 0 to 1, never back
     EXPECT_EQ(fractions.front(), 0.0);
     EXPECT_EQ(fractions.back(), 1.0);
