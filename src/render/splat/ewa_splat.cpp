@@ -31,6 +31,22 @@ void tangentAxes(const Vec3& normal, double radius, Vec3* axis1, Vec3* axis2) {
   *axis2 = radius * t2;
 }
 
+void surfelFrame(const SurfelCloud& cloud, size_t i, Vec3* normal, Vec3* axis1, Vec3* axis2) {
+  if (cloud.hasAxes()) {
+    *axis1 = cloud.axes1[i];
+    *axis2 = cloud.axes2[i];
+    *normal = cloud.hasNormals() ? cloud.normals[i] : Vec3(axis1->cross(*axis2));
+  } else {
+    *normal = cloud.normals[i];
+    const double length = normal->norm();
+    if (length > 0 && std::isfinite(length)) {
+      tangentAxes(*normal / length, cloud.radii[i], axis1, axis2);
+    } else {
+      *axis1 = *axis2 = Vec3::Zero();
+    }
+  }
+}
+
 namespace {
 
 /// Jacobian of the projection (camera frame -> pixels) at camera point c.

@@ -85,6 +85,9 @@ enum class SplatSetup { kCulled, kDrawn, kDrawnEdgeOn, kInvalid };
 /// Two tangent axes of length `radius` perpendicular to the unit `normal`.
 void tangentAxes(const Vec3& normal, double radius, Vec3* axis1, Vec3* axis2);
 
+/// Normal and tangent axes of surfel i as the renderer draws it (axes if present, else normal and radius).
+void surfelFrame(const SurfelCloud& cloud, size_t i, Vec3* normal, Vec3* axis1, Vec3* axis2);
+
 /// Screen-space set-up of the surfel (centre, unit normal, scaled tangent axes, all world frame). Fills
 /// `raster` (flags: kEdgeOn only) and, if not null, `geometry`. The camera image must be at most
 /// SplatRaster::kMaxImageSize pixels wide and high.

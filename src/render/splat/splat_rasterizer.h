@@ -8,6 +8,7 @@
 #endif
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "relaxed_connectivity/render/splat/ewa_splat.h"
@@ -20,6 +21,20 @@ constexpr int kTileSize = 32;
 /// conic at every pixel of their box (no square root or division per row).
 constexpr int kSpanMinWidth = 8;
 constexpr int kTileStride = kTileSize + 8;  ///< row stride of the tile buffers: room for an 8-wide overrun
+constexpr int kTileBufferSize = kTileSize * kTileStride;  ///< floats of one tile buffer
+
+constexpr int kWeightTableSteps = 1024;  ///< Gaussian weight table over r2 in [0, 1]
+using WeightTable = std::array<float, kWeightTableSteps + 1>;
+
+/// Gaussian weight over r2 in [0, 1] (the kernel cut off at cutoff_radius, in units of the surfel radius),
+/// times `sign` (-1: the table that un-splats, 5.7).
+inline WeightTable makeWeightTable(double cutoff_radius, float sign = 1.0f) {
+  WeightTable weight_table;
+  const double cutoff_sigmas = cutoff_radius / kKernelSigmaPerRadius;
+  for (int k = 0; k <= kWeightTableSteps; ++k)
+    weight_table[k] = sign * float(std::exp(-0.5 * cutoff_sigmas * cutoff_sigmas * k / kWeightTableSteps));
+  return weight_table;
+}
 
 struct TileRect {
   int x0, y0, x1, y1;  ///< inclusive pixel range

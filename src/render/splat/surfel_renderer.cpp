@@ -28,7 +28,6 @@ namespace {
 
 using namespace splat_tile;
 constexpr int kTilePixels = kTileSize * kTileSize;
-constexpr int kWeightTableSteps = 1024;    ///< Gaussian weight table over r2 in [0, 1]
 constexpr size_t kSurfelsPerChunk = 4096;  ///< set-up/binning work unit (at most 8 per thread)
 #if defined(__SSE2__)
 constexpr bool kSimd = true;  ///< unclipped splats are rasterized four pixels at a time
@@ -41,7 +40,6 @@ double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-constexpr int kTileBufferSize = kTileSize * kTileStride;
 constexpr int kBlockSize = 8;  ///< occlusion culling granularity inside a tile
 constexpr int kBlocksPerTile = kTileSize / kBlockSize;
 /// Pass 1 tests splats with a box of at least this many pixels against the block bounds so far.
@@ -150,23 +148,6 @@ void validateConfig(const SplatConfig& config) {
   if (config.threads < 0) fail("threads must be >= 0");
   if (config.outputs & ~uint32_t(kOutputAll)) fail("outputs has unknown RenderOutput bits");
   if (!(config.light_direction_camera.norm() > 0)) fail("light_direction_camera must be non-zero");
-}
-
-/// Normal and tangent axes of surfel i as the renderer draws it (axes if present, else normal and radius).
-void surfelFrame(const SurfelCloud& cloud, size_t i, Vec3* normal, Vec3* axis1, Vec3* axis2) {
-  if (cloud.hasAxes()) {
-    *axis1 = cloud.axes1[i];
-    *axis2 = cloud.axes2[i];
-    *normal = cloud.hasNormals() ? cloud.normals[i] : Vec3(axis1->cross(*axis2));
-  } else {
-    *normal = cloud.normals[i];
-    const double length = normal->norm();
-    if (length > 0 && std::isfinite(length)) {
-      tangentAxes(*normal / length, cloud.radii[i], axis1, axis2);
-    } else {
-      *axis1 = *axis2 = Vec3::Zero();
-    }
-  }
 }
 
 /// Throws std::invalid_argument for what render() cannot draw.
@@ -402,17 +383,6 @@ void binSplats(RenderFrameState& f) {
   }
 }
 
-using WeightTable = std::array<float, kWeightTableSteps + 1>;
-
-/// Gaussian weight over r2 in [0, 1] (the kernel cut off at cutoff_radius).
-WeightTable makeWeightTable(const SplatConfig& config) {
-  WeightTable weight_table;
-  const double cutoff_sigmas = config.cutoff_radius / kKernelSigmaPerRadius;
-  for (int k = 0; k <= kWeightTableSteps; ++k)
-    weight_table[k] = float(std::exp(-0.5 * cutoff_sigmas * cutoff_sigmas * k / kWeightTableSteps));
-  return weight_table;
-}
-
 /// Sizes the requested images and empties the others.
 void prepareImages(const SplatConfig& config, const Camera& camera, size_t pixels, RenderImages* out) {
   out->width = camera.width;
@@ -470,8 +440,9 @@ TilePassOptions tilePassOptions(const RenderFrameState& f) {
 class TileRenderer {
  public:
   TileRenderer(const RenderFrameState& f, const TilePassOptions& o, const WeightTable& weight_table,
-               const DeferredShader& shader, RenderImages* out)
-      : ws_(f.ws),
+               const DeferredShader& shader, RenderImages* out, SplatAccumulation* keep)
+      : keep_(keep),
+        ws_(f.ws),
         clipper_(f.clipper),
         frame_(f.frame),
         o_(o),
@@ -524,7 +495,10 @@ class TileRenderer {
   void accumulateSplat4(const SplatRaster& s, const SplatBlend& shading, const uint64_t* rows, int row0);
 #endif
   void shadeTile();
+  /// Copies the tile's bounds and sums into keep_ (an empty tile: no coverage).
+  void keepTile(int tile, bool empty);
 
+  SplatAccumulation* keep_;
   const SplatWorkspace& ws_;
   const FragmentClipper* clipper_;
   const CameraFrame& frame_;
@@ -557,6 +531,7 @@ void TileRenderer::renderTile(int tile) {
   selectTile(tile);
   if (splat_count_ == 0) {
     for (int y = rect_.y0; y <= rect_.y1; ++y) shader_.clearSpan(rect_.x1 - rect_.x0 + 1, rect_.x0, y, out_);
+    if (keep_) keepTile(tile, true);
     shade_ms += millisecondsSince(start_tile);
     return;
   }
@@ -564,6 +539,7 @@ void TileRenderer::renderTile(int tile) {
   const Clock::time_point start_accumulate = Clock::now();
   visibility_ms += std::chrono::duration<double, std::milli>(start_accumulate - start_tile).count();
   accumulationPass();
+  if (keep_) keepTile(tile, false);
   const Clock::time_point start_shade = Clock::now();
   accumulate_ms += std::chrono::duration<double, std::milli>(start_shade - start_accumulate).count();
   shadeTile();
@@ -959,6 +935,29 @@ void TileRenderer::accumulateSplat4(const SplatRaster& s, const SplatBlend& shad
 }
 #endif
 
+void TileRenderer::keepTile(int tile, bool empty) {
+  constexpr size_t kBytes = sizeof(float) * kTileBufferSize;
+  auto copy = [&](SplatAccumulation::Sum sum, const float* from) {
+    if (empty) {
+      if (sum == SplatAccumulation::kBound || sum == SplatAccumulation::kFront) {
+        std::fill_n(keep_->sum(tile, sum), kTileBufferSize, std::numeric_limits<float>::infinity());
+      } else {
+        std::memset(keep_->sum(tile, sum), 0, kBytes);
+      }
+    } else {
+      std::memcpy(keep_->sum(tile, sum), from, kBytes);
+    }
+  };
+  copy(SplatAccumulation::kBound, tb_.bound);
+  copy(SplatAccumulation::kFront, tb_.front);
+  copy(SplatAccumulation::kWeight, tb_.weight);
+  if (keep_->has_depth) copy(SplatAccumulation::kDepth, tb_.depth);
+  for (int c = 0; c < 3 && keep_->has_color; ++c)
+    copy(SplatAccumulation::Sum(SplatAccumulation::kColor0 + c), tb_.color[c]);
+  for (int c = 0; c < 3 && keep_->has_normal; ++c)
+    copy(SplatAccumulation::Sum(SplatAccumulation::kNormal0 + c), tb_.normal[c]);
+}
+
 /// Normalise by the accumulated weights and shade.
 void TileRenderer::shadeTile() {
   for (int y = rect_.y0; y <= rect_.y1; ++y) {
@@ -980,9 +979,14 @@ SurfelRenderer::SurfelRenderer(const SplatConfig& config) : config_(config) {
 }
 
 void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, RenderImages* out,
-                            const FragmentClipper* clipper, RenderStats* stats) const {
+                            const FragmentClipper* clipper, RenderStats* stats,
+                            SplatAccumulation* keep) const {
   const Clock::time_point start_total = Clock::now();
   checkRenderInputs(config_, cloud, camera, out, clipper);
+  if (keep && (clipper || (config_.outputs & kOutputPatchId)))
+    throw std::invalid_argument(
+        "SurfelRenderer::render: the accumulation is kept only without clipping and without the patch id "
+        "image");
 
   // The renderer's scratch memory, or a temporary one while another thread renders with this renderer.
   std::unique_lock<std::mutex> workspace_lock(workspace_.mutex, std::try_to_lock);
@@ -1000,17 +1004,23 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
   binSplats(f);
   f.stats.bin_ms = millisecondsSince(start_bin);
 
-  const WeightTable weight_table = makeWeightTable(config_);
+  const WeightTable weight_table = makeWeightTable(config_.cutoff_radius);
   prepareImages(config_, camera, f.pixels, out);
   const DeferredShader shader(config_, f.frame);
   const TilePassOptions options = tilePassOptions(f);
   f.stats.simd_width = options.wide ? 8 : kSimd ? 4 : 1;
+  if (keep) {
+    keep->resize(camera.width, camera.height);
+    keep->has_depth = options.sums_needed.depth;
+    keep->has_color = options.sums_needed.color;
+    keep->has_normal = options.sums_needed.normal;
+  }
   size_t fragments = 0, clipped_fragments = 0;
   double visibility_ms = 0, accumulate_ms = 0, shade_ms = 0;
 #pragma omp parallel num_threads(f.threads) reduction(+ : fragments, clipped_fragments, visibility_ms, \
                                                           accumulate_ms, shade_ms)
   {
-    TileRenderer tiles(f, options, weight_table, shader, out);
+    TileRenderer tiles(f, options, weight_table, shader, out, keep);
 #pragma omp for schedule(dynamic, 1)
     for (int tile = 0; tile < f.tiles; ++tile) tiles.renderTile(tile);
     shader.finish();

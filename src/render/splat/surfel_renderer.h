@@ -11,6 +11,7 @@
 #include "relaxed_connectivity/core/surfel_cloud.h"
 #include "relaxed_connectivity/render/splat/camera.h"
 #include "relaxed_connectivity/render/splat/fragment_clipper.h"
+#include "relaxed_connectivity/render/splat/splat_accumulation.h"
 #include "relaxed_connectivity/render/splat/splat_config.h"
 #include "relaxed_connectivity/render/splat/splat_workspace.h"
 
@@ -31,8 +32,11 @@ class SurfelRenderer {
   /// unless already behind the depth bound there, colour-only clipped ones where they blend.
   /// Images may be at most 65535 pixels wide and high. Scratch memory is kept in the renderer between
   /// frames; concurrent calls on one renderer are safe (all but one use temporary scratch memory).
+  /// With `keep`, the per-pixel bounds and weight-sums of the frame are kept there for differential
+  /// updates (DifferentialSurfelRenderer, 5.7); not with a clipper or the patch id image.
   void render(const SurfelCloud& cloud, const Camera& camera, RenderImages* out,
-              const FragmentClipper* clipper = nullptr, RenderStats* stats = nullptr) const;
+              const FragmentClipper* clipper = nullptr, RenderStats* stats = nullptr,
+              SplatAccumulation* keep = nullptr) const;
 
  private:
   SplatConfig config_;
