@@ -21,6 +21,13 @@ struct StrokeSample {
   Vec3 position = Vec3::Zero();
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
   uint32_t buttons = 0;
+  /// The stylus pose as a transform (device base <- stylus).
+  Eigen::Isometry3d pose() const {
+    Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+    p.linear() = orientation.toRotationMatrix();
+    p.translation() = position;
+    return p;
+  }
 };
 
 class StrokeFileError : public std::runtime_error {

@@ -30,13 +30,7 @@ Replay replay(const std::string& brush, const std::string& stroke, const PaintSu
               DepthBelow depth_below) {
   const StrokeSampler sampler(readStrokeFile(configPath("strokes/" + stroke)));
   Brush b(readBrushPreset(configPath("brushes/" + brush)));
-  auto pose = [&](double t) {
-    const StrokeSample s = sampler.at(t);
-    Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
-    p.linear() = s.orientation.toRotationMatrix();
-    p.translation() = s.position;
-    return p;
-  };
+  auto pose = [&](double t) { return sampler.at(t).pose(); };
   Replay r;
   const double dt = 1.0 / 60;
   b.reset(pose(sampler.startTime()));

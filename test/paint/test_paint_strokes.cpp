@@ -36,13 +36,7 @@ PaintRun paintStroke(const std::string& stroke, const std::string& brush_name, c
   Brush brush(readBrushPreset(configPath("brushes/" + brush_name)));
   const PaintType paint = readPaintType(configPath("paints/" + paint_name + ".yaml"));
   loadBrush(brush.skin(), paint);
-  const auto pose = [&](double t) {
-    const StrokeSample s = sampler.at(t);
-    Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
-    p.linear() = s.orientation.toRotationMatrix();
-    p.translation() = s.position;
-    return world_T_stroke * p;
-  };
+  const auto pose = [&](double t) { return world_T_stroke * sampler.at(t).pose(); };
   PaintRun run;
   const double dt = 1.0 / 60;
   brush.reset(pose(sampler.startTime()));
