@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_paint_stroke.h"
 #include "relaxed_connectivity/core/kd_tree.h"
 #include "relaxed_connectivity/paint/brush_preset_reader.h"
 #include "relaxed_connectivity/paint/paint_downsampling.h"
@@ -27,24 +28,12 @@ namespace {
 using rc::Vec3;
 using Clock = std::chrono::steady_clock;
 
-constexpr double kRadius = 0.1, kEvent = 1.0 / 30, kSpeed = 0.1, kLean = 0.5235987755982988;
-
-/// The stroke of bench_paint_brush: a great circle over the sphere, the stylus leaning 30 degrees back.
-Eigen::Isometry3d strokePose(int e, double bristle_length, double press) {
-  const double angle = kSpeed * kEvent * e / kRadius - 0.5;
-  const Vec3 up(std::sin(angle), 0, std::cos(angle)), ahead(std::cos(angle), 0, -std::sin(angle));
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() =
-      Eigen::Quaterniond::FromTwoVectors(Vec3(0, 0, -1), -std::cos(kLean) * up - std::sin(kLean) * ahead)
-          .toRotationMatrix();
-  t.translation() = (kRadius + bristle_length - press) * up;
-  return t;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
+using rc::bench::kEvent;
+using rc::bench::kLean;
+using rc::bench::kRadius;
+using rc::bench::kSpeed;
+using rc::bench::median;
+using rc::bench::strokePose;
 
 struct Run {
   std::vector<double> brush_us, paint_us, buffer_us, exchange_us, resample_us;

@@ -32,7 +32,7 @@ struct DifferentialRenderConfig {
                       ///< be un-splatted)
   /// Removed plus added surfels above which an update renders the whole cloud instead (partial updates stop
   /// paying; bench_paint_rendering measures the crossover).
-  size_t max_delta_surfels = 40000;
+  size_t max_delta_surfels = 100000;
   /// Splats un-splatted or splatted into one tile since the last full render before a full update.
   uint32_t max_tile_updates = 100000;
   /// Camera motion [m, rad] above which the next update is a full one; 0: any change.

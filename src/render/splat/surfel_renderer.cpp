@@ -945,7 +945,13 @@ void TileRenderer::keepTile(int tile, bool empty) {
         std::memset(keep_->sum(tile, sum), 0, kBytes);
       }
     } else {
+#if defined(__SSE2__)
+      // Streaming stores: the kept sums are read again only by later deltas, not by this frame.
+      float* to = keep_->sum(tile, sum);
+      for (int i = 0; i < kTileBufferSize; i += 4) _mm_stream_ps(to + i, _mm_load_ps(from + i));
+#else
       std::memcpy(keep_->sum(tile, sum), from, kBytes);
+#endif
     }
   };
   copy(SplatAccumulation::kBound, tb_.bound);
@@ -956,6 +962,9 @@ void TileRenderer::keepTile(int tile, bool empty) {
     copy(SplatAccumulation::Sum(SplatAccumulation::kColor0 + c), tb_.color[c]);
   for (int c = 0; c < 3 && keep_->has_normal; ++c)
     copy(SplatAccumulation::Sum(SplatAccumulation::kNormal0 + c), tb_.normal[c]);
+#if defined(__SSE2__)
+  _mm_sfence();
+#endif
 }
 
 /// Normalise by the accumulated weights and shade.
