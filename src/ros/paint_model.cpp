@@ -275,6 +275,7 @@ void PaintModel::tick(const ros::WallTimerEvent&) {
       Eigen::Isometry3d pose_frame_T_stylus;
       tf2::fromMsg(pose->pose, pose_frame_T_stylus);
       const Eigen::Isometry3d world_T_stylus = world_T_pose_frame * pose_frame_T_stylus;
+      pose_stamp_ = pose->header.stamp;
       const double dt = 1.0 / params_.rate;
       try {
         if (!brush_placed_) {
@@ -359,6 +360,7 @@ void PaintModel::publishDelta(const ros::Time& stamp) {
   delta.header.stamp = stamp;
   delta.header.frame_id = params_.world_frame;
   delta.sequence = ++delta_sequence_;
+  delta.pose_stamp = pose_stamp_;
   SurfelCloud surfels = surface_->activeCloudOf(changed);
   surfels.frame_id = params_.world_frame;
   surfels.stamp_ns = stamp.toNSec();
