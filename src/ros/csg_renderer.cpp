@@ -12,6 +12,7 @@
 #include "relaxed_connectivity/render/csg/patch_clouds.h"
 #include "relaxed_connectivity/ros/csg_renderer_images.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
+#include "relaxed_connectivity/ros/splat_params.h"
 
 namespace rc {
 namespace {
@@ -31,13 +32,6 @@ PartnerMethod parsePartnerMethod(const std::string& name) {
   if (name == "spatial_index") return PartnerMethod::kSpatialIndex;
   throw std::invalid_argument("csg_renderer: partner_method must be clip_buffer or spatial_index (got '" +
                               name + "')");
-}
-
-/// Rotation angle between two orientations plus translation distance.
-bool poseMoved(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b, double tolerance) {
-  const double translation = (a.translation() - b.translation()).norm();
-  const double angle = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
-  return !(translation <= tolerance && std::abs(angle) <= tolerance);
 }
 
 }  // namespace
@@ -134,18 +128,7 @@ CsgRendererParams readCsgRendererParams(const ros::NodeHandle& pnh) {
   pnh.param("far_clip", p.far_clip, p.far_clip);
   SplatConfig& s = p.splat;
   s.outputs = kOutputColor | kOutputDepth | kOutputWeight | kOutputPatchId;  // what the node uses
-  pnh.param("ewa_filter", s.ewa_filter, s.ewa_filter);
-  pnh.param("lowpass_variance", s.lowpass_variance, s.lowpass_variance);
-  pnh.param("cutoff_radius", s.cutoff_radius, s.cutoff_radius);
-  pnh.param("depth_tolerance_scale", s.depth_tolerance_scale, s.depth_tolerance_scale);
-  pnh.param("shading", s.shading, s.shading);
-  pnh.param("threads", s.threads, s.threads);
-  std::vector<int> background{s.background[0], s.background[1], s.background[2]};
-  pnh.param("background", background, background);
-  if (background.size() != 3 || *std::min_element(background.begin(), background.end()) < 0 ||
-      *std::max_element(background.begin(), background.end()) > 255)
-    throw std::invalid_argument("csg_renderer: background must be [r, g, b] with values in 0..255");
-  s.background = {uint8_t(background[0]), uint8_t(background[1]), uint8_t(background[2]), 255};
+  readSplatParams(pnh, "csg_renderer", &s);
   p.validate();
   return p;
 }
@@ -289,7 +272,7 @@ bool CsgRenderer::renderIfChanged() {
     reject("camera pose", "the transform to '" + params_.camera_frame + "' is not finite");
     return false;
   }
-  const bool moved = !last_pose_ || poseMoved(*last_pose_, pose, params_.pose_tolerance);
+  const bool moved = !last_pose_ || cameraPoseMoved(*last_pose_, pose, params_.pose_tolerance);
 
   // Snapshot of the inputs.
   std::vector<Source> sources;

@@ -32,16 +32,24 @@ size_t countForegroundPixels(const RenderImages& images) {
 
 sensor_msgs::ImagePtr toColorImage(const RenderImages& images, const std_msgs::Header& header) {
   checkSizes(images);
+  return toColorImage(images.color, images.width, images.height, header);
+}
+
+sensor_msgs::ImagePtr toColorImage(const std::vector<Rgba>& color, uint32_t width, uint32_t height,
+                                   const std_msgs::Header& header) {
+  if (color.size() != static_cast<size_t>(width) * height)
+    throw std::invalid_argument("colour image: " + std::to_string(color.size()) + " pixels, expected " +
+                                std::to_string(width) + " x " + std::to_string(height));
   auto msg = boost::make_shared<sensor_msgs::Image>();
   msg->header = header;
-  msg->width = images.width;
-  msg->height = images.height;
+  msg->width = width;
+  msg->height = height;
   msg->encoding = sensor_msgs::image_encodings::RGB8;
   msg->is_bigendian = 0;
-  msg->step = 3 * images.width;
-  msg->data.resize(static_cast<size_t>(msg->step) * images.height);
+  msg->step = 3 * width;
+  msg->data.resize(static_cast<size_t>(msg->step) * height);
   uint8_t* out = msg->data.data();
-  for (const Rgba& c : images.color) {
+  for (const Rgba& c : color) {
     *out++ = c[0];
     *out++ = c[1];
     *out++ = c[2];

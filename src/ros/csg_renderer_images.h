@@ -8,6 +8,7 @@
 #include <std_msgs/Header.h>
 
 #include <cmath>
+#include <vector>
 
 #include "relaxed_connectivity/render/splat/camera.h"
 #include "relaxed_connectivity/render/splat/surfel_renderer.h"
@@ -25,6 +26,9 @@ size_t countForegroundPixels(const RenderImages& images);
 /// rgb8 image of the shaded colour (alpha dropped). Throws std::invalid_argument if the buffers disagree in
 /// size.
 sensor_msgs::ImagePtr toColorImage(const RenderImages& images, const std_msgs::Header& header);
+/// The same from a colour buffer of width * height pixels (throws std::invalid_argument otherwise).
+sensor_msgs::ImagePtr toColorImage(const std::vector<Rgba>& color, uint32_t width, uint32_t height,
+                                   const std_msgs::Header& header);
 
 /// 32FC1 depth image: camera-frame z in metres (REP 118), NaN where isBackgroundPixel.
 sensor_msgs::ImagePtr toDepthImage(const RenderImages& images, const std_msgs::Header& header);

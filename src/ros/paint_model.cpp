@@ -176,6 +176,8 @@ void PaintModel::installSurface(std::unique_ptr<PaintSurface> surface, const std
   downsampler_ = params_.downsampling_visits > 0 ? std::make_unique<PaintDownsampler>() : nullptr;
   surface_->takeChangedOriginals();  // the full cloud carries this state
   publish_now_ = true;
+  ++object_generation_;
+  new_object_ = true;  // its first full cloud goes out with the next tick's stamp
   ROS_INFO_STREAM("paint_model: object of " << surface_->originalCount() << " surfels ("
                                             << surface_->childCount() << " children), " << what);
 }
@@ -339,6 +341,7 @@ void PaintModel::tick(const ros::WallTimerEvent&) {
     last_skin_ = wall;
   }
   if (surface_) {
+    if (new_object_) object_stamp_ = now, new_object_ = false;
     publishDelta(now);
     if (publish_now_ || (painted_dirty_ && (wall - last_painted_).toSec() >= 1.0 / params_.painted_rate)) {
       publishPainted(now);
@@ -361,6 +364,8 @@ void PaintModel::publishDelta(const ros::Time& stamp) {
   delta.header.frame_id = params_.world_frame;
   delta.sequence = ++delta_sequence_;
   delta.pose_stamp = pose_stamp_;
+  delta.object_generation = object_generation_;
+  delta.object_stamp = object_stamp_;
   SurfelCloud surfels = surface_->activeCloudOf(changed);
   surfels.frame_id = params_.world_frame;
   surfels.stamp_ns = stamp.toNSec();

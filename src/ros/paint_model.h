@@ -154,7 +154,10 @@ class PaintModel {
   bool painted_dirty_ = false, publish_now_ = false;
   ros::WallTime last_painted_, last_skin_, last_autosave_, last_stats_;
   uint64_t delta_sequence_ = 0;
-  ros::Time pose_stamp_;  ///< of the device pose of the latest brush step
+  ros::Time pose_stamp_;            ///< of the device pose of the latest brush step
+  uint32_t object_generation_ = 0;  ///< counts objects installed (PaintDelta.object_generation)
+  ros::Time object_stamp_;          ///< stamp of the current object's first full cloud
+  bool new_object_ = false;
   // Stats over the current period.
   unsigned long events_ = 0, ticks_ = 0, instabilities_ = 0;
   std::atomic<unsigned long> rejected_{0};  // also counted by the pose callback

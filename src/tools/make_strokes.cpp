@@ -3,8 +3,10 @@
 //   straight.csv  press onto the horizontal plane z = 0, paint 80 mm along +x, lift off
 //   spiral.csv    an outward spiral of three turns over the plane z = 0, stylus tilted towards the centre
 //   edge.csv      along the top face z = 0 of a block (x < 0) over its 90-degree edge at x = z = 0 and down
-//   its
-//                 side face x = 0, the stylus turning with the surface normal
+//                 its side face x = 0, the stylus turning with the surface normal
+//   session.csv   the paint session's demo (launch/paint_session.launch): dip into the red well of
+//                 config/paint/palettes/session.yaml, a stroke along +x, dip into the blue well, two strokes
+//                 (one parallel, one across), all on the plane z = 0 beside the palette
 // Usage: make_strokes [OUTPUT_DIR]   (default config/paint/strokes)
 #include <cmath>
 #include <cstdio>
@@ -55,6 +57,26 @@ std::vector<StrokeSample> stroke(double duration, Path path, Orientation orienta
     }
   }
   return samples;
+}
+
+/// Appends `next` to `samples` after a straight travel of `travel` seconds from the last sample to the first
+/// of `next` (both lifted), shifting `next` in time.
+void append(std::vector<StrokeSample>* samples, const std::vector<StrokeSample>& next, double travel) {
+  double t0 = 0;
+  if (!samples->empty()) {
+    const StrokeSample from = samples->back(), to = next.front();
+    const int n = int(std::lround(travel * kRate));
+    for (int k = 1; k < n; ++k) {
+      const double u = smoothstep(double(k) / n);
+      samples->push_back(sample(from.t + k / kRate, (1 - u) * from.position + u * to.position,
+                                from.orientation.slerp(u, to.orientation), false));
+    }
+    t0 = from.t + travel;
+  }
+  for (StrokeSample s : next) {
+    s.t += t0;
+    samples->push_back(s);
+  }
 }
 
 }  // namespace
@@ -108,10 +130,39 @@ int main(int argc, char** argv) {
         "across a 90-degree edge: top face z = 0 (x < 0), edge at x = z = 0, side face x = 0\n"
         "(z < 0); 40 mm on top, around the edge, 40 mm down the side in 3 s\n"
         "written by src/tools/make_strokes.cpp; format: src/paint/stroke_file.h");
+    // Session: the wells of config/paint/palettes/session.yaml lie at y = -0.07 (red at x = -0.042, blue at
+    // x = 0.014); each dip presses into the well and stirs a small circle for a second.
+    auto dip = [&](double x) {
+      return stroke(
+          1.0,
+          [=](double u) {
+            return Vec3(x + 0.004 * std::cos(2 * M_PI * u) - 0.004, -0.07 + 0.004 * std::sin(2 * M_PI * u),
+                        kPressHeight);
+          },
+          [&](double) { return trail; }, up);
+    };
+    auto line = [&](const Vec3& from, const Vec3& to, double seconds, const Eigen::Quaterniond& q) {
+      return stroke(
+          seconds, [=](double u) { return Vec3(from + u * (to - from) + Vec3(0, 0, kPressHeight)); },
+          [=](double) { return q; }, up);
+    };
+    const Eigen::Quaterniond across(Eigen::AngleAxisd(0.5 * M_PI, Vec3::UnitZ()) * trail);  // stroke along +y
+    std::vector<StrokeSample> session;
+    append(&session, dip(-0.042), 0.5);
+    append(&session, line(Vec3(-0.05, 0.03, 0), Vec3(0.05, 0.03, 0), 2.5, trail), 0.8);
+    append(&session, dip(0.014), 0.8);
+    append(&session, line(Vec3(-0.05, 0.06, 0), Vec3(0.05, 0.06, 0), 2.5, trail), 0.8);
+    append(&session, line(Vec3(0.0, 0.0, 0), Vec3(0.0, 0.09, 0), 2.0, across), 0.8);
+    rc::writeStrokeFile(
+        dir + "/session.csv", session,
+        "paint session: red well, stroke along +x at y = 30 mm, blue well, strokes along +x at\n"
+        "y = 60 mm and along +y at x = 0 (crossing both), over the plane z = 0; palette wells at\n"
+        "y = -70 mm (config/paint/palettes/session.yaml)\n"
+        "written by src/tools/make_strokes.cpp; format: src/paint/stroke_file.h");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "make_strokes: %s\n", e.what());
     return 1;
   }
-  std::printf("make_strokes: wrote straight.csv, spiral.csv, edge.csv to %s\n", dir.c_str());
+  std::printf("make_strokes: wrote straight.csv, spiral.csv, edge.csv, session.csv to %s\n", dir.c_str());
   return 0;
 }
