@@ -9,6 +9,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "relaxed_connectivity/paint/painted_surface_io.h"
 #include "relaxed_connectivity/render/splat/image_io.h"
 #include "relaxed_connectivity/ros/csg_renderer_images.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
@@ -17,7 +18,7 @@
 namespace rc {
 namespace {
 
-constexpr size_t kRecentDeltas = 120;  ///< two seconds of deltas at 60 Hz, for a full cloud that comes late
+constexpr size_t kRecentDeltas = 30;  ///< half a second of deltas at 60 Hz, for a full cloud that comes late
 
 double percentile(std::vector<double> values, double q) {
   if (values.empty()) return 0;
@@ -231,6 +232,11 @@ void PaintRenderer::deltaCallback(const relaxed_connectivity::PaintDeltaConstPtr
     }
     if (have_object_ && !waiting_) applyDelta(msg->originals, surfels, msg->pose_stamp);
     last_delta_stamp_ = msg->header.stamp;
+    // Kept with what the copy needs only (the paint columns are most of a delta's bytes).
+    for (auto it = surfels.attributes.columns().begin(); it != surfels.attributes.columns().end();)
+      it = it->name == kSurfelFather ? std::next(it) : surfels.attributes.columns().erase(it);
+    surfels.confidence.clear();
+    surfels.curvature.clear();
     recent_deltas_.push_back({msg->header.stamp, msg->object_generation, msg->originals, std::move(surfels)});
     if (recent_deltas_.size() > kRecentDeltas) recent_deltas_.pop_front();
   } catch (const std::exception& e) {

@@ -11,6 +11,7 @@
 #include "paint_test_surfaces.h"
 #include "relaxed_connectivity/io/ply_io.h"
 #include "relaxed_connectivity/paint/brush_preset_reader.h"
+#include "relaxed_connectivity/paint/paint_palette.h"
 #include "relaxed_connectivity/paint/paint_transfer.h"
 #include "relaxed_connectivity/paint/paint_type_reader.h"
 #include "relaxed_connectivity/paint/painted_surface_io.h"
@@ -48,6 +49,12 @@ PaintRun paintStroke(const std::string& stroke, const std::string& brush_name, c
     if (each) each(brush, e);
   }
   return run;
+}
+
+std::string toString(const Vec3& v) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "(%.0f, %.0f, %.0f)", v.x(), v.y(), v.z());
+  return text;
 }
 
 std::string fileBytes(const std::string& path) {
@@ -165,6 +172,43 @@ TEST(PaintStrokes, ASplitBrushPaintsWithOneBufferPerTipOnBothFacesOfAnEdge) {
   // Measured: 95 split events, 81 of them with two buffers; wet paint 934 on the top, 141 on the side.
   EXPECT_GT(top, 100.0);
   EXPECT_GT(side, 0.03 * top);
+}
+
+// The paint session's demo offline (launch/paint_session.launch, scripts/demo): session.csv over the top
+// face of the scanned box (the plane z = 0.95, the device base at y = -0.265) with the session palette beside
+// it. The brush starts with acrylic's red, dips into the red well, paints the first stroke, dips into the blue
+// well and paints the second and third: red dominates along the first stroke, blue along the second.
+TEST(PaintStrokes, TheSessionStrokePaintsRedThenBlueFromThePalette) {
+  SurfelCloud box_top = paint_test::planeCloud(0.12, 0.002, 0.95);
+  for (Vec3& p : box_top.positions) p.y() -= 0.14;  // y in [-0.26, -0.02]: the front of the box's top
+  const size_t originals = box_top.size();
+  appendPalette(box_top, readPalette(configPath("palettes/session.yaml")));
+  PaintSurface surface(box_top);
+  Eigen::Isometry3d world_T_base = Eigen::Isometry3d::Identity();
+  world_T_base.translation() = Vec3(0, -0.265, 0.95);
+  const PaintRun run = paintStroke("session.csv", "round.yaml", "acrylic", world_T_base, surface);
+  EXPECT_GT(run.painting_events, 300u);
+  // Mean visible colour of the active surfels of the board within 4 mm of a point.
+  const SurfelCloud active = surface.activeCloud();
+  const Attribute* father = active.attributes.find(kSurfelFather);
+  auto probe = [&](const Vec3& at) {
+    Vec3 sum = Vec3::Zero();
+    int n = 0;
+    for (size_t i = 0; i < active.size(); ++i) {
+      if (father->get(i) >= double(originals) || (active.positions[i] - at).head<2>().norm() > 0.004) continue;
+      sum += Vec3(active.colors[i][0], active.colors[i][1], active.colors[i][2]);
+      ++n;
+    }
+    EXPECT_GT(n, 5) << at.transpose();
+    return Vec3(sum / std::max(n, 1));
+  };
+  const Vec3 unpainted = probe(Vec3(0.0, -0.04, 0.95));
+  // Where the brush is pressed longest: the start of each stroke (x = -0.05) and 1 cm into it.
+  const Vec3 first = probe(Vec3(-0.04, -0.265 + 0.03, 0.95)), second = probe(Vec3(-0.04, -0.265 + 0.06, 0.95));
+  std::printf("unpainted %s, first stroke %s, second stroke %s\n", toString(unpainted).c_str(),
+              toString(first).c_str(), toString(second).c_str());
+  EXPECT_GT(first.x() - first.z(), unpainted.x() - unpainted.z() + 20) << "the first stroke is not red";
+  EXPECT_GT(second.z() - second.x(), unpainted.z() - unpainted.x() + 20) << "the second stroke is not blue";
 }
 
 }  // namespace
