@@ -280,6 +280,10 @@ SurfelCloud PaintSurface::cloudOf(const uint32_t* list, size_t count, size_t n) 
   for (size_t k = 0; k < out.size(); ++k) columns.write(k, *paint[k]);
   Attribute& father = out.attributes.add("father", ScalarType::kUInt32, 1, out.size());
   for (size_t k = 0; k < out.size(); ++k) father.set(k, fathers[k]);
+  // The visible reflectivity (5.8 applied to all paint attributes) for renderers with an environment map
+  // (5.7).
+  Attribute& reflectivity = out.attributes.add("reflectivity", ScalarType::kFloat32, 1, out.size());
+  for (size_t k = 0; k < out.size(); ++k) reflectivity.set(k, visibleColour(*paint[k]).reflectivity);
   return out;
 }
 

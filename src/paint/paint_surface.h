@@ -115,7 +115,7 @@ class PaintSurface {
   size_t activeCount() const { return enabled_count_ + child_count_; }
   /// The active surfels as one cloud (positions, normals, radii, visible colours (5.8)) with their paint
   /// columns (paint_attributes.h) for rendering and export; the uint32 attribute `father` names each
-  /// surfel's original.
+  /// surfel's original, the float attribute `reflectivity` is the visible paint's (for environment maps, 5.7).
   SurfelCloud activeCloud() const;
 
  private:

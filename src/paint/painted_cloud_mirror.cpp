@@ -7,16 +7,36 @@
 #include <unordered_set>
 
 #include "relaxed_connectivity/paint/painted_surface_io.h"
+#include "relaxed_connectivity/render/splat/environment_map.h"
 
 namespace rc {
 
 namespace {
 
+float floatAt(const Attribute& a, size_t i) {
+  float v;
+  std::memcpy(&v, a.bytes.data() + sizeof(float) * i, sizeof(float));
+  return v;
+}
+
+void pushFloat(Attribute& a, float v) {
+  const size_t at = a.bytes.size();
+  a.bytes.resize(at + sizeof(float));
+  std::memcpy(a.bytes.data() + at, &v, sizeof(float));
+}
+
+/// The render channels of surfel i appended to `to` (the reflectivity column made when first needed).
 void copyChannels(const SurfelCloud& from, size_t i, SurfelCloud* to) {
   to->positions.push_back(from.positions[i]);
   to->normals.push_back(from.normals[i]);
   to->radii.push_back(from.radii[i]);
   if (from.hasColors()) to->colors.push_back(from.colors[i]);
+  if (const Attribute* r = from.attributes.find(kReflectivityAttribute)) {
+    Attribute* column = to->attributes.find(kReflectivityAttribute);
+    if (!column)
+      column = &to->attributes.add(kReflectivityAttribute, ScalarType::kFloat32, 1, to->size() - 1);
+    pushFloat(*column, floatAt(*r, i));
+  }
 }
 
 }  // namespace
@@ -40,6 +60,13 @@ SurfelCloud PaintedCloudMirror::renderChannels(const SurfelCloud& from, const ch
   out.normals = from.normals;
   out.radii = from.radii;
   out.colors = from.colors;
+  if (const Attribute* r = from.attributes.find(kReflectivityAttribute)) {
+    if (r->count != 1)
+      fail(std::string("'") + kReflectivityAttribute + "' has " + std::to_string(r->count) +
+           " values per surfel");
+    Attribute& column = out.attributes.add(kReflectivityAttribute, ScalarType::kFloat32, 1, from.size());
+    for (size_t i = 0; i < from.size(); ++i) column.set(i, r->get(i));
+  }
   return out;
 }
 
@@ -77,6 +104,10 @@ void PaintedCloudMirror::push(const SurfelCloud& from, size_t i, uint32_t father
   cloud_.normals.push_back(from.normals[i]);
   cloud_.radii.push_back(from.radii[i]);
   if (colors_) cloud_.colors.push_back(from.colors[i]);
+  if (Attribute* r = cloud_.attributes.find(kReflectivityAttribute)) {  // (0 where the delta has none)
+    const Attribute* given = from.attributes.find(kReflectivityAttribute);
+    pushFloat(*r, given ? floatAt(*given, i) : 0.0f);
+  }
   if (father >= members_.size()) members_.resize(size_t(father) + 1);
   slot_.push_back(uint32_t(members_[father].size()));
   members_[father].push_back(uint32_t(cloud_.size() - 1));
@@ -92,6 +123,9 @@ void PaintedCloudMirror::removeAt(uint32_t index) {
     cloud_.normals[index] = cloud_.normals[last];
     cloud_.radii[index] = cloud_.radii[last];
     if (colors_) cloud_.colors[index] = cloud_.colors[last];
+    if (Attribute* r = cloud_.attributes.find(kReflectivityAttribute))
+      std::memcpy(r->bytes.data() + sizeof(float) * index, r->bytes.data() + sizeof(float) * last,
+                  sizeof(float));
     father_[index] = father_[last];
     slot_[index] = slot_[last];
     members_[father_[index]][slot_[index]] = index;
@@ -100,6 +134,7 @@ void PaintedCloudMirror::removeAt(uint32_t index) {
   cloud_.normals.pop_back();
   cloud_.radii.pop_back();
   if (colors_) cloud_.colors.pop_back();
+  if (Attribute* r = cloud_.attributes.find(kReflectivityAttribute)) r->bytes.resize(sizeof(float) * last);
   father_.pop_back();
   slot_.pop_back();
 }

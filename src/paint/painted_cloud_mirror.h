@@ -3,7 +3,7 @@
 // their `father` (the original they belong to), and a delta replaces the whole group of each listed original.
 // Applying a delta reports the surfels that went and came, exactly as they were and are, which is what a
 // differential renderer (5.7) un-splats and splats. Only the channels a renderer needs are kept: positions,
-// normals, radii and colours.
+// normals, radii, colours and the reflectivity (kReflectivityAttribute) where the full cloud has it.
 #pragma once
 
 #include <cstddef>

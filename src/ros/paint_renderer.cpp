@@ -93,6 +93,7 @@ PaintRendererParams readPaintRendererParams(const ros::NodeHandle& pnh) {
   double pose_tolerance = 1e-6;
   pnh.param("pose_tolerance", pose_tolerance, pose_tolerance);
   p.render.pose_tolerance = pose_tolerance;
+  pnh.param("environment", p.environment, p.environment);
   pnh.param("draw_brush", p.draw_brush, p.draw_brush);
   OverlayOptions& b = p.brush;
   b.splat = s;
@@ -107,12 +108,32 @@ PaintRendererParams readPaintRendererParams(const ros::NodeHandle& pnh) {
   return p;
 }
 
+namespace {
+
+std::unique_ptr<EnvironmentMap> makeEnvironment(const std::string& spec) {
+  if (spec == "none") return nullptr;
+  if (spec == "studio") return std::make_unique<EnvironmentMap>(EnvironmentMap::studio());
+  try {
+    return std::make_unique<EnvironmentMap>(EnvironmentMap::fromEquirectangularPng(spec));
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("paint_renderer: environment: ") + e.what());
+  }
+}
+
+DifferentialRenderConfig withEnvironment(DifferentialRenderConfig config, const EnvironmentMap* environment) {
+  config.splat.environment = environment;
+  return config;
+}
+
+}  // namespace
+
 PaintRenderer::PaintRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : nh_(nh),
       private_nh_(private_nh),
       params_(readPaintRendererParams(private_nh)),
       tf_listener_(tf_buffer_, nh),
-      renderer_(params_.render),
+      environment_(makeEnvironment(params_.environment)),
+      renderer_(withEnvironment(params_.render, environment_.get())),
       compositor_(params_.brush) {
   image_pub_ = private_nh_.advertise<sensor_msgs::Image>("image", 1);
   depth_pub_ = private_nh_.advertise<sensor_msgs::Image>("depth", 1);

@@ -16,7 +16,8 @@
 // Parameters  (private) fixed_frame ("world"), camera_frame ("paint_camera", REP 103 optical), max_rate
 //             ([Hz] 60), pose_tolerance (1e-6 m / rad), width, height, horizontal_fov (degrees), near_clip,
 //             far_clip, ewa_filter, lowpass_variance, cutoff_radius, depth_tolerance_scale, shading,
-//             backface_culling, threads, background [r g b], max_delta_surfels, max_tile_updates, draw_brush,
+//             backface_culling, threads, background [r g b], max_delta_surfels, max_tile_updates,
+//             environment ("studio" | "none" | an equirectangular PNG: reflective paint, 5.7), draw_brush,
 //             shadow, light_direction [x y z], shadow_length, shadow_strength, stats_period ([s] 1); see
 //             config/paint_session.yaml.
 //
@@ -44,6 +45,7 @@
 #include "relaxed_connectivity/paint/painted_cloud_mirror.h"
 #include "relaxed_connectivity/render/splat/camera.h"
 #include "relaxed_connectivity/render/splat/differential_renderer.h"
+#include "relaxed_connectivity/render/splat/environment_map.h"
 #include "relaxed_connectivity/render/splat/overlay_compositor.h"
 
 namespace rc {
@@ -57,6 +59,8 @@ struct PaintRendererParams {
   double horizontal_fov = 60.0;  ///< degrees
   double near_clip = 0.01, far_clip = 100.0;
   DifferentialRenderConfig render;
+  /// Environment reflected by metallic paint (5.7): "studio" (procedural), "none", or an equirectangular PNG.
+  std::string environment = "studio";
   bool draw_brush = true;
   OverlayOptions brush;
 
@@ -111,6 +115,7 @@ class PaintRenderer {
   std::mutex mutex_;  // everything below (nodelet managers call back from several threads)
   PaintedCloudMirror mirror_;
   bool have_object_ = false;
+  std::unique_ptr<EnvironmentMap> environment_;  ///< (before renderer_: its configuration points here)
   DifferentialSurfelRenderer renderer_;
   OverlayCompositor compositor_;
   SurfelCloud pending_removed_, pending_added_;  ///< deltas since the last frame

@@ -57,7 +57,11 @@ TEST(PaintSessionBag, PaintsAndTheImageEqualsAFullRenderOfTheSavedState) {
       [&] { return tf_buffer.canTransform(params.fixed_frame, params.camera_frame, ros::Time(0)); }, 5));
   camera.world_T_camera =
       tf2::transformToEigen(tf_buffer.lookupTransform(params.fixed_frame, params.camera_frame, ros::Time(0)));
-  DifferentialSurfelRenderer reference(params.render);
+  DifferentialRenderConfig config = params.render;
+  const EnvironmentMap studio = EnvironmentMap::studio();  // the node's default environment
+  ASSERT_EQ(params.environment, "studio");
+  config.splat.environment = &studio;
+  DifferentialSurfelRenderer reference(config);
   reference.renderFull(saved->activeCloud(), camera);
 
   ASSERT_TRUE(session.image);

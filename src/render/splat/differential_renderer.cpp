@@ -9,6 +9,7 @@
 #include <string>
 
 #include "relaxed_connectivity/render/splat/deferred_shader.h"
+#include "relaxed_connectivity/render/splat/environment_map.h"
 #include "relaxed_connectivity/render/splat/ewa_splat.h"
 #include "relaxed_connectivity/render/splat/splat_rasterizer.h"
 #include "relaxed_connectivity/render/splat/tile_passes_avx2.h"
@@ -148,6 +149,10 @@ void DifferentialSurfelRenderer::update(const SurfelCloud& cloud, const SurfelCl
   const int threads = sc.threads > 0 ? sc.threads : omp_get_max_threads();
   const int setup_threads = n >= 2048 ? threads : 1;
   size_t invalid = 0;
+  const Attribute* removed_reflectivity =
+      sc.environment ? removed.attributes.find(kReflectivityAttribute) : nullptr;
+  const Attribute* added_reflectivity =
+      sc.environment ? added.attributes.find(kReflectivityAttribute) : nullptr;
 #pragma omp parallel for num_threads(setup_threads) schedule(static) reduction(+ : invalid)
   for (size_t k = 0; k < n; ++k) {
     const bool remove = k < removed.size();
@@ -159,7 +164,12 @@ void DifferentialSurfelRenderer::update(const SurfelCloud& cloud, const SurfelCl
     invalid += result == SplatSetup::kInvalid;
     if (result != SplatSetup::kDrawn && result != SplatSetup::kDrawnEdgeOn) continue;
     drawn[k] = 1;
-    const Rgba color = from.hasColors() ? from.colors[i] : sc.default_color;
+    Rgba color = from.hasColors() ? from.colors[i] : sc.default_color;
+    const Attribute* reflectivity = remove ? removed_reflectivity : added_reflectivity;
+    if (reflectivity)  // as SurfelRenderer does it: the same camera gives the same colour
+      color = reflectedColor(color, reflectivity->get(i), from.positions[i],
+                             Vec3(d.blend.normal[0], d.blend.normal[1], d.blend.normal[2]), frame_->eye,
+                             *sc.environment);
     for (int c = 0; c < 3; ++c) d.blend.color[c] = float(color[c]);
     d.blend.patch_id = 0;
   }

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "relaxed_connectivity/render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/render/splat/splat_config.h"  // RenderImages
 
 // stb with internal linkage, so other translation units may include their own copies.
 #define STB_IMAGE_WRITE_STATIC

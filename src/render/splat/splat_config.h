@@ -11,6 +11,8 @@
 
 namespace rc {
 
+class EnvironmentMap;
+
 /// Output images of SurfelRenderer::render() (bit flags). Images not asked for are left empty and cost
 /// nothing: the per-pixel output writes are a large part of a frame at 1280x720.
 enum RenderOutput : uint32_t {
@@ -46,6 +48,9 @@ struct SplatConfig {
   bool wide_simd = true;
   Rgba background = {255, 255, 255, 255};
   Rgba default_color = {200, 200, 200, 255};  ///< for clouds without colours
+  /// Reflective surfels (a float attribute kReflectivityAttribute, environment_map.h) mirror this environment
+  /// (5.7); null or no such attribute: colours as they are. Not owned; must outlive the renders.
+  const EnvironmentMap* environment = nullptr;
 };
 
 /// Output images, row-major, width * height (empty if not in SplatConfig::outputs). Background pixels:

@@ -18,6 +18,7 @@
 #include "relaxed_connectivity/core/surfel_attributes.h"
 #include "relaxed_connectivity/render/splat/circular_setup_avx2.h"
 #include "relaxed_connectivity/render/splat/deferred_shader.h"
+#include "relaxed_connectivity/render/splat/environment_map.h"
 #include "relaxed_connectivity/render/splat/ewa_splat.h"
 #include "relaxed_connectivity/render/splat/splat_rasterizer.h"
 #include "relaxed_connectivity/render/splat/tile_passes_avx2.h"
@@ -218,6 +219,8 @@ ChunkCounts setupChunk(RenderFrameState& f, size_t chunk, bool circular, bool wi
   SplatShading* staged_shading = ws.staged_shading.data() + counts.begin;
   uint32_t* clip_staged = clipper ? ws.clip_staged.data() + counts.begin : nullptr;
   uint32_t* tile_counts = ws.chunk_tile_counts.data() + chunk * size_t(f.tiles);
+  const Attribute* reflectivity =
+      f.config.environment ? cloud.attributes.find(kReflectivityAttribute) : nullptr;
   // Records the set-up of surfel i, whose record and normal are in staged[counts.drawn].
   auto account = [&](size_t i, SplatSetup result) {
     if (result == SplatSetup::kInvalid) {
@@ -232,6 +235,10 @@ ChunkCounts setupChunk(RenderFrameState& f, size_t chunk, bool circular, bool wi
     SplatShading& shading = staged_shading[counts.drawn];
     counts.edge_on += result == SplatSetup::kDrawnEdgeOn;
     shading.color = cloud.hasColors() ? cloud.colors[i] : f.config.default_color;
+    if (reflectivity)  // (5.7) per surfel, seen from this camera
+      shading.color = reflectedColor(shading.color, reflectivity->get(i), cloud.positions[i],
+                                     Vec3(shading.normal[0], shading.normal[1], shading.normal[2]),
+                                     f.frame.eye, *f.config.environment);
     shading.patch_id = patch_attribute ? int32_t(patch_attribute->get(i)) : 0;
     if (clipper && clipper->needsClipping(uint32_t(i))) {
       raster.flags |= clipper->clipsColorOnly(uint32_t(i)) ? SplatRaster::kClipColorOnly : SplatRaster::kClip;
