@@ -235,18 +235,18 @@ void PaintSurface::restoreOriginal(size_t original, bool enabled, const PaintSta
 }
 
 SurfelCloud PaintSurface::activeCloud() const {
-  return cloudOf(nullptr, originals_.size(), activeCount());
+  return cloudOf(nullptr, originals_.size(), activeCount(), true);
 }
 
-SurfelCloud PaintSurface::activeCloudOf(const std::vector<uint32_t>& originals) const {
+SurfelCloud PaintSurface::activeCloudOf(const std::vector<uint32_t>& originals, bool paint_columns) const {
   for (uint32_t i : originals)
     if (i >= originals_.size())
       throw std::out_of_range("PaintSurface::activeCloudOf: original " + std::to_string(i) + " of " +
                               std::to_string(originals_.size()));
-  return cloudOf(originals.data(), originals.size(), originals.size());
+  return cloudOf(originals.data(), originals.size(), originals.size(), paint_columns);
 }
 
-SurfelCloud PaintSurface::cloudOf(const uint32_t* list, size_t count, size_t n) const {
+SurfelCloud PaintSurface::cloudOf(const uint32_t* list, size_t count, size_t n, bool paint_columns) const {
   SurfelCloud out;
   out.positions.reserve(n);
   out.normals.reserve(n);
@@ -275,9 +275,11 @@ SurfelCloud PaintSurface::cloudOf(const uint32_t* list, size_t count, size_t n) 
     for (const ChildSurfel& c : children_[i]) push(c.position, c.normal, c.radius, c.paint, uint32_t(i));
   }
   if (!originals_.hasRadii() && child_count_ == 0) out.radii.clear();
-  addPaintAttributes(out, PaintState(), false);
-  PaintColumns columns(out);
-  for (size_t k = 0; k < out.size(); ++k) columns.write(k, *paint[k]);
+  if (paint_columns) {
+    addPaintAttributes(out, PaintState(), false);
+    PaintColumns columns(out);
+    for (size_t k = 0; k < out.size(); ++k) columns.write(k, *paint[k]);
+  }
   Attribute& father = out.attributes.add("father", ScalarType::kUInt32, 1, out.size());
   for (size_t k = 0; k < out.size(); ++k) father.set(k, fathers[k]);
   // The visible reflectivity (5.8 applied to all paint attributes) for renderers with an environment map

@@ -105,7 +105,9 @@ class PaintSurface {
   std::vector<uint32_t> takeChangedOriginals();
   /// The active surfels of the listed originals (the enabled original or its children), as activeCloud()
   /// writes them.
-  SurfelCloud activeCloudOf(const std::vector<uint32_t>& originals) const;
+  /// Without `paint_columns` only what a viewer needs: positions, normals, radii, visible colours, `father`,
+  /// `reflectivity` (a quarter of the bytes).
+  SurfelCloud activeCloudOf(const std::vector<uint32_t>& originals, bool paint_columns = true) const;
   /// The observer told before each change (nullptr: none); not owned.
   void setObserver(PaintSurfaceObserver* observer) { observer_ = observer; }
   PaintSurfaceObserver* observer() const { return observer_; }
@@ -115,7 +117,8 @@ class PaintSurface {
   size_t activeCount() const { return enabled_count_ + child_count_; }
   /// The active surfels as one cloud (positions, normals, radii, visible colours (5.8)) with their paint
   /// columns (paint_attributes.h) for rendering and export; the uint32 attribute `father` names each
-  /// surfel's original, the float attribute `reflectivity` is the visible paint's (for environment maps, 5.7).
+  /// surfel's original, the float attribute `reflectivity` is the visible paint's (for environment
+  /// maps, 5.7).
   SurfelCloud activeCloud() const;
 
  private:
@@ -124,7 +127,7 @@ class PaintSurface {
   void buildCollisionGrid(double spacing);
   void buildCellDistances();
   /// The active surfels of originals list[0..count) (all when list is null); n: the expected size.
-  SurfelCloud cloudOf(const uint32_t* list, size_t count, size_t n) const;
+  SurfelCloud cloudOf(const uint32_t* list, size_t count, size_t n, bool paint_columns) const;
   void notify(size_t original) {
     if (!changed_flag_[original]) changed_flag_[original] = 1, changed_.push_back(uint32_t(original));
     if (observer_) observer_->beforeChange(original);

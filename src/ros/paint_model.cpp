@@ -366,7 +366,7 @@ void PaintModel::publishDelta(const ros::Time& stamp) {
   delta.pose_stamp = pose_stamp_;
   delta.object_generation = object_generation_;
   delta.object_stamp = object_stamp_;
-  SurfelCloud surfels = surface_->activeCloudOf(changed);
+  SurfelCloud surfels = surface_->activeCloudOf(changed, /*paint_columns=*/false);  // (a viewer's channels)
   surfels.frame_id = params_.world_frame;
   surfels.stamp_ns = stamp.toNSec();
   PointCloud2Converter::toMessage(surfels, delta.surfels);

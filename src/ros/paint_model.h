@@ -16,7 +16,7 @@
 //             columns and `father`, at most painted_rate per second while paint changes, and at once after
 //             a load, undo, redo or clear)
 //             surfels/painted_delta (relaxed_connectivity/PaintDelta: the originals changed this tick and
-//             their surfels)
+//             their surfels, a viewer's channels without the paint columns)
 //             paint_stats (relaxed_connectivity/PaintStats, every stats_period seconds)
 // Services    ~undo, ~redo, ~clear (relaxed_connectivity/PaintCommand), ~save, ~load, ~set_paint, ~set_brush
 //             (relaxed_connectivity/PaintFile)

@@ -95,7 +95,10 @@ StrokeComparison paintAndCompare(const std::string& paint_name) {
     if (changed.empty()) continue;
     ++deltas;
     SurfelCloud removed, added;
-    mirror.applyDelta(changed, surface.activeCloudOf(changed), &removed, &added);
+    const SurfelCloud delta =
+        surface.activeCloudOf(changed, /*paint_columns=*/false);  // as paint_model sends it
+    EXPECT_EQ(delta.attributes.columns().size(), 2u);             // father and reflectivity: no paint columns
+    mirror.applyDelta(changed, delta, &removed, &added);
     // What went is exactly what the changed originals showed before, what came what they show now.
     EXPECT_EQ(surfelKeys(removed), surfelKeys(groupsOf(before, changed)));
     EXPECT_EQ(surfelKeys(added), surfelKeys(surface.activeCloudOf(changed)));
