@@ -89,10 +89,9 @@ PaintRendererParams readPaintRendererParams(const ros::NodeHandle& pnh) {
     throw std::invalid_argument("paint_renderer: max_delta_surfels must be >= 0 and max_tile_updates >= 1");
   p.render.max_delta_surfels = size_t(max_delta);
   p.render.max_tile_updates = uint32_t(max_tile_updates);
-  p.render.pose_tolerance = 0;  // the node decides on camera motion (pose_tolerance below)
-  double pose_tolerance = 1e-6;
-  pnh.param("pose_tolerance", pose_tolerance, pose_tolerance);
-  p.render.pose_tolerance = pose_tolerance;
+  p.render.pose_tolerance =
+      1e-6;  // camera motion [m, rad] that makes a full update (node and renderer alike)
+  pnh.param("pose_tolerance", p.render.pose_tolerance, p.render.pose_tolerance);
   pnh.param("environment", p.environment, p.environment);
   pnh.param("draw_brush", p.draw_brush, p.draw_brush);
   OverlayOptions& b = p.brush;

@@ -176,8 +176,8 @@ TEST(PaintStrokes, ASplitBrushPaintsWithOneBufferPerTipOnBothFacesOfAnEdge) {
 
 // The paint session's demo offline (launch/paint_session.launch, scripts/demo): session.csv over the top
 // face of the scanned box (the plane z = 0.95, the device base at y = -0.265) with the session palette beside
-// it. The brush starts with acrylic's red, dips into the red well, paints the first stroke, dips into the blue
-// well and paints the second and third: red dominates along the first stroke, blue along the second.
+// it. The brush starts with acrylic's red, dips into the red well, paints the first stroke, dips into the
+// blue well and paints the second and third: red dominates along the first stroke, blue along the second.
 TEST(PaintStrokes, TheSessionStrokePaintsRedThenBlueFromThePalette) {
   SurfelCloud box_top = paint_test::planeCloud(0.12, 0.002, 0.95);
   for (Vec3& p : box_top.positions) p.y() -= 0.14;  // y in [-0.26, -0.02]: the front of the box's top
@@ -195,7 +195,8 @@ TEST(PaintStrokes, TheSessionStrokePaintsRedThenBlueFromThePalette) {
     Vec3 sum = Vec3::Zero();
     int n = 0;
     for (size_t i = 0; i < active.size(); ++i) {
-      if (father->get(i) >= double(originals) || (active.positions[i] - at).head<2>().norm() > 0.004) continue;
+      if (father->get(i) >= double(originals) || (active.positions[i] - at).head<2>().norm() > 0.004)
+        continue;
       sum += Vec3(active.colors[i][0], active.colors[i][1], active.colors[i][2]);
       ++n;
     }
@@ -204,7 +205,8 @@ TEST(PaintStrokes, TheSessionStrokePaintsRedThenBlueFromThePalette) {
   };
   const Vec3 unpainted = probe(Vec3(0.0, -0.04, 0.95));
   // Where the brush is pressed longest: the start of each stroke (x = -0.05) and 1 cm into it.
-  const Vec3 first = probe(Vec3(-0.04, -0.265 + 0.03, 0.95)), second = probe(Vec3(-0.04, -0.265 + 0.06, 0.95));
+  const Vec3 first = probe(Vec3(-0.04, -0.265 + 0.03, 0.95)),
+             second = probe(Vec3(-0.04, -0.265 + 0.06, 0.95));
   std::printf("unpainted %s, first stroke %s, second stroke %s\n", toString(unpainted).c_str(),
               toString(first).c_str(), toString(second).c_str());
   EXPECT_GT(first.x() - first.z(), unpainted.x() - unpainted.z() + 20) << "the first stroke is not red";

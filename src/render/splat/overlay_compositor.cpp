@@ -62,8 +62,8 @@ double pixelsPerMetre(const Camera& camera, double z) {
                                                                : camera.ortho_scale;
 }
 
-/// The screen rectangle of the overlay's splats (clamped to the image); `all_visible` false if a surfel lies
-/// behind the near plane (then the whole image).
+/// The screen rectangle of the overlay's splats, clamped to the image; the whole image if a splat reaches
+/// behind the near plane; empty if no surfel is finite.
 PixelRect screenRect(const SurfelCloud& overlay, const Camera& camera, double cutoff) {
   PixelRect rect;
   bool any = false;
