@@ -59,6 +59,11 @@ BrushEventStats Brush::advance(double dt, const Eigen::Isometry3d& world_T_brush
                                const PaintSurface* surface) {
   if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("Brush::advance: dt must be positive");
   BrushEventStats stats;
+  if (surface && surface->id() != cached_surface_) {  // what the caches proved was about another object
+    cache_.assign(skeleton_.nodeCount(), NodeCache());
+    handle_cache_ = NodeCache();
+    cached_surface_ = surface->id();
+  }
   const Eigen::Isometry3d start = skeleton_.handlePose();
   const Eigen::Quaterniond q0(start.linear()), q1(world_T_brush.linear());
   stats.substeps = std::max(1, int(std::ceil(dt / preset_.time_step - 1e-9)));

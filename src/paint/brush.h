@@ -59,7 +59,8 @@ class Brush {
   /// One main-loop event: the device moved from the last pose to `world_T_brush` over dt seconds. Steps the
   /// skeleton in preset time steps (the handle follows the interpolated pose), projects colliding active
   /// masses onto the surface (5.5) in `collision_passes` passes, evaluates the handle contacts at the new
-  /// pose, splits (5.4.3) and skins. `surface` may be null (free space). Throws BrushInstability.
+  /// pose, splits (5.4.3) and skins. `surface` may be null (free space); another surface than the last
+  /// event's starts the query caches afresh. Throws BrushInstability.
   BrushEventStats advance(double dt, const Eigen::Isometry3d& world_T_brush, const PaintSurface* surface);
 
   /// Handle points inside the object after the last event.
@@ -105,6 +106,7 @@ class Brush {
   // The handle is rigid: one query at the centre of its points proves them all outside while the centre
   // stays within clearance - handle_radius_ of where that query was made.
   NodeCache handle_cache_;
+  uint64_t cached_surface_ = 0;        // PaintSurface::id() the caches were built on (0: none)
   Vec3 handle_centre_ = Vec3::Zero();  // brush frame
   double handle_radius_ = 0;
   std::array<Neighbor, 64> neighbours_;  // of the last query (contactOf)

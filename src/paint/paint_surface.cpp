@@ -1,6 +1,7 @@
 #include "relaxed_connectivity/paint/paint_surface.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -11,6 +12,8 @@
 namespace rc {
 
 PaintSurface::PaintSurface(SurfelCloud originals) : originals_(std::move(originals)) {
+  static std::atomic<uint64_t> next_id{1};
+  id_ = next_id++;
   originals_.validate();
   if (originals_.empty()) throw std::invalid_argument("PaintSurface: the object has no surfels");
   if (!originals_.hasNormals())

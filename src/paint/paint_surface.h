@@ -41,6 +41,8 @@ class PaintSurface {
   explicit PaintSurface(SurfelCloud originals);
 
   const SurfelCloud& originals() const { return originals_; }
+  /// Unique per constructed surface in this process: what a cache of queries against it (Brush) checks.
+  uint64_t id() const { return id_; }
   size_t originalCount() const { return originals_.size(); }
   /// The median surfel radius (without radii: the median distance to the nearest other original, over a
   /// sample): the sampling scale collision margins use.
@@ -134,6 +136,7 @@ class PaintSurface {
   }
 
   SurfelCloud originals_;
+  uint64_t id_;
   std::unique_ptr<KdTree> tree_;
   SortedCellGrid grid_;                 // the originals sorted by cell, for nearestOriginals
   std::vector<Vec3> sorted_positions_;  // positions in grid order

@@ -258,5 +258,26 @@ TEST(Brush, ReplayingAStrokeIsBitwiseDeterministic) {
   EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)), 0);
 }
 
+TEST(Brush, AnotherSurfaceIsQueriedAfreshNotThroughTheLastOnesCache) {
+  // The brush hangs still 5 mm above a plane (its caches prove every mass outside); then a new object
+  // appears whose surface is 2 mm above the tips (a session installs a newly scanned object). The next event
+  // must find the contacts on it, not trust what was proved about the old one.
+  const BrushPreset preset;
+  const PaintSurface low(paint_test::planeCloud(0.04, 0.0005));
+  const Eigen::Isometry3d pose = stylus(Vec3(0, 0, preset.bristle_length + 0.005), Vec3(0, 0, -1));
+  Brush brush(preset);
+  brush.reset(pose);
+  for (int i = 0; i < 10; ++i) brush.advance(kEvent, pose, &low);
+  ASSERT_TRUE(brush.split().tips.empty());
+  double lowest = 1e9;
+  const BrushSkeleton& s = brush.skeleton();
+  for (int a = 0; a < s.activeCount(); ++a) lowest = std::min(lowest, s.positions()[s.handleCount() + a].z());
+  const PaintSurface high(paint_test::planeCloud(0.04, 0.0005, lowest + 0.002));
+  brush.advance(kEvent, pose, &high);
+  EXPECT_FALSE(brush.split().tips.empty()) << "no contact with the new surface";
+  for (int a = 0; a < s.activeCount(); ++a)
+    EXPECT_GE(s.positions()[s.handleCount() + a].z(), lowest + 0.002 - 1e-9) << "mass " << a << " inside";
+}
+
 }  // namespace
 }  // namespace rc
