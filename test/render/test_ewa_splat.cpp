@@ -79,7 +79,8 @@ TEST(EwaSplat, CircularSetupAgreesWithTheAxesSetup) {
 }
 
 // The four-wide (AVX2) set-up gives bitwise the scalar records and results: random, near-edge-on, tiny and
-// huge surfels, behind the camera, outside the image, back-facing (culled or not), invalid ones.
+// huge surfels, behind the camera, outside the image, back-facing (culled or not), invalid ones. The pre-cull
+// pass (unculledCircularSurfels) drops only what the set-up culls.
 TEST(EwaSplat, FourWideCircularSetupIsBitwiseTheScalarOne) {
   if (!circularSetupAvx2Available()) GTEST_SKIP() << "this CPU or build has no AVX2 set-up";
   std::mt19937 random(11);
@@ -112,6 +113,22 @@ TEST(EwaSplat, FourWideCircularSetupIsBitwiseTheScalarOne) {
         normals.push_back(normal);
         radii.push_back(radius);
       }
+      // The pre-cull pass drops only surfels the set-up culls, and keeps every invalid one.
+      std::vector<uint32_t> kept(centers.size());
+      kept.resize(unculledCircularSurfels(centers.data(), normals.data(), radii.data(), centers.size(), frame,
+                                          params, kept.data()));
+      std::vector<bool> is_kept(centers.size(), false);
+      for (const uint32_t i : kept) is_kept[i] = true;
+      size_t dropped = 0;
+      for (size_t i = 0; i < centers.size(); ++i) {
+        SplatRaster raster;
+        float unit_normal[3];
+        const SplatSetup result =
+            setupCircularEwaSplat(centers[i], normals[i], radii[i], frame, params, &raster, unit_normal);
+        if (!is_kept[i]) EXPECT_EQ(int(result), int(SplatSetup::kCulled)) << "surfel " << i << " dropped";
+        dropped += !is_kept[i];
+      }
+      EXPECT_GT(dropped, cull ? 2000u : 30u);  // back-facing, behind the camera
       for (size_t first = 0; first + 4 <= centers.size(); first += 4) {
         SplatRaster wide[4], scalar[4];
         float wide_normals[4][3], scalar_normals[4][3];

@@ -334,6 +334,9 @@ TEST(SurfelRenderer, WideTilePassesGiveBitwiseTheSameImages) {
           wide_runs += stats[1].simd_width == 8;
           EXPECT_NE(stats[0].simd_width, 8);
           EXPECT_EQ(stats[0].fragments, stats[1].fragments);
+          EXPECT_EQ(stats[0].splats, stats[1].splats);
+          EXPECT_EQ(stats[0].culled_surfels, stats[1].culled_surfels);
+          EXPECT_EQ(stats[0].invalid_surfels, stats[1].invalid_surfels);
           EXPECT_GT(stats[1].fragments, 1000u);
           const size_t n = size_t(camera.width) * camera.height;
           EXPECT_EQ(0, std::memcmp(images[0].color.data(), images[1].color.data(), n * sizeof(Rgba)));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 
 #include "relaxed_connectivity/render/splat/tile_passes_avx2.h"
@@ -242,6 +243,42 @@ void setupCircularEwaSplats4(const Vec3* centers, const Vec3* normals, const dou
       results[k] = setupCircularEwaSplat(centers[k], normals[k], radii[k], camera, params, &rasters[k]);
 }
 
+size_t unculledCircularSurfels(const Vec3* centers, const Vec3* normals, const double* radii, size_t count,
+                               const CameraFrame& camera, const EwaParams& params, uint32_t* kept) {
+  const Eigen::Matrix3d& R = camera.camera_R_world;
+  size_t n = 0, i = 0;
+  for (; i + 4 <= count; i += 4) {
+    // As setupCircularEwaSplats4: unit normal, camera frame, n . c and the cull mask.
+    const V nx_in = lane(normals + i, 0), ny_in = lane(normals + i, 1), nz_in = lane(normals + i, 2);
+    const V normal_length = _mm256_sqrt_pd(add(add(mul(nx_in, nx_in), mul(ny_in, ny_in)), mul(nz_in, nz_in)));
+    const V inv_length = div(set1(1.0), normal_length);
+    const V ux = mul(nx_in, inv_length), uy = mul(ny_in, inv_length), uz = mul(nz_in, inv_length);
+    const V px = lane(centers + i, 0), py = lane(centers + i, 1), pz = lane(centers + i, 2);
+    const V cx = add(row(R, 0, px, py, pz), set1(camera.camera_t_world.x()));
+    const V cy = add(row(R, 1, px, py, pz), set1(camera.camera_t_world.y()));
+    const V cz = add(row(R, 2, px, py, pz), set1(camera.camera_t_world.z()));
+    const V nx = row(R, 0, ux, uy, uz), ny = row(R, 1, ux, uy, uz), nz = row(R, 2, ux, uy, uz);
+    const V n_dot_view = add(add(mul(nx, cx), mul(ny, cy)), mul(nz, cz));
+    V culled = _mm256_or_pd(_mm256_cmp_pd(cz, set1(camera.near_clip), _CMP_NGE_UQ),
+                            _mm256_cmp_pd(cz, set1(camera.far_clip), _CMP_NLE_UQ));
+    if (params.backface_culling)
+      culled = _mm256_or_pd(culled, _mm256_cmp_pd(n_dot_view, set1(0.0), _CMP_GT_OQ));
+    // Valid input (finite, a normal of positive length, a positive radius); the others are kept.
+    const V radius = _mm256_andnot_pd(set1(-0.0), _mm256_loadu_pd(radii + i));
+    const V finite_max = set1(std::numeric_limits<double>::max());
+    V valid = _mm256_and_pd(_mm256_cmp_pd(normal_length, set1(0.0), _CMP_GT_OQ),
+                            _mm256_cmp_pd(radius, set1(0.0), _CMP_GT_OQ));
+    valid = _mm256_and_pd(valid, _mm256_cmp_pd(radius, finite_max, _CMP_LE_OQ));
+    for (const V v : {px, py, pz, nx_in, ny_in, nz_in})
+      valid = _mm256_and_pd(valid, _mm256_cmp_pd(_mm256_andnot_pd(set1(-0.0), v), finite_max, _CMP_LE_OQ));
+    const int culled_mask = _mm256_movemask_pd(_mm256_and_pd(culled, valid));
+    for (int k = 0; k < 4; ++k)
+      if (!(culled_mask & (1 << k))) kept[n++] = uint32_t(i + k);
+  }
+  for (; i < count; ++i) kept[n++] = uint32_t(i);  // the set-up decides
+  return n;
+}
+
 #pragma GCC pop_options
 
 #else
@@ -253,6 +290,11 @@ bool circularSetupAvx2Available() {
 void setupCircularEwaSplats4(const Vec3*, const Vec3*, const double*, const CameraFrame&, const EwaParams&,
                              SplatRaster*, float (*)[3], SplatSetup*) {
   throw std::logic_error("setupCircularEwaSplats4: this build has no AVX2 set-up");
+}
+
+size_t unculledCircularSurfels(const Vec3*, const Vec3*, const double*, size_t, const CameraFrame&,
+                               const EwaParams&, uint32_t*) {
+  throw std::logic_error("unculledCircularSurfels: this build has no AVX2 set-up");
 }
 
 #endif

@@ -16,4 +16,11 @@ void setupCircularEwaSplats4(const Vec3* centers, const Vec3* normals, const dou
                              const CameraFrame& camera, const EwaParams& params, SplatRaster rasters[4],
                              float unit_normals[4][3], SplatSetup results[4]);
 
+/// The first test of the set-up alone, four surfels at a time: writes to `kept` the indices (0..count) of the
+/// surfels that setupCircularEwaSplat would not cull at once (near/far clip, back-face with
+/// params.backface_culling), with the same arithmetic, and of every surfel with invalid input (its set-up
+/// says why); returns how many. The others are culled: their full set-up is skipped.
+size_t unculledCircularSurfels(const Vec3* centers, const Vec3* normals, const double* radii, size_t count,
+                               const CameraFrame& camera, const EwaParams& params, uint32_t* kept);
+
 }  // namespace rc

@@ -49,14 +49,10 @@ float DeferredShader::highlight(float cosine) const {
 
 #if defined(__SSE2__)
 namespace {
-/// Four output values written around the caches (the images are not read again by the renderer); plain
-/// stores where the address is not 16-byte aligned.
-inline void stream(float* address, __m128 value) {
-  if ((reinterpret_cast<uintptr_t>(address) & 15) == 0) {
-    _mm_stream_ps(address, value);
-  } else {
-    _mm_storeu_ps(address, value);
-  }
+/// Four output values. Plain stores: streaming (non-temporal) ones took twice the shading time at 1280x720
+/// on this 2-core VM (the images' short tile rows in several outputs at once; bench_paint_rendering).
+inline void store(float* address, __m128 value) {
+  _mm_storeu_ps(address, value);
 }
 }  // namespace
 #endif
@@ -71,12 +67,12 @@ void DeferredShader::clearSpan(int count, int x, int y, RenderImages* out) const
   std::memcpy(&background, &config_.background, sizeof(background));
   const __m128 background4 = _mm_castsi128_ps(_mm_set1_epi32(int32_t(background)));
   for (; k + 4 <= count; k += 4) {
-    if (outputs_ & kOutputWeight) stream(out->weight.data() + p + k, zero);
-    if (outputs_ & kOutputDepth) stream(out->depth.data() + p + k, infinity);
+    if (outputs_ & kOutputWeight) store(out->weight.data() + p + k, zero);
+    if (outputs_ & kOutputDepth) store(out->depth.data() + p + k, infinity);
     if (outputs_ & kOutputNormal)
-      for (int c = 0; c < 3; ++c) stream(out->normal[p + k].data() + 4 * c, zero);
-    if (outputs_ & kOutputPatchId) stream(reinterpret_cast<float*>(out->patch_id.data() + p + k), no_patch);
-    if (outputs_ & kOutputColor) stream(reinterpret_cast<float*>(out->color.data() + p + k), background4);
+      for (int c = 0; c < 3; ++c) store(out->normal[p + k].data() + 4 * c, zero);
+    if (outputs_ & kOutputPatchId) store(reinterpret_cast<float*>(out->patch_id.data() + p + k), no_patch);
+    if (outputs_ & kOutputColor) store(reinterpret_cast<float*>(out->color.data() + p + k), background4);
   }
 #endif
   const size_t q = p + k, rest = size_t(count - k);
@@ -130,7 +126,7 @@ void DeferredShader::shadePixel(const AccumulatedSpan& span, int k, int x, int y
 
 void DeferredShader::finish() const {
 #if defined(__SSE2__)
-  _mm_sfence();  // the streamed stores are visible to other threads after this
+  _mm_sfence();  // (any streamed stores are visible to other threads after this)
 #endif
 }
 
@@ -158,11 +154,11 @@ void DeferredShader::shadeSpan(const AccumulatedSpan& span, int count, int x, in
       continue;
     }
     const size_t p = p0 + k;
-    if (outputs_ & kOutputWeight) stream(out->weight.data() + p, w);
-    if (outputs_ & kOutputDepth) stream(out->depth.data() + p, _mm_div_ps(_mm_loadu_ps(span.depth + k), w));
+    if (outputs_ & kOutputWeight) store(out->weight.data() + p, w);
+    if (outputs_ & kOutputDepth) store(out->depth.data() + p, _mm_div_ps(_mm_loadu_ps(span.depth + k), w));
     if (outputs_ & kOutputPatchId)
-      stream(reinterpret_cast<float*>(out->patch_id.data() + p),
-             _mm_loadu_ps(reinterpret_cast<const float*>(span.patch_id + k)));
+      store(reinterpret_cast<float*>(out->patch_id.data() + p),
+            _mm_loadu_ps(reinterpret_cast<const float*>(span.patch_id + k)));
     if (!(outputs_ & (kOutputNormal | kOutputColor))) continue;
     // Unit normal (zero where the blended normals cancel).
     __m128 n[3];
@@ -179,9 +175,9 @@ void DeferredShader::shadeSpan(const AccumulatedSpan& span, int count, int x, in
       const __m128 zzxy = _mm_shuffle_ps(n[2], xy_hi, _MM_SHUFFLE(3, 2, 2, 2));
       const __m128 xyzz = _mm_shuffle_ps(xy_hi, n[2], _MM_SHUFFLE(3, 3, 3, 2));
       float* normals = out->normal[p].data();
-      stream(normals, _mm_shuffle_ps(xy_lo, zx, _MM_SHUFFLE(2, 0, 1, 0)));
-      stream(normals + 4, _mm_shuffle_ps(yz, xy_hi, _MM_SHUFFLE(1, 0, 2, 0)));
-      stream(normals + 8, _mm_shuffle_ps(zzxy, xyzz, _MM_SHUFFLE(2, 1, 2, 0)));
+      store(normals, _mm_shuffle_ps(xy_lo, zx, _MM_SHUFFLE(2, 0, 1, 0)));
+      store(normals + 4, _mm_shuffle_ps(yz, xy_hi, _MM_SHUFFLE(1, 0, 2, 0)));
+      store(normals + 8, _mm_shuffle_ps(zzxy, xyzz, _MM_SHUFFLE(2, 1, 2, 0)));
     }
     if (!(outputs_ & kOutputColor)) continue;
     // Base colour.
@@ -255,7 +251,7 @@ void DeferredShader::shadeSpan(const AccumulatedSpan& span, int count, int x, in
       packed = _mm_or_si128(packed, _mm_slli_epi32(channel, 8 * c));
     }
     static_assert(sizeof(Rgba) == 4, "Rgba is four bytes");
-    stream(reinterpret_cast<float*>(out->color.data() + p), _mm_castsi128_ps(packed));
+    store(reinterpret_cast<float*>(out->color.data() + p), _mm_castsi128_ps(packed));
   }
 #endif
   for (; k < count; ++k) shadePixel(span, k, x + k, y, p0 + k, out);

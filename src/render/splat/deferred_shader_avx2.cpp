@@ -19,21 +19,13 @@ namespace rc {
 
 namespace {
 
-/// Eight output values written around the caches where the address allows (as the four-wide stream()).
-inline void stream8(float* address, __m256 value) {
-  const uintptr_t offset = reinterpret_cast<uintptr_t>(address) & 31;
-  if (offset == 0) {
-    _mm256_stream_ps(address, value);
-  } else if ((offset & 15) == 0) {
-    _mm_stream_ps(address, _mm256_castps256_ps128(value));
-    _mm_stream_ps(address + 4, _mm256_extractf128_ps(value, 1));
-  } else {
-    _mm256_storeu_ps(address, value);
-  }
+/// Eight output values (plain stores, as the four-wide store()).
+inline void store8(float* address, __m256 value) {
+  _mm256_storeu_ps(address, value);
 }
 
-/// Four unit normals (x y z x | y z x y | z x y z), streamed like the four-wide path.
-inline void streamNormals(float* normals, __m128 nx, __m128 ny, __m128 nz) {
+/// Four unit normals (x y z x | y z x y | z x y z).
+inline void storeNormals(float* normals, __m128 nx, __m128 ny, __m128 nz) {
   const __m128 xy_lo = _mm_unpacklo_ps(nx, ny), xy_hi = _mm_unpackhi_ps(nx, ny);
   const __m128 zx = _mm_shuffle_ps(nz, nx, _MM_SHUFFLE(1, 1, 0, 0));
   const __m128 yz = _mm_shuffle_ps(ny, nz, _MM_SHUFFLE(1, 1, 1, 1));
@@ -42,13 +34,7 @@ inline void streamNormals(float* normals, __m128 nx, __m128 ny, __m128 nz) {
   const __m128 rows[3] = {_mm_shuffle_ps(xy_lo, zx, _MM_SHUFFLE(2, 0, 1, 0)),
                           _mm_shuffle_ps(yz, xy_hi, _MM_SHUFFLE(1, 0, 2, 0)),
                           _mm_shuffle_ps(zzxy, xyzz, _MM_SHUFFLE(2, 1, 2, 0))};
-  for (int r = 0; r < 3; ++r) {
-    if ((reinterpret_cast<uintptr_t>(normals + 4 * r) & 15) == 0) {
-      _mm_stream_ps(normals + 4 * r, rows[r]);
-    } else {
-      _mm_storeu_ps(normals + 4 * r, rows[r]);
-    }
-  }
+  for (int r = 0; r < 3; ++r) _mm_storeu_ps(normals + 4 * r, rows[r]);
 }
 
 }  // namespace
@@ -57,12 +43,12 @@ void DeferredShader::shadeEight(const AccumulatedSpan& span, int k, int x, int y
                                 RenderImages* out) const {
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
   const __m256 w = _mm256_loadu_ps(span.weight + k);
-  if (outputs_ & kOutputWeight) stream8(out->weight.data() + p, w);
+  if (outputs_ & kOutputWeight) store8(out->weight.data() + p, w);
   if (outputs_ & kOutputDepth)
-    stream8(out->depth.data() + p, _mm256_div_ps(_mm256_loadu_ps(span.depth + k), w));
+    store8(out->depth.data() + p, _mm256_div_ps(_mm256_loadu_ps(span.depth + k), w));
   if (outputs_ & kOutputPatchId)
-    stream8(reinterpret_cast<float*>(out->patch_id.data() + p),
-            _mm256_loadu_ps(reinterpret_cast<const float*>(span.patch_id + k)));
+    store8(reinterpret_cast<float*>(out->patch_id.data() + p),
+           _mm256_loadu_ps(reinterpret_cast<const float*>(span.patch_id + k)));
   if (!(outputs_ & (kOutputNormal | kOutputColor))) return;
   // Unit normal (zero where the blended normals cancel).
   __m256 n[3];
@@ -74,10 +60,10 @@ void DeferredShader::shadeEight(const AccumulatedSpan& span, int k, int x, int y
   for (int c = 0; c < 3; ++c) n[c] = _mm256_mul_ps(n[c], inv_length);
   if (outputs_ & kOutputNormal) {
     float* normals = out->normal[p].data();
-    streamNormals(normals, _mm256_castps256_ps128(n[0]), _mm256_castps256_ps128(n[1]),
-                  _mm256_castps256_ps128(n[2]));
-    streamNormals(normals + 12, _mm256_extractf128_ps(n[0], 1), _mm256_extractf128_ps(n[1], 1),
-                  _mm256_extractf128_ps(n[2], 1));
+    storeNormals(normals, _mm256_castps256_ps128(n[0]), _mm256_castps256_ps128(n[1]),
+                 _mm256_castps256_ps128(n[2]));
+    storeNormals(normals + 12, _mm256_extractf128_ps(n[0], 1), _mm256_extractf128_ps(n[1], 1),
+                 _mm256_extractf128_ps(n[2], 1));
   }
   if (!(outputs_ & kOutputColor)) return;
   // Base colour.
@@ -148,7 +134,7 @@ void DeferredShader::shadeEight(const AccumulatedSpan& span, int k, int x, int y
         _mm256_cvttps_epi32(_mm256_add_ps(_mm256_min_ps(hi, _mm256_max_ps(zero, rgb[c])), half));
     packed = _mm256_or_si256(packed, _mm256_slli_epi32(channel, 8 * c));
   }
-  stream8(reinterpret_cast<float*>(out->color.data() + p), _mm256_castsi256_ps(packed));
+  store8(reinterpret_cast<float*>(out->color.data() + p), _mm256_castsi256_ps(packed));
 }
 
 #pragma GCC pop_options

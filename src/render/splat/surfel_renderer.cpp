@@ -249,21 +249,42 @@ ChunkCounts setupChunk(RenderFrameState& f, size_t chunk, bool circular, bool wi
     ++counts.drawn;
   };
   size_t first = counts.begin;
-  if (wide_setup) {  // four circular surfels at a time (bitwise the scalar set-up)
-    for (; first + 4 <= counts.end; first += 4) {
-      SplatRaster rasters[4];
-      float unit_normals[4][3];
-      SplatSetup results[4];
-      setupCircularEwaSplats4(&cloud.positions[first], &cloud.normals[first], &cloud.radii[first], f.frame,
-                              f.params, rasters, unit_normals, results);
-      for (int k = 0; k < 4; ++k) {
-        if (results[k] == SplatSetup::kDrawn || results[k] == SplatSetup::kDrawnEdgeOn) {
-          staged[counts.drawn] = rasters[k];
-          std::copy_n(unit_normals[k], 3, staged_shading[counts.drawn].normal);
+  if (wide_setup) {  // four circular surfels at a time (bitwise the scalar set-up), culled ones first
+    constexpr size_t kBlock = 1024;
+    uint32_t kept[kBlock];
+    for (size_t block = counts.begin; block < counts.end; block += kBlock) {
+      const size_t size = std::min(kBlock, counts.end - block);
+      const size_t n = unculledCircularSurfels(&cloud.positions[block], &cloud.normals[block],
+                                               &cloud.radii[block], size, f.frame, f.params, kept);
+      counts.culled += uint32_t(size - n);
+      size_t j = 0;
+      for (; j + 4 <= n; j += 4) {
+        Vec3 centers[4], normals[4];
+        double radii[4];
+        for (int k = 0; k < 4; ++k) {
+          const size_t i = block + kept[j + k];
+          centers[k] = cloud.positions[i], normals[k] = cloud.normals[i], radii[k] = cloud.radii[i];
         }
-        account(first + k, results[k]);
+        SplatRaster rasters[4];
+        float unit_normals[4][3];
+        SplatSetup results[4];
+        setupCircularEwaSplats4(centers, normals, radii, f.frame, f.params, rasters, unit_normals, results);
+        for (int k = 0; k < 4; ++k) {
+          if (results[k] == SplatSetup::kDrawn || results[k] == SplatSetup::kDrawnEdgeOn) {
+            staged[counts.drawn] = rasters[k];
+            std::copy_n(unit_normals[k], 3, staged_shading[counts.drawn].normal);
+          }
+          account(block + kept[j + k], results[k]);
+        }
+      }
+      for (; j < n; ++j) {  // the last few: the scalar set-up
+        const size_t i = block + kept[j];
+        account(i,
+                setupCircularEwaSplat(cloud.positions[i], cloud.normals[i], cloud.radii[i], f.frame, f.params,
+                                      &staged[counts.drawn], staged_shading[counts.drawn].normal));
       }
     }
+    first = counts.end;
   }
   for (size_t i = first; i < counts.end; ++i) {
     if (clipper && !clipper->isVisible(uint32_t(i))) {
