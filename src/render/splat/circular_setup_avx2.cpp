@@ -70,6 +70,29 @@ inline __m128i floorToPixel(V value, double size) {
   return _mm_add_epi32(truncated, _mm256_cvtpd_epi32(_mm256_and_pd(above, set1(-1.0))));
 }
 
+/// Four surfels in the camera frame: the unit normal u = n / |n|, c = R p + t, n_c = R u, n_c . c and the
+/// first test of setupCircularCommonCase (near/far clip, back-face).
+struct CameraLanes {
+  CameraLanes(const Vec3* centers, const Vec3* normals, const CameraFrame& camera, const EwaParams& params) {
+    nx_in = lane(normals, 0), ny_in = lane(normals, 1), nz_in = lane(normals, 2);
+    normal_length = _mm256_sqrt_pd(add(add(mul(nx_in, nx_in), mul(ny_in, ny_in)), mul(nz_in, nz_in)));
+    const V inv_length = div(set1(1.0), normal_length);
+    ux = mul(nx_in, inv_length), uy = mul(ny_in, inv_length), uz = mul(nz_in, inv_length);
+    const Eigen::Matrix3d& R = camera.camera_R_world;
+    px = lane(centers, 0), py = lane(centers, 1), pz = lane(centers, 2);
+    cx = add(row(R, 0, px, py, pz), set1(camera.camera_t_world.x()));
+    cy = add(row(R, 1, px, py, pz), set1(camera.camera_t_world.y()));
+    cz = add(row(R, 2, px, py, pz), set1(camera.camera_t_world.z()));
+    nx = row(R, 0, ux, uy, uz), ny = row(R, 1, ux, uy, uz), nz = row(R, 2, ux, uy, uz);
+    n_dot_view = add(add(mul(nx, cx), mul(ny, cy)), mul(nz, cz));
+    culled = _mm256_or_pd(_mm256_cmp_pd(cz, set1(camera.near_clip), _CMP_NGE_UQ),
+                          _mm256_cmp_pd(cz, set1(camera.far_clip), _CMP_NLE_UQ));
+    if (params.backface_culling)
+      culled = _mm256_or_pd(culled, _mm256_cmp_pd(n_dot_view, set1(0.0), _CMP_GT_OQ));
+  }
+  V nx_in, ny_in, nz_in, normal_length, ux, uy, uz, px, py, pz, cx, cy, cz, nx, ny, nz, n_dot_view, culled;
+};
+
 }  // namespace
 
 void setupCircularEwaSplats4(const Vec3* centers, const Vec3* normals, const double* radii,
@@ -84,11 +107,10 @@ void setupCircularEwaSplats4(const Vec3* centers, const Vec3* normals, const dou
       decided[k] = true;
     }
   }
-  const V nx_in = lane(normals, 0), ny_in = lane(normals, 1), nz_in = lane(normals, 2);
-  const V normal_length = _mm256_sqrt_pd(add(add(mul(nx_in, nx_in), mul(ny_in, ny_in)), mul(nz_in, nz_in)));
+  const CameraLanes l(centers, normals, camera, params);
   const V radius = _mm256_andnot_pd(set1(-0.0), _mm256_loadu_pd(radii));  // |radius|
   alignas(32) double lengths[4], radius_lanes[4];
-  _mm256_store_pd(lengths, normal_length);
+  _mm256_store_pd(lengths, l.normal_length);
   _mm256_store_pd(radius_lanes, radius);
   for (int k = 0; k < 4; ++k) {
     if (!decided[k] && (!(lengths[k] > 0) || !(radius_lanes[k] > 0))) {
@@ -96,29 +118,16 @@ void setupCircularEwaSplats4(const Vec3* centers, const Vec3* normals, const dou
       decided[k] = true;
     }
   }
-  const V inv_length = div(set1(1.0), normal_length);
-  const V ux = mul(nx_in, inv_length), uy = mul(ny_in, inv_length), uz = mul(nz_in, inv_length);
   alignas(32) double unit[3][4];
-  _mm256_store_pd(unit[0], ux);
-  _mm256_store_pd(unit[1], uy);
-  _mm256_store_pd(unit[2], uz);
+  _mm256_store_pd(unit[0], l.ux);
+  _mm256_store_pd(unit[1], l.uy);
+  _mm256_store_pd(unit[2], l.uz);
   for (int k = 0; k < 4; ++k)
     for (int a = 0; a < 3; ++a) unit_normals[k][a] = float(unit[a][k]);
 
-  // Camera frame: c = R p + t, n = R u.
-  const Eigen::Matrix3d& R = camera.camera_R_world;
-  const V px = lane(centers, 0), py = lane(centers, 1), pz = lane(centers, 2);
-  const V cx = add(row(R, 0, px, py, pz), set1(camera.camera_t_world.x()));
-  const V cy = add(row(R, 1, px, py, pz), set1(camera.camera_t_world.y()));
-  const V cz = add(row(R, 2, px, py, pz), set1(camera.camera_t_world.z()));
-  const V nx = row(R, 0, ux, uy, uz), ny = row(R, 1, ux, uy, uz), nz = row(R, 2, ux, uy, uz);
-
   // setupCircularCommonCase, perspective.
-  const V n_dot_view = add(add(mul(nx, cx), mul(ny, cy)), mul(nz, cz));
-  V culled = _mm256_or_pd(_mm256_cmp_pd(cz, set1(camera.near_clip), _CMP_NGE_UQ),
-                          _mm256_cmp_pd(cz, set1(camera.far_clip), _CMP_NLE_UQ));
-  if (params.backface_culling)
-    culled = _mm256_or_pd(culled, _mm256_cmp_pd(n_dot_view, set1(0.0), _CMP_GT_OQ));
+  const V cx = l.cx, cy = l.cy, cz = l.cz, nx = l.nx, ny = l.ny, nz = l.nz, n_dot_view = l.n_dot_view;
+  const V culled = l.culled;
   const V r2 = mul(radius, radius);
   const V inv_z = div(set1(1.0), cz);
   const V j00 = mul(set1(camera.fx), inv_z), j02 = mul(mul(mul(set1(-camera.fx), cx), inv_z), inv_z);
@@ -245,33 +254,18 @@ void setupCircularEwaSplats4(const Vec3* centers, const Vec3* normals, const dou
 
 size_t unculledCircularSurfels(const Vec3* centers, const Vec3* normals, const double* radii, size_t count,
                                const CameraFrame& camera, const EwaParams& params, uint32_t* kept) {
-  const Eigen::Matrix3d& R = camera.camera_R_world;
   size_t n = 0, i = 0;
   for (; i + 4 <= count; i += 4) {
-    // As setupCircularEwaSplats4: unit normal, camera frame, n . c and the cull mask.
-    const V nx_in = lane(normals + i, 0), ny_in = lane(normals + i, 1), nz_in = lane(normals + i, 2);
-    const V normal_length = _mm256_sqrt_pd(add(add(mul(nx_in, nx_in), mul(ny_in, ny_in)), mul(nz_in, nz_in)));
-    const V inv_length = div(set1(1.0), normal_length);
-    const V ux = mul(nx_in, inv_length), uy = mul(ny_in, inv_length), uz = mul(nz_in, inv_length);
-    const V px = lane(centers + i, 0), py = lane(centers + i, 1), pz = lane(centers + i, 2);
-    const V cx = add(row(R, 0, px, py, pz), set1(camera.camera_t_world.x()));
-    const V cy = add(row(R, 1, px, py, pz), set1(camera.camera_t_world.y()));
-    const V cz = add(row(R, 2, px, py, pz), set1(camera.camera_t_world.z()));
-    const V nx = row(R, 0, ux, uy, uz), ny = row(R, 1, ux, uy, uz), nz = row(R, 2, ux, uy, uz);
-    const V n_dot_view = add(add(mul(nx, cx), mul(ny, cy)), mul(nz, cz));
-    V culled = _mm256_or_pd(_mm256_cmp_pd(cz, set1(camera.near_clip), _CMP_NGE_UQ),
-                            _mm256_cmp_pd(cz, set1(camera.far_clip), _CMP_NLE_UQ));
-    if (params.backface_culling)
-      culled = _mm256_or_pd(culled, _mm256_cmp_pd(n_dot_view, set1(0.0), _CMP_GT_OQ));
+    const CameraLanes l(centers + i, normals + i, camera, params);
     // Valid input (finite, a normal of positive length, a positive radius); the others are kept.
     const V radius = _mm256_andnot_pd(set1(-0.0), _mm256_loadu_pd(radii + i));
     const V finite_max = set1(std::numeric_limits<double>::max());
-    V valid = _mm256_and_pd(_mm256_cmp_pd(normal_length, set1(0.0), _CMP_GT_OQ),
+    V valid = _mm256_and_pd(_mm256_cmp_pd(l.normal_length, set1(0.0), _CMP_GT_OQ),
                             _mm256_cmp_pd(radius, set1(0.0), _CMP_GT_OQ));
     valid = _mm256_and_pd(valid, _mm256_cmp_pd(radius, finite_max, _CMP_LE_OQ));
-    for (const V v : {px, py, pz, nx_in, ny_in, nz_in})
+    for (const V v : {l.px, l.py, l.pz, l.nx_in, l.ny_in, l.nz_in})
       valid = _mm256_and_pd(valid, _mm256_cmp_pd(_mm256_andnot_pd(set1(-0.0), v), finite_max, _CMP_LE_OQ));
-    const int culled_mask = _mm256_movemask_pd(_mm256_and_pd(culled, valid));
+    const int culled_mask = _mm256_movemask_pd(_mm256_and_pd(l.culled, valid));
     for (int k = 0; k < 4; ++k)
       if (!(culled_mask & (1 << k))) kept[n++] = uint32_t(i + k);
   }
