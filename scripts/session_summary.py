@@ -1,10 +1,13 @@
 #!/usr/bin/python3
 """Listens to a paint session's statistics until interrupted and writes what was measured over the whole session.
 
-Usage: /usr/bin/python3 scripts/session_summary.py OUTPUT.txt   (stop it with SIGINT; the summary is written then)
+Usage: /usr/bin/python3 scripts/session_summary.py OUTPUT.txt [PAINT_STATS.csv]
+       (stop it with SIGINT; the summary is written then; PAINT_STATS.csv: the paint model's memory-relevant stats
+       per message: unix time, active surfels, children, undo journal bytes)
 Topics: paint_stats (relaxed_connectivity/PaintStats), paint_renderer/stats (PaintRenderStats), haptic/stats
 (HapticLoopStats). Rates are over the periods in which something happened (painting events, rendered frames);
-latencies are the largest per-period percentiles (the renderer measures device pose stamp -> image).
+latencies are the largest per-period percentiles and the renderer's own over the whole session (device pose stamp
+-> image).
 """
 import signal
 import sys
@@ -60,6 +63,11 @@ class Summary:
                     reasons[m.last_full_update_reason] = reasons.get(m.last_full_update_reason, 0) + m.full_updates
             lines.append("full updates by (last) reason per second: " +
                          ", ".join("%s %d" % kv for kv in sorted(reasons.items())))
+            last = self.render[-1]
+            if last.session_latency_count:
+                lines.append("latency device pose -> image over the session: p50 %.1f ms, p99 %.1f ms, max %.1f ms "
+                             "(%d deltas)" % (last.session_latency_p50_ms, last.session_latency_p99_ms,
+                                              last.session_latency_max_ms, last.session_latency_count))
             lines.append("latency p99 per second while painting [ms]: " +
                          " ".join("%.0f" % m.latency_p99_ms for m in busy))
             last = self.render[-1]
@@ -88,6 +96,11 @@ def main():
     while not stop:
         rospy.sleep(0.2)
     s.write(sys.argv[1])
+    if len(sys.argv) > 2:
+        with open(sys.argv[2], "w") as f:
+            f.write("unix_time,active_surfels,children,journal_bytes\n")
+            for m in s.paint:
+                f.write("%.3f,%d,%d,%d\n" % (m.header.stamp.to_sec(), m.active_surfels, m.children, m.journal_bytes))
     rospy.signal_shutdown("done")
 
 

@@ -145,7 +145,7 @@ PaintRenderer::PaintRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
   if (params_.draw_brush) skin_sub_ = nh_.subscribe("brush/skin", 2, &PaintRenderer::skinCallback, this);
   last_stats_ = last_frame_ = ros::WallTime::now();
   timer_ =
-      nh_.createWallTimer(ros::WallDuration(1.0 / params_.max_rate), &PaintRenderer::timerCallback, this);
+      nh_.createWallTimer(ros::WallDuration(0.25 / params_.max_rate), &PaintRenderer::timerCallback, this);
   ROS_INFO_STREAM("paint_renderer: camera '" << params_.camera_frame << "' in '" << params_.fixed_frame
                                              << "', " << params_.width << " x " << params_.height
                                              << ", at most " << params_.max_rate << " Hz, brush "
@@ -262,6 +262,7 @@ void PaintRenderer::deltaCallback(const relaxed_connectivity::PaintDeltaConstPtr
   } catch (const std::exception& e) {
     reject("delta " + std::to_string(msg->sequence), e.what());
   }
+  renderWhenDue();  // the paint on screen as soon as a frame is due (end-to-end latency)
 }
 
 void PaintRenderer::skinCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
@@ -293,13 +294,21 @@ bool PaintRenderer::saveImage(relaxed_connectivity::PaintFile::Request& request,
 }
 
 void PaintRenderer::timerCallback(const ros::WallTimerEvent&) {
+  renderWhenDue();
+  const ros::WallTime now = ros::WallTime::now();
+  if ((now - last_stats_).toSec() >= params_.stats_period) publishStats(now);
+}
+
+void PaintRenderer::renderWhenDue() {
+  std::unique_lock<std::mutex> frame(frame_mutex_, std::try_to_lock);
+  if (!frame.owns_lock()) return;  // another thread renders now; the timer catches what it missed
+  const ros::WallTime now = ros::WallTime::now();
+  if ((now - last_frame_).toSec() < 1.0 / params_.max_rate - 1e-4) return;
   try {
-    renderIfChanged();
+    if (renderIfChanged()) last_frame_ = now;
   } catch (const std::exception& e) {  // never let a frame take the node down
     reject("frame", e.what());
   }
-  const ros::WallTime now = ros::WallTime::now();
-  if ((now - last_stats_).toSec() >= params_.stats_period) publishStats(now);
 }
 
 bool PaintRenderer::renderIfChanged() {
@@ -361,7 +370,10 @@ bool PaintRenderer::renderIfChanged() {
   last_camera_ = camera;
   const ros::Time shown = ros::Time::now();
   for (const ros::Time& pose_stamp : pending_pose_stamps_)
-    if (!pose_stamp.isZero()) latencies_ms_.push_back(1e3 * (shown - pose_stamp).toSec());
+    if (!pose_stamp.isZero()) {
+      latencies_ms_.push_back(1e3 * (shown - pose_stamp).toSec());
+      session_latency_.add(latencies_ms_.back());
+    }
   pending_pose_stamps_.clear();
   ++frames_;
   return true;
@@ -387,6 +399,10 @@ void PaintRenderer::publishStats(const ros::WallTime& now) {
     s.latency_p99_ms = percentile(latencies_ms_, 0.99);
     s.latency_max_ms =
         latencies_ms_.empty() ? 0.0 : *std::max_element(latencies_ms_.begin(), latencies_ms_.end());
+    s.session_latency_count = uint32_t(session_latency_.count());
+    s.session_latency_p50_ms = session_latency_.percentile(0.5);
+    s.session_latency_p99_ms = session_latency_.percentile(0.99);
+    s.session_latency_max_ms = session_latency_.max();
     s.sequence_gaps = sequence_gaps_;
     s.resyncs = resyncs_;
     s.rejected_messages = rejected_;

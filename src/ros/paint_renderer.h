@@ -22,9 +22,10 @@
 //             config/paint_session.yaml.
 //
 // A frame is published when something changed (a delta, the brush, the camera), at most max_rate times per
-// second; deltas are applied as they arrive. Bad input (malformed or non-finite clouds, a delta naming a
-// surfel's father it does not list, a frame other than fixed_frame) is logged, counted and rejected; the
-// image and the copy stay as they were.
+// second; deltas are applied as they arrive and rendered at once when a frame is due (else within a quarter
+// of a frame period: the camera and the brush are polled at 4 max_rate). Bad input (malformed or non-finite
+// clouds, a delta naming a surfel's father it does not list, a frame other than fixed_frame) is logged,
+// counted and rejected; the image and the copy stay as they were.
 #pragma once
 
 #include <relaxed_connectivity/PaintDelta.h>
@@ -41,6 +42,7 @@
 #include <string>
 #include <vector>
 
+#include "relaxed_connectivity/core/latency_histogram.h"
 #include "relaxed_connectivity/core/surfel_cloud.h"
 #include "relaxed_connectivity/paint/painted_cloud_mirror.h"
 #include "relaxed_connectivity/render/splat/camera.h"
@@ -101,6 +103,8 @@ class PaintRenderer {
   /// A cloud of a message in fixed_frame (throws naming the problem).
   SurfelCloud cloudOf(const sensor_msgs::PointCloud2& msg, const char* what) const;
   void timerCallback(const ros::WallTimerEvent&);
+  /// Renders if something changed and the last frame is at least 1 / max_rate old (one thread at a time).
+  void renderWhenDue();
   void publishStats(const ros::WallTime& now);
 
   ros::NodeHandle nh_, private_nh_;
@@ -134,7 +138,8 @@ class PaintRenderer {
   SurfelCloud skin_;
   std::vector<Rgba> composed_;  ///< the image with the brush
   std::optional<Camera> last_camera_;
-  ros::WallTime last_frame_;
+  std::mutex frame_mutex_;    // renderWhenDue: one frame at a time
+  ros::WallTime last_frame_;  ///< start of the last frame (frame_mutex_)
 
   // Stats of the current period
   ros::WallTime last_stats_;
@@ -142,6 +147,7 @@ class PaintRenderer {
   uint32_t sequence_gaps_ = 0, resyncs_ = 0, rejected_ = 0;
   double full_ms_ = 0, differential_ms_ = 0, differential_max_ms_ = 0, brush_ms_ = 0;
   std::vector<double> latencies_ms_;
+  LatencyHistogram session_latency_;  ///< since start
   std::string last_reason_ = "none", last_error_;
 };
 
