@@ -2,22 +2,9 @@
 
 #include <visualization_msgs/InteractiveMarker.h>
 
+#include "relaxed_connectivity/ros/six_dof_marker.h"
+
 namespace rc {
-namespace {
-
-visualization_msgs::InteractiveMarkerControl axisControl(const std::string& name, double x, double y,
-                                                         double z, uint8_t mode) {
-  visualization_msgs::InteractiveMarkerControl c;
-  c.name = name;
-  c.orientation.w = 1;
-  c.orientation.x = x;
-  c.orientation.y = y;
-  c.orientation.z = z;
-  c.interaction_mode = mode;
-  return c;
-}
-
-}  // namespace
 
 MarkerHapticDevice::MarkerHapticDevice(const std::string& topic_ns, const std::string& frame,
                                        const Vec3& start_position, double brush_length) {
@@ -39,22 +26,8 @@ MarkerHapticDevice::MarkerHapticDevice(const std::string& topic_ns, const std::s
   body.scale.z = brush_length;
   body.pose.position.z = -0.5 * brush_length;
   body.pose.orientation.w = 1;
-  body.color.r = 0.8f;
-  body.color.g = 0.6f;
-  body.color.b = 0.2f;
-  body.color.a = 1.0f;
-  visualization_msgs::InteractiveMarkerControl grab;
-  grab.always_visible = true;
-  grab.interaction_mode = visualization_msgs::InteractiveMarkerControl::MOVE_ROTATE_3D;
-  grab.markers.push_back(body);
-  marker.controls.push_back(grab);
-  using Control = visualization_msgs::InteractiveMarkerControl;
-  marker.controls.push_back(axisControl("rotate_x", 1, 0, 0, Control::ROTATE_AXIS));
-  marker.controls.push_back(axisControl("move_x", 1, 0, 0, Control::MOVE_AXIS));
-  marker.controls.push_back(axisControl("rotate_z", 0, 1, 0, Control::ROTATE_AXIS));
-  marker.controls.push_back(axisControl("move_z", 0, 1, 0, Control::MOVE_AXIS));
-  marker.controls.push_back(axisControl("rotate_y", 0, 0, 1, Control::ROTATE_AXIS));
-  marker.controls.push_back(axisControl("move_y", 0, 0, 1, Control::MOVE_AXIS));
+  body.color = markerColor(0.8f, 0.6f, 0.2f);
+  addSixDofControls(body, &marker);
   server_->insert(marker, [this](const auto& f) { feedback(f); });
   paint_entry_ = menu_.insert("Paint (button 0)", [this](const auto& f) { togglePaint(f); });
   menu_.setCheckState(paint_entry_, interactive_markers::MenuHandler::UNCHECKED);

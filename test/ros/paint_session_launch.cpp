@@ -1,7 +1,14 @@
 // launch/paint_session.launch end to end (paint_session_launch.test): scan -> paint model -> replayed stroke
 // -> paint_renderer images; the second 6-DOF input (object_pose) moves the object and the renderer follows
-// with a full update.
+// with a full update; the camera's interactive marker (camera_mover, dragged as rviz sends it) moves the
+// view, a non-finite drag is refused.
 #include <geometry_msgs/PoseStamped.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+#include <visualization_msgs/InteractiveMarkerFeedback.h>
+
+#include <limits>
 
 #include "launch_test_support.h"
 #include "paint_session_support.h"
@@ -39,6 +46,38 @@ TEST(PaintSessionLaunch, ScansPaintsRendersAndFollowsTheObject) {
       },
       10))
       << session.render_stats.last_full_update_reason;
+
+  // Drag the camera's marker 3 cm sideways: the camera frame moves, the renderer makes a full update.
+  tf2_ros::Buffer tf_buffer;
+  tf2_ros::TransformListener tf_listener(tf_buffer);
+  const auto camera = [&] {
+    return tf2::transformToEigen(tf_buffer.lookupTransform("world", "paint_camera", ros::Time(0)));
+  };
+  ASSERT_TRUE(waitFor([&] { return tf_buffer.canTransform("world", "paint_camera", ros::Time(0)); }, 5));
+  const Eigen::Isometry3d start = camera();
+  ros::Publisher drag =
+      nh.advertise<visualization_msgs::InteractiveMarkerFeedback>("camera_mover/marker/feedback", 10);
+  ASSERT_TRUE(waitFor([&] { return drag.getNumSubscribers() > 0; }, 10));
+  visualization_msgs::InteractiveMarkerFeedback feedback;
+  feedback.header.frame_id = "world";
+  feedback.marker_name = "paint_camera";
+  feedback.event_type = visualization_msgs::InteractiveMarkerFeedback::POSE_UPDATE;
+  feedback.pose = tf2::toMsg(Eigen::Translation3d(0.03, 0, 0) * start);
+  const uint32_t full_before_drag = session.full_updates;
+  drag.publish(feedback);
+  EXPECT_TRUE(waitFor([&] { return (camera().translation() - start.translation()).x() > 0.029; }, 5));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return session.full_updates > full_before_drag &&
+               session.render_stats.last_full_update_reason == "camera_moved";
+      },
+      10));
+  // A non-finite drag is refused: the camera stays.
+  const Eigen::Isometry3d dragged = camera();
+  feedback.pose.position.y = std::numeric_limits<double>::quiet_NaN();
+  drag.publish(feedback);
+  waitFor([] { return false; }, 1.0);
+  EXPECT_LT((camera().translation() - dragged.translation()).norm(), 1e-9);
 }
 
 }  // namespace
