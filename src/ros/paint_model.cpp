@@ -196,7 +196,9 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
     if (!cloud.hasNormals())
       throw std::invalid_argument("the cloud has no normals (normal_x/y/z): run it through surfel_estimator");
     if (msg->header.frame_id != params_.world_frame) {
-      const auto tf = tf_buffer_.lookupTransform(params_.world_frame, msg->header.frame_id, ros::Time(0));
+      // (waits a little: at start-up the object's frame may not be broadcast yet)
+      const auto tf = tf_buffer_.lookupTransform(params_.world_frame, msg->header.frame_id, ros::Time(0),
+                                                 ros::Duration(2.0));
       cloud.transform(tf2::transformToEigen(tf));
     }
     cloud.frame_id = params_.world_frame;
