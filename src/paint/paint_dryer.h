@@ -25,6 +25,7 @@ class PaintDryer {
   double start_;
   std::vector<double> last_visit_;
   size_t cursor_ = 0;
+  std::vector<ChildSurfel> dried_children_;  // scratch
 };
 
 }  // namespace rc

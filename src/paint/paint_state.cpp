@@ -1,6 +1,7 @@
 #include "relaxed_connectivity/paint/paint_state.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace rc {
 
@@ -26,6 +27,17 @@ void addWetPaint(PaintState& into, const PaintState& from, double volume) {
 PaintColour visibleColour(const PaintState& s) {
   const double alpha = std::clamp(s.optical_density * s.wet_volume, 0.0, 1.0);  // (5.8)
   return PaintColour::mix(s.wet, alpha, s.dry, 1.0 - alpha);
+}
+
+uint8_t colourByte(double channel) {
+  return uint8_t(std::lround(255.0 * std::clamp(channel, 0.0, 1.0)));
+}
+
+bool lookAlike(const PaintState& a, const PaintState& b) {
+  const PaintColour ca = visibleColour(a), cb = visibleColour(b);
+  for (int k = 0; k < 3; ++k)
+    if (colourByte(ca.rgb[k]) != colourByte(cb.rgb[k])) return false;
+  return float(ca.reflectivity) == float(cb.reflectivity);
 }
 
 }  // namespace rc

@@ -42,5 +42,10 @@ void addWetPaint(PaintState& into, const PaintState& from, double volume);
 
 /// The visible colour (5.8): alpha C_w + (1 - alpha) C_d with alpha = min(rho V_w, 1) (dry paint is opaque).
 PaintColour visibleColour(const PaintState& s);
+/// A colour channel 0..1 as the 8-bit value a viewer gets.
+uint8_t colourByte(double channel);
+/// Whether a viewer sees `a` and `b` alike: the same 8-bit visible colour and the same visible reflectivity
+/// in float (what PaintSurface::activeCloud exports). Drying under opaque wet paint, for one, is unseen.
+bool lookAlike(const PaintState& a, const PaintState& b);
 
 }  // namespace rc

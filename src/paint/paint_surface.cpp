@@ -259,14 +259,13 @@ SurfelCloud PaintSurface::cloudOf(const uint32_t* list, size_t count, size_t n, 
   paint.reserve(n);
   std::vector<uint32_t> fathers;
   fathers.reserve(n);
-  const auto to_byte = [](double c) { return uint8_t(std::lround(255.0 * std::clamp(c, 0.0, 1.0))); };
   const auto push = [&](const Vec3& p, const Vec3& normal, double radius, const PaintState& state,
                         uint32_t father) {
     out.positions.push_back(p);
     out.normals.push_back(normal);
     out.radii.push_back(radius);
     const Vec3 c = visibleColour(state).rgb;  // (5.8)
-    out.colors.push_back({to_byte(c[0]), to_byte(c[1]), to_byte(c[2]), 255});
+    out.colors.push_back({colourByte(c[0]), colourByte(c[1]), colourByte(c[2]), 255});
     paint.push_back(&state);
     fathers.push_back(father);
   };

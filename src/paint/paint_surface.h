@@ -70,6 +70,16 @@ class PaintSurface {
     notify(original);
     return children_[original];
   }
+  /// Mutable access for a change no viewer sees (lookAlike before and after: drying under opaque paint): the
+  /// observer is told (undo stays exact), takeChangedOriginals does not list it (no delta for nothing).
+  PaintState& originalPaintUnseen(size_t original) {
+    if (observer_) observer_->beforeChange(original);
+    return original_paint_[original];
+  }
+  std::vector<ChildSurfel>& childrenUnseen(size_t original) {
+    if (observer_) observer_->beforeChange(original);
+    return children_[original];
+  }
   /// The paint of an original surfel: from the cloud's paint columns when it has them (paint_attributes.h),
   /// else no wet paint over a dry base layer (volume 1) of the surfel's own colour (white without colours).
   const PaintState& originalPaint(size_t original) const { return original_paint_[original]; }

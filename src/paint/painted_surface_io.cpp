@@ -15,10 +15,6 @@ namespace {
 
 enum SurfelKind : uint8_t { kEnabledOriginal = 0, kDisabledOriginal = 1, kChild = 2 };
 
-uint8_t colourByte(double c) {
-  return uint8_t(std::lround(255.0 * std::clamp(c, 0.0, 1.0)));
-}
-
 }  // namespace
 
 void savePaintedSurface(const std::string& path, const PaintSurface& surface, bool atomic) {
