@@ -37,7 +37,7 @@ bool lookAlike(const PaintState& a, const PaintState& b) {
   const PaintColour ca = visibleColour(a), cb = visibleColour(b);
   for (int k = 0; k < 3; ++k)
     if (colourByte(ca.rgb[k]) != colourByte(cb.rgb[k])) return false;
-  return float(ca.reflectivity) == float(cb.reflectivity);
+  return colourByte(ca.reflectivity) == colourByte(cb.reflectivity);  // (weighs the environment's colour)
 }
 
 }  // namespace rc

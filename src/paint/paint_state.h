@@ -44,8 +44,9 @@ void addWetPaint(PaintState& into, const PaintState& from, double volume);
 PaintColour visibleColour(const PaintState& s);
 /// A colour channel 0..1 as the 8-bit value a viewer gets.
 uint8_t colourByte(double channel);
-/// Whether a viewer sees `a` and `b` alike: the same 8-bit visible colour and the same visible reflectivity
-/// in float (what PaintSurface::activeCloud exports). Drying under opaque wet paint, for one, is unseen.
+/// Whether a viewer sees `a` and `b` alike: the same 8-bit visible colour and visible reflectivity in the
+/// same 1/255 step (it weighs an environment colour of 8-bit channels: within a step a pixel moves by less
+/// than a level). Drying under opaque wet paint, for one, is unseen.
 bool lookAlike(const PaintState& a, const PaintState& b);
 
 }  // namespace rc
