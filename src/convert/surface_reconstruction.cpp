@@ -1,0 +1,162 @@
+#include "relaxed_connectivity/convert/surface_reconstruction.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#if defined(RC_HAVE_CGAL)
+#include <CGAL/Advancing_front_surface_reconstruction.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#endif
+
+#include "relaxed_connectivity/mesh/mesh_metrics.h"
+
+namespace rc {
+namespace {
+
+/// Union-find over the vertices: the connected components of the triangles.
+struct Components {
+  explicit Components(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  size_t find(size_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  }
+  void join(size_t a, size_t b) { parent[find(a)] = find(b); }
+  std::vector<size_t> parent;
+};
+
+void checkInput(const SurfelCloud& surfels) {
+  if (surfels.size() < 4)
+    throw std::invalid_argument("reconstructSurface: " + std::to_string(surfels.size()) +
+                                " surfels; a surface needs at least 4");
+  if (!surfels.hasNormals())
+    throw std::invalid_argument("reconstructSurface: the surfels have no normals (orient them first)");
+  for (size_t i = 0; i < surfels.size(); ++i)
+    if (!surfels.positions[i].allFinite() || !surfels.normals[i].allFinite())
+      throw std::invalid_argument("reconstructSurface: surfel " + std::to_string(i) +
+                                  " has a non-finite position or normal");
+}
+
+#if defined(RC_HAVE_CGAL)
+/// Turns the triangles so that each edge shared by two of them is traversed once each way (a breadth-first
+/// walk per component), then flips each component whose area-weighted normals disagree with the surfels'.
+/// Returns false if a component cannot be oriented consistently (a Moebius-like or non-manifold patch).
+bool orient(const SurfelCloud& surfels, std::vector<Triangle>& triangles, ReconstructionStats& stats) {
+  // Edge -> the triangles using it.
+  std::unordered_map<uint64_t, std::vector<uint32_t>> users;
+  auto key = [](uint32_t a, uint32_t b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); };
+  for (uint32_t t = 0; t < triangles.size(); ++t)
+    for (int e = 0; e < 3; ++e) users[key(triangles[t][e], triangles[t][(e + 1) % 3])].push_back(t);
+  std::vector<int> component(triangles.size(), -1);
+  bool consistent = true;
+  auto sameDirection = [](const Triangle& t, uint32_t a, uint32_t b) {
+    for (int e = 0; e < 3; ++e)
+      if (t[e] == a && t[(e + 1) % 3] == b) return true;
+    return false;
+  };
+  int components = 0;
+  std::vector<uint32_t> queue;
+  for (uint32_t seed = 0; seed < triangles.size(); ++seed) {
+    if (component[seed] >= 0) continue;
+    const int c = components++;
+    component[seed] = c;
+    queue.assign(1, seed);
+    std::vector<uint32_t> members;
+    while (!queue.empty()) {
+      const uint32_t t = queue.back();
+      queue.pop_back();
+      members.push_back(t);
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t a = triangles[t][e], b = triangles[t][(e + 1) % 3];
+        for (const uint32_t u : users[key(a, b)]) {
+          if (u == t) continue;
+          if (component[u] < 0) {  // orient the neighbour against this triangle's edge
+            if (sameDirection(triangles[u], a, b)) std::swap(triangles[u][1], triangles[u][2]);
+            component[u] = c;
+            queue.push_back(u);
+          } else if (component[u] == c && sameDirection(triangles[u], a, b)) {
+            consistent = false;
+          }
+        }
+      }
+    }
+    // The surfels' normals vote, weighted by the triangle areas.
+    double vote = 0;
+    for (const uint32_t t : members) {
+      const Vec3& p0 = surfels.positions[triangles[t][0]];
+      const Vec3 n = (surfels.positions[triangles[t][1]] - p0).cross(surfels.positions[triangles[t][2]] - p0);
+      vote += n.dot(surfels.normals[triangles[t][0]] + surfels.normals[triangles[t][1]] +
+                    surfels.normals[triangles[t][2]]);
+    }
+    if (vote < 0) {
+      for (const uint32_t t : members) std::swap(triangles[t][1], triangles[t][2]);
+      ++stats.flipped_components;
+    }
+  }
+  stats.components = size_t(components);
+  return consistent;
+}
+#endif
+
+}  // namespace
+
+#if defined(RC_HAVE_CGAL)
+
+bool meshGenerationAvailable() {
+  return true;
+}
+
+TriangleMesh reconstructSurface(const SurfelCloud& surfels, const ReconstructionOptions& options,
+                                ReconstructionStats* stats_out) {
+  checkInput(surfels);
+  if (!(options.radius_ratio_bound > 0) || !(options.beta > 0) || !(options.beta < M_PI / 2))
+    throw std::invalid_argument("reconstructSurface: radius_ratio_bound must be > 0 and beta in (0, pi/2)");
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  std::vector<Kernel::Point_3> points;
+  points.reserve(surfels.size());
+  for (const Vec3& p : surfels.positions) points.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::array<std::size_t, 3>> faces;
+  CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(faces),
+                                               options.radius_ratio_bound, options.beta);
+  TriangleMesh mesh;
+  mesh.vertices = surfels;
+  mesh.triangles.reserve(faces.size());
+  for (const auto& f : faces) mesh.triangles.push_back({uint32_t(f[0]), uint32_t(f[1]), uint32_t(f[2])});
+  ReconstructionStats stats;
+  const bool consistent = orient(surfels, mesh.triangles, stats);
+  const EdgeStatistics edges = edgeStatistics(mesh);
+  if (options.require_manifold &&
+      (!consistent || edges.non_manifold_edges > 0 || edges.misoriented_edges > 0))
+    throw std::invalid_argument("reconstructSurface: the reconstruction is not an orientable manifold (" +
+                                std::to_string(edges.non_manifold_edges) +
+                                " edges with more than two triangles, " +
+                                std::to_string(edges.misoriented_edges) + " that could not be oriented)");
+  std::vector<bool> used(surfels.size(), false);
+  for (const Triangle& t : mesh.triangles)
+    for (uint32_t v : t) used[v] = true;
+  stats.triangles = mesh.triangles.size();
+  stats.unused_surfels = size_t(std::count(used.begin(), used.end(), false));
+  stats.boundary_edges = edges.boundary_edges;
+  if (stats_out) *stats_out = stats;
+  return mesh;
+}
+
+#else
+
+bool meshGenerationAvailable() {
+  return false;
+}
+
+TriangleMesh reconstructSurface(const SurfelCloud& surfels, const ReconstructionOptions&,
+                                ReconstructionStats*) {
+  checkInput(surfels);
+  throw std::runtime_error("reconstructSurface: this build has no CGAL (install libcgal-dev and rebuild)");
+}
+
+#endif
+
+}  // namespace rc
