@@ -1,0 +1,239 @@
+#include "relaxed_connectivity/convert/atlas_packing.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace rc {
+namespace {
+
+/// Distance from p to the closed triangle abc (2D).
+double distanceToTriangle(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                          const Eigen::Vector2d& c) {
+  auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
+    return u.x() * v.y() - u.y() * v.x();
+  };
+  const double area = cross(b - a, c - a);
+  const double s0 = cross(b - a, p - a), s1 = cross(c - b, p - b), s2 = cross(a - c, p - c);
+  if ((area > 0 && s0 >= 0 && s1 >= 0 && s2 >= 0) || (area < 0 && s0 <= 0 && s1 <= 0 && s2 <= 0)) return 0.0;
+  auto segment = [&](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
+    const Eigen::Vector2d d = v - u;
+    const double t = std::clamp((p - u).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
+    return (p - (u + t * d)).norm();
+  };
+  return std::min({segment(a, b), segment(b, c), segment(c, a)});
+}
+
+/// A patch's mask reduced to what packing needs: per texel row, the first and last claimed column.
+struct RowProfile {
+  int width = 0, height = 0;
+  double origin = 0;
+  std::vector<int> left, right;  // -1: the row claims nothing
+  size_t claimed = 0;
+  double alpha_left = 0, alpha_right = 0;  // base angles [rad]
+};
+
+RowProfile profileOf(const PatchShape& p, int border) {
+  const PatchMask mask = patchMask(p, border);
+  RowProfile r;
+  r.width = mask.width;
+  r.height = mask.height;
+  r.origin = mask.origin;
+  r.left.assign(size_t(mask.height), -1);
+  r.right.assign(size_t(mask.height), -1);
+  for (int y = 0; y < mask.height; ++y)
+    for (int x = 0; x < mask.width; ++x)
+      if (mask.texels[size_t(y) * mask.width + x]) {
+        if (r.left[y] < 0) r.left[y] = x;
+        r.right[y] = x;
+        ++r.claimed;
+      }
+  r.alpha_left = std::atan2(p.height, p.apex_x);
+  r.alpha_right = std::atan2(p.height, p.base - p.apex_x);
+  return r;
+}
+
+bool isPowerOfTwo(int v) {
+  return v > 0 && (v & (v - 1)) == 0;
+}
+
+int nextPowerOfTwo(double v) {
+  int p = 1;
+  while (p < v) p *= 2;
+  return p;
+}
+
+}  // namespace
+
+PatchShape PatchShape::ofTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                  const Eigen::Vector3d& c, double texels_per_unit) {
+  // The longest edge is the base; the apex is the vertex opposite it.
+  const std::array<Eigen::Vector3d, 3> v = {a, b, c};
+  int k = 0;
+  double longest = -1;
+  for (int e = 0; e < 3; ++e) {
+    const double length = (v[(e + 1) % 3] - v[e]).norm();
+    if (length > longest) longest = length, k = e;
+  }
+  const Eigen::Vector3d& p0 = v[k];
+  const Eigen::Vector3d& p1 = v[(k + 1) % 3];
+  const Eigen::Vector3d& apex = v[(k + 2) % 3];
+  const Eigen::Vector3d axis = (p1 - p0) / std::max(longest, 1e-300);
+  PatchShape s;
+  s.base = longest * texels_per_unit;
+  s.apex_x = std::clamp((apex - p0).dot(axis), 0.0, longest) * texels_per_unit;
+  s.height = ((apex - p0) - (apex - p0).dot(axis) * axis).norm() * texels_per_unit;
+  return s;
+}
+
+PatchMask patchMask(const PatchShape& p, int border) {
+  if (!std::isfinite(p.base) || !std::isfinite(p.apex_x) || !std::isfinite(p.height) || !(p.base > 0) ||
+      !(p.height > 0) || p.apex_x < 0 || p.apex_x > p.base)
+    throw std::invalid_argument("patchMask: a patch needs base > 0, height > 0 and 0 <= apex_x <= base");
+  if (border < 0) throw std::invalid_argument("patchMask: border must be >= 0");
+  PatchMask m;
+  m.origin = border + 1.0;
+  m.width = int(std::ceil(p.base + 2 * m.origin));
+  m.height = int(std::ceil(p.height + 2 * m.origin));
+  m.texels.assign(size_t(m.width) * size_t(m.height), 0);
+  const Eigen::Vector2d a(m.origin, m.origin), b(m.origin + p.base, m.origin),
+      c(m.origin + p.apex_x, m.origin + p.height);
+  // A texel is claimed when its square touches the triangle grown by `border` texels.
+  const double reach = border + std::sqrt(0.5);
+  for (int y = 0; y < m.height; ++y)
+    for (int x = 0; x < m.width; ++x)
+      m.texels[size_t(y) * m.width + x] =
+          distanceToTriangle(Eigen::Vector2d(x + 0.5, y + 0.5), a, b, c) <= reach;
+  return m;
+}
+
+AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptions& options) {
+  if (!(options.height_tolerance >= 0) || !(options.height_tolerance < 1))
+    throw std::invalid_argument("packPatches: height_tolerance must be in [0, 1)");
+  if (options.page_size != 0 && !isPowerOfTwo(options.page_size))
+    throw std::invalid_argument("packPatches: page_size " + std::to_string(options.page_size) +
+                                " is not a power of two");
+  if (!isPowerOfTwo(options.max_page_size))
+    throw std::invalid_argument("packPatches: max_page_size must be a power of two");
+  std::vector<RowProfile> profiles;
+  profiles.reserve(patches.size());
+  double box_area = 0, triangle_area = 0;
+  int largest = 1;
+  size_t claimed = 0;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    try {
+      profiles.push_back(profileOf(patches[i], options.border));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("packPatches: patch " + std::to_string(i) + ": " + e.what());
+    }
+    box_area += double(profiles.back().width) * profiles.back().height;
+    triangle_area += 0.5 * patches[i].base * patches[i].height;
+    largest = std::max({largest, profiles.back().width, profiles.back().height});
+    claimed += profiles.back().claimed;
+  }
+  AtlasLayout layout;
+  layout.page_size =
+      options.page_size > 0
+          ? options.page_size
+          : std::min(options.max_page_size,
+                     std::max(nextPowerOfTwo(largest), nextPowerOfTwo(std::sqrt(box_area / 0.8))));
+  const int P = layout.page_size;
+  if (largest > P)
+    throw std::invalid_argument("packPatches: a patch of " + std::to_string(largest) +
+                                " texels does not fit a page of " + std::to_string(P));
+  layout.placements.assign(patches.size(), PatchPlacement());
+  if (patches.empty()) return layout;
+
+  // Remaining patches, tallest first (row heights come from the tallest left).
+  std::vector<uint32_t> remaining(patches.size());
+  for (uint32_t i = 0; i < remaining.size(); ++i) remaining[i] = i;
+  std::stable_sort(remaining.begin(), remaining.end(),
+                   [&](uint32_t a, uint32_t b) { return profiles[a].height > profiles[b].height; });
+  std::vector<bool> placed(patches.size(), false);
+  int page = 0, y_row = 0;
+  std::vector<int> row_right;  // per texel row of the current row: first free column
+  std::vector<uint32_t> candidates;
+  constexpr int kFailuresToCloseARow = 16;  // candidates tried in vain before a row counts as full
+  while (!remaining.empty()) {
+    const int row_height = profiles[remaining.front()].height;  // (line 3: the tallest left)
+    if (y_row + row_height > P) ++page, y_row = 0;
+    const double lowest = row_height - options.height_tolerance * row_height;
+    candidates.clear();
+    for (uint32_t i : remaining)
+      if (profiles[i].height >= lowest) candidates.push_back(i);  // (line 4)
+    row_right.assign(size_t(row_height), 0);
+    double beta = M_PI / 2;  // (line 5)
+    bool mirror = false;
+    int failures = 0;
+    while (!candidates.empty() && failures < kFailuresToCloseARow) {
+      // (line 8) the candidate whose base angle fits the free angle best.
+      size_t best = 0;
+      double best_fit = std::numeric_limits<double>::infinity();
+      for (size_t k = 0; k < candidates.size(); ++k) {
+        const RowProfile& r = profiles[candidates[k]];
+        const double fit = std::min(std::abs(r.alpha_left - beta), std::abs(r.alpha_right - beta));
+        if (fit < best_fit) best_fit = fit, best = k;
+      }
+      const uint32_t t = candidates[best];
+      candidates.erase(candidates.begin() + long(best));
+      const RowProfile& r = profiles[t];
+      const bool flip_h = std::abs(r.alpha_left - beta) > std::abs(r.alpha_right - beta);  // (line 9)
+      const bool flip_v = mirror;                                                          // (line 14)
+      // insert(y_min, t): pushed from the right as far left as its texels allow.
+      const int shift = flip_v ? row_height - r.height : 0;  // flipped: aligned with the row's top
+      auto maskRow = [&](int strip_row) {
+        return flip_v ? r.height - 1 - (strip_row - shift) : strip_row - shift;
+      };
+      int x = 0;
+      for (int s = shift; s < shift + r.height; ++s) {
+        const int m = maskRow(s);
+        if (r.left[m] < 0) continue;
+        const int left = flip_h ? r.width - 1 - r.right[m] : r.left[m];
+        x = std::max(x, row_right[s] - left);
+      }
+      if (x + r.width > P) {
+        ++failures;
+        continue;
+      }
+      failures = 0;
+      for (int s = shift; s < shift + r.height; ++s) {
+        const int m = maskRow(s);
+        if (r.left[m] < 0) continue;
+        const int right = flip_h ? r.width - 1 - r.left[m] : r.right[m];
+        row_right[s] = std::max(row_right[s], x + right + 1);
+      }
+      // The triangle's corners on the page.
+      const PatchShape& p = patches[t];
+      std::array<Eigen::Vector2d, 3> c = {Eigen::Vector2d(r.origin, r.origin),
+                                          Eigen::Vector2d(r.origin + p.base, r.origin),
+                                          Eigen::Vector2d(r.origin + p.apex_x, r.origin + p.height)};
+      for (Eigen::Vector2d& q : c) {
+        if (flip_h) q.x() = r.width - q.x();
+        if (flip_v) q.y() = r.height - q.y();
+        q += Eigen::Vector2d(x, y_row + shift);
+      }
+      PatchPlacement& out = layout.placements[t];
+      out.page = page;
+      out.corners = c;
+      out.flipped_horizontally = flip_h;
+      out.flipped_vertically = flip_v;
+      placed[t] = true;
+      beta = flip_h ? r.alpha_left : r.alpha_right;  // (lines 10, 12) the free angle on the right
+      mirror = !mirror;                              // (line 15)
+    }
+    remaining.erase(std::remove_if(remaining.begin(), remaining.end(), [&](uint32_t i) { return placed[i]; }),
+                    remaining.end());
+    y_row += row_height;  // (line 20)
+  }
+  layout.pages = page + 1;
+  layout.last_page_height = y_row;
+  const double atlas_area = double(P) * P * page + double(P) * layout.last_page_height;
+  layout.usage = triangle_area / atlas_area;
+  layout.usage_with_borders = double(claimed) / atlas_area;
+  return layout;
+}
+
+}  // namespace rc
