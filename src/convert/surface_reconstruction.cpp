@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -17,17 +16,6 @@
 
 namespace rc {
 namespace {
-
-/// Union-find over the vertices: the connected components of the triangles.
-struct Components {
-  explicit Components(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  size_t find(size_t v) {
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
-  }
-  void join(size_t a, size_t b) { parent[find(a)] = find(b); }
-  std::vector<size_t> parent;
-};
 
 void checkInput(const SurfelCloud& surfels) {
   if (surfels.size() < 4)
