@@ -16,22 +16,14 @@
 #include "relaxed_connectivity/convert/surface_reconstruction.h"
 #include "relaxed_connectivity/io/ply_io.h"
 #include "relaxed_connectivity/mesh/mesh_metrics.h"
+#include "sphere_surfels.h"
 
 namespace rc {
 namespace {
 
 /// n Fibonacci points on the unit sphere, outward normals, radii of the sampling.
 SurfelCloud sphereSurfels(size_t n) {
-  SurfelCloud c;
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (size_t i = 0; i < n; ++i) {
-    const double z = 1.0 - 2.0 * (double(i) + 0.5) / double(n), r = std::sqrt(1.0 - z * z);
-    const Vec3 p(r * std::cos(golden * double(i)), r * std::sin(golden * double(i)), z);
-    c.positions.push_back(p);
-    c.normals.push_back(p);
-  }
-  c.radii.assign(n, std::sqrt(4.0 / double(n)));
-  return c;
+  return fibonacciSphereSurfels(n, std::sqrt(4.0 / double(n)));
 }
 
 /// The largest distance of a mesh's vertices and triangle centroids from the unit sphere.

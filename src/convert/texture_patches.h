@@ -1,0 +1,100 @@
+// Texture patches per mesh triangle (thesis 6.2): the surfels near a triangle are EWA-splatted (src/render's
+// set-up and rasterizer) in an orthographic view onto the triangle's plane, its longest edge along the image
+// x-axis, with visibility splatting; the patch resolution is refined until the area-weighted error (6.1)
+// between the surfels and the bilinearly interpolated texture drops below a threshold, or the texel spacing
+// reaches d_min / (2 sqrt 2), d_min the smallest distance between two of the patch's surfels. Colour and
+// normal textures (6.2) are refined separately, so their sizes differ. Each patch is the packing mask's
+// raster (atlas_packing.h): the triangle plus a border, so bilinear filtering never reads a neighbour.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "relaxed_connectivity/convert/atlas_packing.h"
+#include "relaxed_connectivity/core/triangle_mesh.h"
+
+namespace rc {
+
+/// Which texture a patch holds.
+enum class TextureKind { kColor, kNormal };
+
+struct TextureOptions {
+  /// Colour threshold: (6.1) divided by the area of the patch's surfels, i.e. the area-weighted mean RGB
+  /// distance (L2, channels in [0, 1]) between a surfel and the texture at its centre.
+  double color_error = 0.03;
+  /// Normal threshold: the area-weighted mean of (6.2), 1 - N_s . N_t.
+  double normal_error = 0.002;
+  bool normal_texture = true;
+  /// Texels along the base at the first refinement step, and the factor the resolution grows by per step.
+  double start_base_texels = 2;
+  double refinement_factor = 1.41421356237;
+  /// Never more texels along a base than this (a guard for duplicate surfels, whose d_min is 0).
+  double max_base_texels = 512;
+  /// Texels around each triangle (atlas_packing.h: a patch claims its triangle plus this border).
+  int border = 1;
+  /// Surfels farther than this from a triangle's plane are not splatted into its patch [m]; 0: the larger of
+  /// four times the median surfel radius and 1 % of the bounding box diagonal.
+  double projection_depth = 0;
+  int threads = 0;  ///< 0: all cores
+};
+
+/// A triangle's frame: the base from `origin` along `x_axis` (the longest edge), the apex on the +y side,
+/// `normal` = the triangle's (right-handed with its corner order). corner[k]: the mesh corner (0, 1, 2 of the
+/// triangle) at the base start, base end and apex.
+struct PatchFrame {
+  Eigen::Vector3d origin, x_axis, y_axis, normal;
+  std::array<int, 3> corner;
+  double base = 0, apex_x = 0, height = 0;  ///< [m]
+};
+PatchFrame patchFrame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+
+/// One texture of one triangle: the packing mask's raster of `shape` (texel (x, y) centred at (x + 0.5,
+/// y + 0.5) - origin texels from the base start along the frame's x and y axes), row 0 at the base.
+struct TexturePatch {
+  PatchShape shape;
+  double texels_per_unit = 0;
+  int width = 0, height = 0;
+  double origin = 0;
+  std::vector<Eigen::Vector3f> texels;  ///< RGB in [0, 1], or unit normals in the world frame
+  double error = 0;                     ///< the area-weighted mean error the refinement ended with
+  bool at_resolution_limit = false;     ///< stopped by the texel spacing limit, not by the threshold
+  int steps = 0;                        ///< refinement steps taken
+  uint32_t surfels = 0;                 ///< |P_t|: visible surfels with centres on the patch
+  uint32_t filled_texels = 0;           ///< texels no splat covered, filled from their neighbours
+};
+
+struct TrianglePatches {
+  PatchFrame frame;
+  TexturePatch color, normal;  ///< normal: empty without normal_texture
+};
+
+struct TextureStats {
+  size_t triangles = 0;
+  size_t color_texels = 0, normal_texels = 0;
+  size_t at_resolution_limit = 0;  ///< colour patches stopped by the spacing limit
+  size_t empty_patches = 0;        ///< triangles no surfel reached (filled with the nearest surfel's colour)
+  double projection_depth = 0;     ///< [m], as used
+  double seconds = 0;
+};
+
+/// Texture patches for every triangle of `mesh` from `surfels` (positions, normals, radii or axes; colours
+/// optional: white without). `progress(done, total)` is called now and then from one thread. Throws
+/// std::invalid_argument for surfels without normals or radii, non-finite input, a degenerate triangle
+/// (named by index), or bad options.
+std::vector<TrianglePatches> computeTexturePatches(
+    const TriangleMesh& mesh, const SurfelCloud& surfels, const TextureOptions& options = {},
+    TextureStats* stats = nullptr, const std::function<void(size_t, size_t)>& progress = nullptr);
+
+/// The texture's bilinear interpolation at continuous raster coordinates (texel centres at i + 0.5),
+/// clamped to the raster.
+Eigen::Vector3f sampleBilinear(const TexturePatch& patch, double x, double y);
+
+/// A point of the triangle (world frame) in the patch's raster coordinates.
+Eigen::Vector2d rasterCoordinates(const TexturePatch& patch, const PatchFrame& frame,
+                                  const Eigen::Vector3d& p);
+
+}  // namespace rc
