@@ -43,7 +43,7 @@ struct PatchPlacement {
 struct AtlasLayout {
   int page_size = 0;
   int pages = 0;
-  int last_page_height = 0;                ///< the last page's used rows rounded up to a power of two
+  int last_page_height = 0;                ///< the last page is cropped to its used rows
   std::vector<PatchPlacement> placements;  ///< one per patch, in the input order
   /// Texture usage: the texels inside the triangles (their area) over the atlas area (all pages, the last one
   /// cropped to last_page_height); with_borders counts every texel the patches claim (triangles and borders).

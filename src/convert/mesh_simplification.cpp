@@ -24,11 +24,19 @@ using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Mesh = CGAL::Surface_mesh<Kernel::Point_3>;
 
 /// Stops at the triangle count or before a collapse costing more than the squared error bound.
+/// Reports progress every few thousand collapses (and cancels by throwing).
 struct StopPredicate {
   size_t target_edges;  // a closed triangle mesh has 3/2 edges per triangle
   double max_cost;      // squared distance; infinity: none
+  const StageProgress* progress;
+  mutable size_t calls = 0;
   template <typename Profile>
-  bool operator()(const double& cost, const Profile&, std::size_t, std::size_t current_edges) const {
+  bool operator()(const double& cost, const Profile&, std::size_t initial_edges,
+                  std::size_t current_edges) const {
+    if (++calls % 2048 == 0 && *progress &&
+        !(*progress)(double(initial_edges - current_edges) /
+                     double(initial_edges > target_edges + 1 ? initial_edges - target_edges : 1)))
+      throw ConversionCancelled("mesh simplification");
     return current_edges <= target_edges || cost > max_cost;
   }
 };
@@ -36,7 +44,7 @@ struct StopPredicate {
 }  // namespace
 
 TriangleMesh simplifyMesh(const TriangleMesh& input, const SimplificationOptions& options,
-                          SimplificationStats* stats_out) {
+                          SimplificationStats* stats_out, const StageProgress& progress) {
   if (options.target_triangles == 0 && !(options.max_error > 0))
     throw std::invalid_argument("simplifyMesh: give target_triangles or max_error > 0");
   if (!(options.max_error >= 0)) throw std::invalid_argument("simplifyMesh: max_error must be >= 0");
@@ -76,7 +84,7 @@ TriangleMesh simplifyMesh(const TriangleMesh& input, const SimplificationOptions
   const double diagonal = points.empty() ? 0.0 : (hi - lo).norm();
   const double bound = options.max_error > 0 ? options.max_error * diagonal : 0.0;
   StopPredicate stop{options.target_triangles > 0 ? options.target_triangles * 3 / 2 : 0,
-                     bound > 0 ? bound * bound : std::numeric_limits<double>::infinity()};
+                     bound > 0 ? bound * bound : std::numeric_limits<double>::infinity(), &progress};
   CGAL::Surface_mesh_simplification::GarlandHeckbert_plane_policies<Mesh, Kernel> policies(mesh);
   namespace SMS = CGAL::Surface_mesh_simplification;
   stats.collapses = std::size_t(SMS::edge_collapse(
@@ -110,7 +118,8 @@ TriangleMesh simplifyMesh(const TriangleMesh& input, const SimplificationOptions
 
 #else
 
-TriangleMesh simplifyMesh(const TriangleMesh&, const SimplificationOptions&, SimplificationStats*) {
+TriangleMesh simplifyMesh(const TriangleMesh&, const SimplificationOptions&, SimplificationStats*,
+                          const StageProgress&) {
   throw std::runtime_error("simplifyMesh: this build has no CGAL (install libcgal-dev and rebuild)");
 }
 

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 
+#include "relaxed_connectivity/convert/stage_progress.h"
 #include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
@@ -27,7 +28,10 @@ struct SimplificationStats {
 /// area-weighted triangle normals). Throws std::invalid_argument for a mesh that is not an oriented
 /// 2-manifold (possibly with boundary), for no bound, or for non-finite vertices; std::runtime_error without
 /// CGAL.
+/// `progress` (optional) is called every few thousand collapses with the fraction of the edges removed on
+/// the way to the triangle count (or to none, for an error bound alone); returning false throws
+/// ConversionCancelled.
 TriangleMesh simplifyMesh(const TriangleMesh& mesh, const SimplificationOptions& options,
-                          SimplificationStats* stats = nullptr);
+                          SimplificationStats* stats = nullptr, const StageProgress& progress = nullptr);
 
 }  // namespace rc

@@ -98,8 +98,21 @@ bool meshGenerationAvailable() {
   return true;
 }
 
+/// CGAL's default priority (the smallest Delaunay radius of a candidate), reporting progress on the way.
+struct ReportingPriority {
+  const StageProgress* progress;
+  double expected_calls;
+  mutable size_t calls = 0;
+  template <typename AdvancingFront, typename CellHandle>
+  double operator()(const AdvancingFront& front, CellHandle& cell, const int& index) const {
+    if (++calls % 4096 == 0 && *progress && !(*progress)(std::min(0.99, double(calls) / expected_calls)))
+      throw ConversionCancelled("surface reconstruction");
+    return front.smallest_radius_delaunay_sphere(cell, index);
+  }
+};
+
 TriangleMesh reconstructSurface(const SurfelCloud& surfels, const ReconstructionOptions& options,
-                                ReconstructionStats* stats_out) {
+                                ReconstructionStats* stats_out, const StageProgress& progress) {
   checkInput(surfels);
   if (!(options.radius_ratio_bound > 0) || !(options.beta > 0) || !(options.beta < M_PI / 2))
     throw std::invalid_argument("reconstructSurface: radius_ratio_bound must be > 0 and beta in (0, pi/2)");
@@ -108,8 +121,11 @@ TriangleMesh reconstructSurface(const SurfelCloud& surfels, const Reconstruction
   points.reserve(surfels.size());
   for (const Vec3& p : surfels.positions) points.emplace_back(p.x(), p.y(), p.z());
   std::vector<std::array<std::size_t, 3>> faces;
+  // (CGAL evaluates the priority of each candidate about three times per triangle it keeps.)
+  const ReportingPriority priority{&progress, 6.0 * double(surfels.size())};
   CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(faces),
-                                               options.radius_ratio_bound, options.beta);
+                                               priority, options.radius_ratio_bound, options.beta);
+  if (progress && !progress(1.0)) throw ConversionCancelled("surface reconstruction");
   TriangleMesh mesh;
   mesh.vertices = surfels;
   mesh.triangles.reserve(faces.size());
@@ -140,7 +156,7 @@ bool meshGenerationAvailable() {
 }
 
 TriangleMesh reconstructSurface(const SurfelCloud& surfels, const ReconstructionOptions&,
-                                ReconstructionStats*) {
+                                ReconstructionStats*, const StageProgress&) {
   checkInput(surfels);
   throw std::runtime_error("reconstructSurface: this build has no CGAL (install libcgal-dev and rebuild)");
 }

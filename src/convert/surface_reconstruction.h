@@ -6,6 +6,7 @@
 
 #include <cstddef>
 
+#include "relaxed_connectivity/convert/stage_progress.h"
 #include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
@@ -35,7 +36,10 @@ bool meshGenerationAvailable();
 /// The reconstructed mesh: its vertices are the surfels (positions, normals, colours: every surfel, used or
 /// not, in the input order), its triangles index them. Throws std::invalid_argument for fewer than 4 surfels,
 /// missing normals, non-finite positions or normals, or (with require_manifold) a non-manifold result.
+/// `progress` (optional) is called every few thousand candidate triangles with an estimate of the fraction
+/// done (the front's triangles over twice the surfel count); returning false throws ConversionCancelled.
 TriangleMesh reconstructSurface(const SurfelCloud& surfels, const ReconstructionOptions& options = {},
-                                ReconstructionStats* stats = nullptr);
+                                ReconstructionStats* stats = nullptr,
+                                const StageProgress& progress = nullptr);
 
 }  // namespace rc

@@ -296,6 +296,7 @@ TexturePatch refinePatch(const PatchFrame& frame, TextureKind kind, double thres
   for (int step = 1;; ++step) {
     TexturePatch patch = renderPatch(frame, tpu, kind, depth, data, options, weights, s);
     patch.steps = step;
+    patch.refined_texels_per_unit = tpu;
     if (patch.error <= threshold) return patch;
     const double next = std::min(tpu * options.refinement_factor, finest);
     if (!(next > tpu * (1 + 1e-9))) {
@@ -354,7 +355,7 @@ Eigen::Vector2d rasterCoordinates(const TexturePatch& patch, const PatchFrame& f
 
 std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, const SurfelCloud& surfels,
                                                    const TextureOptions& options, TextureStats* stats,
-                                                   const std::function<void(size_t, size_t)>& progress) {
+                                                   const StageProgress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   if (surfels.empty()) throw std::invalid_argument("computeTexturePatches: no surfels");
   if (!surfels.hasNormals() || (!surfels.hasRadii() && !surfels.hasAxes()))
@@ -428,6 +429,7 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
   const splat_tile::WeightTable weights = splat_tile::makeWeightTable(EwaParams().cutoff_radius);
   std::vector<TrianglePatches> out(T);
   std::atomic<size_t> done{0};
+  std::atomic<bool> cancelled{false};
   size_t reported = 0;
   const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
 #pragma omp parallel num_threads(threads)
@@ -435,6 +437,7 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
     PatchScratch s;
 #pragma omp for schedule(dynamic, 8)
     for (size_t t = 0; t < T; ++t) {
+      if (cancelled.load(std::memory_order_relaxed)) continue;
       const PatchFrame& f = frames[t];
       // Candidates: surfels whose discs can reach the coarsest raster, near the plane, facing its side.
       const Vec3 centroid = f.origin + (f.base / 3 + f.apex_x / 3) * f.x_axis + f.height / 3 * f.y_axis;
@@ -453,9 +456,23 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
       TrianglePatches& p = out[t];
       p.frame = f;
       p.color = refinePatch(f, TextureKind::kColor, options.color_error, depth, data, options, weights, s);
-      if (options.normal_texture)
+      if (options.normal_texture) {
         p.normal =
             refinePatch(f, TextureKind::kNormal, options.normal_error, depth, data, options, weights, s);
+        // One layout for both textures (one set of texture coordinates): the finer resolution of the two.
+        const bool color_coarser = p.color.texels_per_unit < p.normal.texels_per_unit;
+        TexturePatch& coarser = color_coarser ? p.color : p.normal;
+        const double finer_tpu = std::max(p.color.texels_per_unit, p.normal.texels_per_unit);
+        if (coarser.texels_per_unit < finer_tpu) {
+          TexturePatch resampled =
+              renderPatch(f, finer_tpu, color_coarser ? TextureKind::kColor : TextureKind::kNormal, depth,
+                          data, options, weights, s);
+          resampled.refined_texels_per_unit = coarser.refined_texels_per_unit;
+          resampled.steps = coarser.steps;
+          resampled.at_resolution_limit = coarser.at_resolution_limit;
+          coarser = std::move(resampled);
+        }
+      }
       // A patch no splat reached: the nearest surfel's colour, the triangle's normal.
       if (p.color.filled_texels == p.color.texels.size()) {
         Neighbor nb;
@@ -467,18 +484,25 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
       const size_t finished = ++done;
       if (progress && omp_get_thread_num() == 0 && finished >= reported + std::max<size_t>(1, T / 100)) {
         reported = finished;
-        progress(finished, T);
+        if (!progress(double(finished) / double(T))) cancelled = true;
       }
     }
   }
-  if (progress) progress(T, T);
+  if (cancelled || (progress && !progress(1.0))) throw ConversionCancelled("texture generation");
   if (stats) {
     *stats = TextureStats();
     stats->triangles = T;
     stats->projection_depth = depth;
     for (const TrianglePatches& p : out) {
-      stats->color_texels += p.color.texels.size();
-      stats->normal_texels += p.normal.texels.size();
+      stats->texels += p.color.texels.size();
+      auto refinedTexels = [&](const TexturePatch& t) {
+        const double o = t.origin, tpu = t.refined_texels_per_unit;
+        return t.texels.empty()
+                   ? 0.0
+                   : std::ceil(p.frame.base * tpu + 2 * o) * std::ceil(p.frame.height * tpu + 2 * o);
+      };
+      stats->color_refined_texels += size_t(refinedTexels(p.color));
+      stats->normal_refined_texels += size_t(refinedTexels(p.normal));
       stats->at_resolution_limit += p.color.at_resolution_limit;
       stats->empty_patches += p.color.filled_texels == p.color.texels.size();
     }

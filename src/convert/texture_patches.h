@@ -3,18 +3,20 @@
 // x-axis, with visibility splatting; the patch resolution is refined until the area-weighted error (6.1)
 // between the surfels and the bilinearly interpolated texture drops below a threshold, or the texel spacing
 // reaches d_min / (2 sqrt 2), d_min the smallest distance between two of the patch's surfels. Colour and
-// normal textures (6.2) are refined separately, so their sizes differ. Each patch is the packing mask's
-// raster (atlas_packing.h): the triangle plus a border, so bilinear filtering never reads a neighbour.
+// normal textures (6.2) are refined separately; both are then rendered at the finer of the two resolutions so
+// that they share one atlas layout (the thesis keeps their sizes apart, which needs a second set of texture
+// coordinates that OBJ lacks). Each patch is the packing mask's raster (atlas_packing.h): the triangle plus a
+// border, so bilinear filtering never reads a neighbour.
 #pragma once
 
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 #include "relaxed_connectivity/convert/atlas_packing.h"
+#include "relaxed_connectivity/convert/stage_progress.h"
 #include "relaxed_connectivity/core/triangle_mesh.h"
 
 namespace rc {
@@ -57,6 +59,9 @@ PatchFrame patchFrame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const 
 struct TexturePatch {
   PatchShape shape;
   double texels_per_unit = 0;
+  /// The resolution this texture's own refinement chose; texels_per_unit is the finer of the colour's and the
+  /// normal's, so that both textures share one layout (one set of texture coordinates, as OBJ requires).
+  double refined_texels_per_unit = 0;
   int width = 0, height = 0;
   double origin = 0;
   std::vector<Eigen::Vector3f> texels;  ///< RGB in [0, 1], or unit normals in the world frame
@@ -74,7 +79,9 @@ struct TrianglePatches {
 
 struct TextureStats {
   size_t triangles = 0;
-  size_t color_texels = 0, normal_texels = 0;
+  size_t texels = 0;  ///< of each texture (colour, normal: one layout)
+  /// Texels the colour and the normal refinement asked for on their own (the thesis' separate sizes).
+  size_t color_refined_texels = 0, normal_refined_texels = 0;
   size_t at_resolution_limit = 0;  ///< colour patches stopped by the spacing limit
   size_t empty_patches = 0;        ///< triangles no surfel reached (filled with the nearest surfel's colour)
   double projection_depth = 0;     ///< [m], as used
@@ -82,12 +89,14 @@ struct TextureStats {
 };
 
 /// Texture patches for every triangle of `mesh` from `surfels` (positions, normals, radii or axes; colours
-/// optional: white without). `progress(done, total)` is called now and then from one thread. Throws
+/// optional: white without). `progress` is called now and then from one thread with the fraction of the
+/// triangles done; returning false throws ConversionCancelled once the triangles in flight are done. Throws
 /// std::invalid_argument for surfels without normals or radii, non-finite input, a degenerate triangle
 /// (named by index), or bad options.
-std::vector<TrianglePatches> computeTexturePatches(
-    const TriangleMesh& mesh, const SurfelCloud& surfels, const TextureOptions& options = {},
-    TextureStats* stats = nullptr, const std::function<void(size_t, size_t)>& progress = nullptr);
+std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, const SurfelCloud& surfels,
+                                                   const TextureOptions& options = {},
+                                                   TextureStats* stats = nullptr,
+                                                   const StageProgress& progress = nullptr);
 
 /// The texture's bilinear interpolation at continuous raster coordinates (texel centres at i + 0.5),
 /// clamped to the raster.

@@ -197,7 +197,13 @@ TEST(TexturePatches, NormalTexturesReproduceTheSphereNormals) {
   }
   EXPECT_LT(worst_angle * 180 / M_PI, 2.5);
   EXPECT_EQ(stats.empty_patches, 0u);
-  EXPECT_GT(stats.normal_texels, stats.color_texels);
+  EXPECT_GT(stats.normal_refined_texels, stats.color_refined_texels);
+  EXPECT_EQ(stats.texels,
+            stats.normal_refined_texels);  // the normals are finer: the colours take their layout
+  for (const TrianglePatches& p : patches) {
+    EXPECT_EQ(p.color.texels_per_unit, p.normal.texels_per_unit);
+    EXPECT_LT(p.color.refined_texels_per_unit, p.normal.refined_texels_per_unit);
+  }
 }
 
 TEST(TexturePatches, SurfelsBehindOrBeyondTheProjectionDepthAreNotDrawn) {

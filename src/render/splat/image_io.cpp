@@ -76,6 +76,19 @@ void writePng(const std::string& path, const std::vector<Rgba>& pixels, uint32_t
     fail(path, "cannot write PNG");
 }
 
+std::vector<uint8_t> encodePng(const std::vector<Rgba>& pixels, uint32_t width, uint32_t height) {
+  checkSize("(PNG in memory)", pixels.size(), width, height, 1);
+  std::vector<uint8_t> bytes;
+  auto append = [](void* context, void* data, int size) {
+    auto* out = static_cast<std::vector<uint8_t>*>(context);
+    out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
+  };
+  if (!stbi_write_png_to_func(append, &bytes, int(width), int(height), 4, pixels.data(), int(width * 4)))
+    throw std::runtime_error("encodePng: cannot encode a " + std::to_string(width) + " x " +
+                             std::to_string(height) + " image");
+  return bytes;
+}
+
 std::vector<Rgba> readPng(const std::string& path, uint32_t* width, uint32_t* height) {
   int w = 0, h = 0, channels = 0;
   std::unique_ptr<uint8_t, void (*)(void*)> data(stbi_load(path.c_str(), &w, &h, &channels, 4),

@@ -23,6 +23,8 @@ struct FloatImage {
 
 /// 8-bit RGBA PNG (rows top to bottom).
 void writePng(const std::string& path, const std::vector<Rgba>& pixels, uint32_t width, uint32_t height);
+/// The bytes of an 8-bit RGBA PNG file of the image (for containers such as glTF binaries).
+std::vector<uint8_t> encodePng(const std::vector<Rgba>& pixels, uint32_t width, uint32_t height);
 /// Reads an 8-bit PNG (any channel count) as RGBA.
 std::vector<Rgba> readPng(const std::string& path, uint32_t* width, uint32_t* height);
 

@@ -1,0 +1,135 @@
+#include "relaxed_connectivity/convert/textured_mesh.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rc {
+namespace {
+
+uint8_t toByte(float value) {
+  return uint8_t(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f));
+}
+
+}  // namespace
+
+Eigen::Vector3f samplePage(const std::vector<Rgba>& image, uint32_t width, uint32_t height, double u,
+                           double v) {
+  const double fx = std::clamp(u * width - 0.5, 0.0, double(width - 1));
+  const double fy = std::clamp(v * height - 0.5, 0.0, double(height - 1));
+  const uint32_t x0 = std::min(uint32_t(fx), width - 1), y0 = std::min(uint32_t(fy), height - 1);
+  const uint32_t x1 = std::min(x0 + 1, width - 1), y1 = std::min(y0 + 1, height - 1);
+  const float tx = float(fx - x0), ty = float(fy - y0);
+  auto at = [&](uint32_t x, uint32_t y) -> Eigen::Vector3f {
+    const Rgba& c = image[size_t(y) * width + x];
+    return Eigen::Vector3f(c[0], c[1], c[2]) / 255.0f;
+  };
+  return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x1, y0)) +
+         ty * ((1 - tx) * at(x0, y1) + tx * at(x1, y1));
+}
+
+TexturedMesh buildTexturedMesh(const TriangleMesh& mesh, const std::vector<TrianglePatches>& patches,
+                               const AtlasOptions& options) {
+  const size_t T = mesh.triangles.size();
+  if (patches.size() != T)
+    throw std::invalid_argument("buildTexturedMesh: " + std::to_string(patches.size()) + " patches for " +
+                                std::to_string(T) + " triangles");
+  const bool normals = T > 0 && !patches[0].normal.texels.empty();
+  std::vector<PatchShape> shapes(T);
+  for (size_t t = 0; t < T; ++t) {
+    shapes[t] = patches[t].color.shape;
+    if (patches[t].color.texels.empty() ||
+        (normals && patches[t].normal.texels.size() != patches[t].color.texels.size()))
+      throw std::invalid_argument("buildTexturedMesh: triangle " + std::to_string(t) +
+                                  " has no colour patch or a normal patch of another size");
+  }
+  TexturedMesh out;
+  out.mesh.triangles = mesh.triangles;
+  out.mesh.vertices.positions = mesh.vertices.positions;
+  out.layout = packPatches(shapes, options);
+  const int P = out.layout.page_size;
+  out.pages.resize(size_t(out.layout.pages));
+  for (int k = 0; k < out.layout.pages; ++k) {
+    TexturePage& page = out.pages[size_t(k)];
+    page.width = uint32_t(P);
+    page.height = uint32_t(k + 1 == out.layout.pages ? out.layout.last_page_height : P);
+    page.color.assign(size_t(page.width) * page.height, Rgba{0, 0, 0, 255});
+    if (normals) page.normal.assign(page.color.size(), Rgba{128, 128, 255, 255});
+  }
+  out.page.resize(T);
+  out.uv.resize(T);
+  out.face_normal.resize(T);
+  out.tangent.resize(T);
+  std::vector<Eigen::Vector3f> vertex_color_sum(mesh.vertices.size(), Eigen::Vector3f::Zero());
+  std::vector<int> vertex_corners(mesh.vertices.size(), 0);
+  for (size_t t = 0; t < T; ++t) {
+    const TrianglePatches& p = patches[t];
+    const PatchPlacement& place = out.layout.placements[t];
+    TexturePage& page = out.pages[size_t(place.page)];
+    out.page[t] = place.page;
+    // The page-texel -> surface map of this patch (rigid: a rotation, possibly mirrored, at 1 / tpu).
+    const Triangle& tri = mesh.triangles[t];
+    const std::array<Vec3, 3> P3 = {mesh.vertices.positions[tri[p.frame.corner[0]]],
+                                    mesh.vertices.positions[tri[p.frame.corner[1]]],
+                                    mesh.vertices.positions[tri[p.frame.corner[2]]]};
+    Eigen::Matrix2d M;
+    M.col(0) = place.corners[1] - place.corners[0];
+    M.col(1) = place.corners[2] - place.corners[0];
+    Eigen::Matrix<double, 3, 2> E;
+    E.col(0) = P3[1] - P3[0];
+    E.col(1) = P3[2] - P3[0];
+    const Eigen::Matrix<double, 3, 2> d_surface = E * M.inverse();  // columns: d/d(page x), d/d(page row)
+    const Vec3 N = p.frame.normal, t_axis = d_surface.col(0).normalized();
+    const Vec3 up = -d_surface.col(1).normalized();  // up the image: decreasing rows
+    out.face_normal[t] = N.cast<float>();
+    out.tangent[t] = Eigen::Vector4f(float(t_axis.x()), float(t_axis.y()), float(t_axis.z()),
+                                     N.cross(t_axis).dot(up) >= 0 ? 1.0f : -1.0f);
+    const Vec3 b_axis = N.cross(t_axis) * double(out.tangent[t].w());
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector2d& q = place.corners[size_t(c)];
+      out.uv[t][size_t(p.frame.corner[size_t(c)])] =
+          Eigen::Vector2f(float(q.x() / page.width), float(q.y() / page.height));
+    }
+    // Blit the patch raster (its mask frame) to the page with the placement's flips: mask texel (x, y) lands
+    // on page texel (left + x or left + W-1-x, top + y or top + H-1-y).
+    const TexturePatch& cp = p.color;
+    const int W = cp.width, H = cp.height;
+    const double o = cp.origin;
+    const int left = int(
+        std::lround(place.flipped_horizontally ? place.corners[0].x() - (W - o) : place.corners[0].x() - o));
+    const int top = int(
+        std::lround(place.flipped_vertically ? place.corners[0].y() - (H - o) : place.corners[0].y() - o));
+    const PatchMask mask = patchMask(cp.shape, options.border);
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        if (!mask.texels[size_t(y) * W + x]) continue;
+        const int px = left + (place.flipped_horizontally ? W - 1 - x : x);
+        const int py = top + (place.flipped_vertically ? H - 1 - y : y);
+        const size_t dst = size_t(py) * page.width + size_t(px), src = size_t(y) * W + x;
+        const Eigen::Vector3f& c = cp.texels[src];
+        page.color[dst] = {toByte(c.x()), toByte(c.y()), toByte(c.z()), 255};
+        if (normals) {
+          const Vec3 n = p.normal.texels[src].cast<double>().normalized();
+          page.normal[dst] = {toByte(float(0.5 + 0.5 * n.dot(t_axis))),
+                              toByte(float(0.5 + 0.5 * n.dot(b_axis))), toByte(float(0.5 + 0.5 * n.dot(N))),
+                              255};
+        }
+      }
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector2f& q = out.uv[t][size_t(c)];
+      vertex_color_sum[tri[size_t(c)]] += samplePage(page.color, page.width, page.height, q.x(), q.y());
+      ++vertex_corners[tri[size_t(c)]];
+    }
+  }
+  out.mesh.vertices.colors.resize(mesh.vertices.size(), Rgba{200, 200, 200, 255});
+  for (size_t v = 0; v < mesh.vertices.size(); ++v)
+    if (vertex_corners[v]) {
+      const Eigen::Vector3f c = vertex_color_sum[v] / float(vertex_corners[v]);
+      out.mesh.vertices.colors[v] = {toByte(c.x()), toByte(c.y()), toByte(c.z()), 255};
+    }
+  return out;
+}
+
+}  // namespace rc
