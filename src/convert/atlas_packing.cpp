@@ -3,7 +3,10 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
 
@@ -58,6 +61,16 @@ RowProfile profileOf(const PatchShape& p, int border) {
 
 bool isPowerOfTwo(int v) {
   return v > 0 && (v & (v - 1)) == 0;
+}
+
+using AngleMap = std::multimap<double, uint32_t>;
+
+void eraseCandidate(AngleMap& map, double angle, uint32_t index) {
+  for (auto [it, end] = map.equal_range(angle); it != end; ++it)
+    if (it->second == index) {
+      map.erase(it);
+      return;
+    }
 }
 
 int nextPowerOfTwo(double v) {
@@ -147,38 +160,53 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
   layout.placements.assign(patches.size(), PatchPlacement());
   if (patches.empty()) return layout;
 
-  // Remaining patches, tallest first (row heights come from the tallest left).
-  std::vector<uint32_t> remaining(patches.size());
-  for (uint32_t i = 0; i < remaining.size(); ++i) remaining[i] = i;
-  std::stable_sort(remaining.begin(), remaining.end(),
+  // Patches by height, tallest first. The pool holds the unplaced patches tall enough for the current row
+  // (T_h of line 4), keyed by their left and by their right base angle: the best fit (line 8) is the
+  // nearest key to beta in either map, O(log n). Row heights only fall, so the pool only grows by the
+  // patches that the lower threshold admits; patches that did not fit a row wait in `skipped` for the next.
+  std::vector<uint32_t> order(patches.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
                    [&](uint32_t a, uint32_t b) { return profiles[a].height > profiles[b].height; });
-  std::vector<bool> placed(patches.size(), false);
+  size_t next = 0;  // order[next..] are not in the pool yet
+  AngleMap by_left, by_right;
+  std::multiset<int> pool_heights;
+  std::vector<uint32_t> skipped;
+  auto addToPool = [&](uint32_t i) {
+    by_left.emplace(profiles[i].alpha_left, i);
+    by_right.emplace(profiles[i].alpha_right, i);
+    pool_heights.insert(profiles[i].height);
+  };
   int page = 0, y_row = 0;
-  std::vector<int> row_right;  // per texel row of the current row: first free column
-  std::vector<uint32_t> candidates;
+  std::vector<int> row_right;               // per texel row of the current row: first free column
   constexpr int kFailuresToCloseARow = 16;  // candidates tried in vain before a row counts as full
-  while (!remaining.empty()) {
-    const int row_height = profiles[remaining.front()].height;  // (line 3: the tallest left)
+  while (!pool_heights.empty() || next < order.size()) {
+    // (line 3) the tallest patch left
+    int row_height = pool_heights.empty() ? 0 : *pool_heights.rbegin();
+    if (next < order.size()) row_height = std::max(row_height, profiles[order[next]].height);
     if (y_row + row_height > P) ++page, y_row = 0;
     const double lowest = row_height - options.height_tolerance * row_height;
-    candidates.clear();
-    for (uint32_t i : remaining)
-      if (profiles[i].height >= lowest) candidates.push_back(i);  // (line 4)
+    while (next < order.size() && profiles[order[next]].height >= lowest)
+      addToPool(order[next++]);  // (line 4)
     row_right.assign(size_t(row_height), 0);
     double beta = M_PI / 2;  // (line 5)
     bool mirror = false;
     int failures = 0;
-    while (!candidates.empty() && failures < kFailuresToCloseARow) {
-      // (line 8) the candidate whose base angle fits the free angle best.
-      size_t best = 0;
+    while (!by_left.empty() && failures < kFailuresToCloseARow) {
+      // (line 8) the candidate whose base angle fits the free angle best; ties: the smaller index.
+      uint32_t t = UINT32_MAX;
       double best_fit = std::numeric_limits<double>::infinity();
-      for (size_t k = 0; k < candidates.size(); ++k) {
-        const RowProfile& r = profiles[candidates[k]];
-        const double fit = std::min(std::abs(r.alpha_left - beta), std::abs(r.alpha_right - beta));
-        if (fit < best_fit) best_fit = fit, best = k;
+      for (const AngleMap* map : {&by_left, &by_right}) {
+        auto it = map->lower_bound(beta);
+        for (auto near : {it, it == map->begin() ? map->end() : std::prev(it)}) {
+          if (near == map->end()) continue;
+          const double fit = std::abs(near->first - beta);
+          if (fit < best_fit || (fit == best_fit && near->second < t)) best_fit = fit, t = near->second;
+        }
       }
-      const uint32_t t = candidates[best];
-      candidates.erase(candidates.begin() + long(best));
+      eraseCandidate(by_left, profiles[t].alpha_left, t);
+      eraseCandidate(by_right, profiles[t].alpha_right, t);
+      pool_heights.erase(pool_heights.find(profiles[t].height));
       const RowProfile& r = profiles[t];
       const bool flip_h = std::abs(r.alpha_left - beta) > std::abs(r.alpha_right - beta);  // (line 9)
       const bool flip_v = mirror;                                                          // (line 14)
@@ -196,6 +224,7 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
       }
       if (x + r.width > P) {
         ++failures;
+        skipped.push_back(t);
         continue;
       }
       failures = 0;
@@ -220,12 +249,11 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
       out.corners = c;
       out.flipped_horizontally = flip_h;
       out.flipped_vertically = flip_v;
-      placed[t] = true;
       beta = flip_h ? r.alpha_left : r.alpha_right;  // (lines 10, 12) the free angle on the right
       mirror = !mirror;                              // (line 15)
     }
-    remaining.erase(std::remove_if(remaining.begin(), remaining.end(), [&](uint32_t i) { return placed[i]; }),
-                    remaining.end());
+    for (uint32_t i : skipped) addToPool(i);
+    skipped.clear();
     y_row += row_height;  // (line 20)
   }
   layout.pages = page + 1;

@@ -146,12 +146,27 @@ TexturePatch renderPatch(const PatchFrame& frame, double texels_per_unit, Textur
 
   s.rasters.clear();
   s.raster_surfel.clear();
+  // The raster's extent on the triangle's plane [m], grown by the largest splat: candidates outside it (the
+  // candidate set serves the coarsest, widest raster) need no set-up.
+  const double reach = data.max_radius;
+  const double x_lo = -patch.origin / texels_per_unit - reach,
+               x_hi = (W - patch.origin) / texels_per_unit + reach;
+  const double y_lo = -patch.origin / texels_per_unit - reach,
+               y_hi = (H - patch.origin) / texels_per_unit + reach;
   for (uint32_t j : s.candidates) {
-    Vec3 normal, axis1, axis2;
-    surfelFrame(cloud, j, &normal, &axis1, &axis2);
+    const Vec3 d = cloud.positions[j] - frame.origin;
+    const double X = d.dot(frame.x_axis), Y = d.dot(frame.y_axis);
+    if (X < x_lo || X > x_hi || Y < y_lo || Y > y_hi) continue;
     SplatRaster raster;
-    const SplatSetup setup =
-        setupEwaSplat(cloud.positions[j], normal, axis1, axis2, view, params, &raster, nullptr);
+    SplatSetup setup;
+    if (cloud.hasAxes()) {
+      Vec3 normal, axis1, axis2;
+      surfelFrame(cloud, j, &normal, &axis1, &axis2);
+      setup = setupEwaSplat(cloud.positions[j], normal, axis1, axis2, view, params, &raster, nullptr);
+    } else {
+      setup =
+          setupCircularEwaSplat(cloud.positions[j], cloud.normals[j], cloud.radii[j], view, params, &raster);
+    }
     if (setup != SplatSetup::kDrawn && setup != SplatSetup::kDrawnEdgeOn) continue;
     s.rasters.push_back(raster);
     s.raster_surfel.push_back(j);
@@ -208,7 +223,12 @@ TexturePatch renderPatch(const PatchFrame& frame, double texels_per_unit, Textur
       }
     }
   patch.filled_texels = uint32_t(n - covered);
-  if (covered == 0) return patch;  // the caller fills an empty patch
+  if (covered == 0) {
+    // No texel centre met a splat (texels coarser than the splats): refine, unless nothing reaches the
+    // triangle at all (the caller then fills the patch from the nearest surfel).
+    if (!s.rasters.empty()) patch.error = std::numeric_limits<double>::infinity();
+    return patch;
+  }
   for (size_t left = n - covered; left > 0;) {
     std::vector<std::pair<size_t, Eigen::Vector3f>> ring;
     for (int y = 0; y < H; ++y)
