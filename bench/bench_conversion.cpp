@@ -233,6 +233,9 @@ int main(int argc, char** argv) {
       mean_error /= area;
     }
     const ViewQuality q = compareViews(igea, mesh);
+    if (const char* dump = std::getenv("RC_DUMP_VIEWS"))  // the first page, for a look at the packing
+      rc::writePng(std::string(dump) + "_atlas" + std::to_string(threshold) + ".png", mesh.pages[0].color,
+                   mesh.pages[0].width, mesh.pages[0].height);
     const size_t texels = atlasTexels(mesh);
     std::printf("%10.3f | %9.2f %9.2f | %10zu %8.2f %6.1f %6.1f | %8.2f %8.2f | %9.4f %9zu\n", threshold,
                 median(texture_s), median(pack_s), texels, 3e-6 * double(texels), 100 * mesh.layout.usage,

@@ -13,21 +13,23 @@
 namespace rc {
 namespace {
 
-/// Distance from p to the closed triangle abc (2D).
-double distanceToTriangle(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b,
-                          const Eigen::Vector2d& c) {
-  auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
-    return u.x() * v.y() - u.y() * v.x();
-  };
-  const double area = cross(b - a, c - a);
-  const double s0 = cross(b - a, p - a), s1 = cross(c - b, p - b), s2 = cross(a - c, p - c);
-  if ((area > 0 && s0 >= 0 && s1 >= 0 && s2 >= 0) || (area < 0 && s0 <= 0 && s1 <= 0 && s2 <= 0)) return 0.0;
-  auto segment = [&](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
-    const Eigen::Vector2d d = v - u;
-    const double t = std::clamp((p - u).dot(d) / std::max(d.squaredNorm(), 1e-300), 0.0, 1.0);
-    return (p - (u + t * d)).norm();
-  };
-  return std::min({segment(a, b), segment(b, c), segment(c, a)});
+/// Whether the closed axis-aligned square of half-size `half` around p meets the closed triangle abc
+/// (separating axes: the square's two and the triangle's three edge normals).
+bool squareMeetsTriangle(const Eigen::Vector2d& p, double half, const Eigen::Vector2d& a,
+                         const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  if (std::max({a.x(), b.x(), c.x()}) < p.x() - half || std::min({a.x(), b.x(), c.x()}) > p.x() + half ||
+      std::max({a.y(), b.y(), c.y()}) < p.y() - half || std::min({a.y(), b.y(), c.y()}) > p.y() + half)
+    return false;
+  const std::array<Eigen::Vector2d, 3> v = {a, b, c};
+  for (int e = 0; e < 3; ++e) {
+    const Eigen::Vector2d edge = v[(e + 1) % 3] - v[e];
+    const Eigen::Vector2d n(-edge.y(), edge.x());
+    const double apex = n.dot(v[(e + 2) % 3] - v[e]);  // the third vertex's side
+    const double centre = n.dot(p - v[e]), radius = half * (std::abs(n.x()) + std::abs(n.y()));
+    // The square lies wholly on the side away from the triangle: separated.
+    if (apex >= 0 ? centre + radius < 0 : centre - radius > 0) return false;
+  }
+  return true;
 }
 
 /// A patch's mask reduced to what packing needs: per texel row, the first and last claimed column.
@@ -102,24 +104,32 @@ PatchShape PatchShape::ofTriangle(const Eigen::Vector3d& a, const Eigen::Vector3
   return s;
 }
 
+double patchMaskOrigin(int border) {
+  // Claimed texels lie within `border` texels of the triangle, so a margin of `border` holds them all and
+  // leaves no empty mask row that would still take row height in the atlas.
+  return std::max(border, 1);
+}
+
 PatchMask patchMask(const PatchShape& p, int border) {
   if (!std::isfinite(p.base) || !std::isfinite(p.apex_x) || !std::isfinite(p.height) || !(p.base > 0) ||
       !(p.height > 0) || p.apex_x < 0 || p.apex_x > p.base)
     throw std::invalid_argument("patchMask: a patch needs base > 0, height > 0 and 0 <= apex_x <= base");
   if (border < 0) throw std::invalid_argument("patchMask: border must be >= 0");
   PatchMask m;
-  m.origin = border + 1.0;
+  m.origin = patchMaskOrigin(border);
   m.width = int(std::ceil(p.base + 2 * m.origin));
   m.height = int(std::ceil(p.height + 2 * m.origin));
   m.texels.assign(size_t(m.width) * size_t(m.height), 0);
   const Eigen::Vector2d a(m.origin, m.origin), b(m.origin + p.base, m.origin),
       c(m.origin + p.apex_x, m.origin + p.height);
-  // A texel is claimed when its square touches the triangle grown by `border` texels.
-  const double reach = border + std::sqrt(0.5);
+  // A texel is claimed when a point of the triangle lies within `border` texels of its centre in x and in y
+  // (Chebyshev distance < border): with border 1, exactly the texels bilinear filtering reads for points of
+  // the triangle. (Border 0: the texels whose square overlaps the triangle.)
+  const double half = std::max(border, 0) > 0 ? border - 1e-9 : 0.5;
   for (int y = 0; y < m.height; ++y)
     for (int x = 0; x < m.width; ++x)
       m.texels[size_t(y) * m.width + x] =
-          distanceToTriangle(Eigen::Vector2d(x + 0.5, y + 0.5), a, b, c) <= reach;
+          squareMeetsTriangle(Eigen::Vector2d(x + 0.5, y + 0.5), half, a, b, c);
   return m;
 }
 
@@ -177,17 +187,58 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
     by_right.emplace(profiles[i].alpha_right, i);
     pool_heights.insert(profiles[i].height);
   };
-  int page = 0, y_row = 0;
-  std::vector<int> row_right;               // per texel row of the current row: first free column
+  int page = 0, y_row = 0, row_height = 0;
+  std::vector<int> row_right;  // per texel row of the current row: first free column
+  std::vector<bool> placed(patches.size(), false);
+  // Mask row of strip row `s` for a patch at vertical offset `shift` in the row, flipped or not.
+  auto maskRow = [](const RowProfile& r, bool flip_v, int shift, int s) {
+    return flip_v ? r.height - 1 - (s - shift) : s - shift;
+  };
+  // insert(): the leftmost column where the patch's texels clear those placed in the row.
+  auto leftmostX = [&](const RowProfile& r, bool flip_h, bool flip_v, int shift) {
+    int x = 0;
+    for (int s = shift; s < shift + r.height; ++s) {
+      const int m = maskRow(r, flip_v, shift, s);
+      if (r.left[m] < 0) continue;
+      x = std::max(x, row_right[s] - (flip_h ? r.width - 1 - r.right[m] : r.left[m]));
+    }
+    return x;
+  };
+  auto place = [&](uint32_t t, bool flip_h, bool flip_v, int shift, int x) {
+    const RowProfile& r = profiles[t];
+    for (int s = shift; s < shift + r.height; ++s) {
+      const int m = maskRow(r, flip_v, shift, s);
+      if (r.left[m] < 0) continue;
+      row_right[s] = std::max(row_right[s], x + (flip_h ? r.width - 1 - r.left[m] : r.right[m]) + 1);
+    }
+    // The triangle's corners on the page.
+    const PatchShape& p = patches[t];
+    std::array<Eigen::Vector2d, 3> c = {Eigen::Vector2d(r.origin, r.origin),
+                                        Eigen::Vector2d(r.origin + p.base, r.origin),
+                                        Eigen::Vector2d(r.origin + p.apex_x, r.origin + p.height)};
+    for (Eigen::Vector2d& q : c) {
+      if (flip_h) q.x() = r.width - q.x();
+      if (flip_v) q.y() = r.height - q.y();
+      q += Eigen::Vector2d(x, y_row + shift);
+    }
+    PatchPlacement& out = layout.placements[t];
+    out.page = page;
+    out.corners = c;
+    out.flipped_horizontally = flip_h;
+    out.flipped_vertically = flip_v;
+    placed[t] = true;
+  };
   constexpr int kFailuresToCloseARow = 16;  // candidates tried in vain before a row counts as full
   while (!pool_heights.empty() || next < order.size()) {
     // (line 3) the tallest patch left
-    int row_height = pool_heights.empty() ? 0 : *pool_heights.rbegin();
+    while (next < order.size() && placed[order[next]]) ++next;  // (taken by an earlier row-end fill)
+    if (pool_heights.empty() && next == order.size()) break;
+    row_height = pool_heights.empty() ? 0 : *pool_heights.rbegin();
     if (next < order.size()) row_height = std::max(row_height, profiles[order[next]].height);
     if (y_row + row_height > P) ++page, y_row = 0;
     const double lowest = row_height - options.height_tolerance * row_height;
-    while (next < order.size() && profiles[order[next]].height >= lowest)
-      addToPool(order[next++]);  // (line 4)
+    for (; next < order.size() && profiles[order[next]].height >= lowest; ++next)  // (line 4)
+      if (!placed[order[next]]) addToPool(order[next]);
     row_right.assign(size_t(row_height), 0);
     double beta = M_PI / 2;  // (line 5)
     bool mirror = false;
@@ -212,45 +263,39 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
       const bool flip_v = mirror;                                                          // (line 14)
       // insert(y_min, t): pushed from the right as far left as its texels allow.
       const int shift = flip_v ? row_height - r.height : 0;  // flipped: aligned with the row's top
-      auto maskRow = [&](int strip_row) {
-        return flip_v ? r.height - 1 - (strip_row - shift) : strip_row - shift;
-      };
-      int x = 0;
-      for (int s = shift; s < shift + r.height; ++s) {
-        const int m = maskRow(s);
-        if (r.left[m] < 0) continue;
-        const int left = flip_h ? r.width - 1 - r.right[m] : r.left[m];
-        x = std::max(x, row_right[s] - left);
-      }
+      const int x = leftmostX(r, flip_h, flip_v, shift);
       if (x + r.width > P) {
         ++failures;
         skipped.push_back(t);
         continue;
       }
       failures = 0;
-      for (int s = shift; s < shift + r.height; ++s) {
-        const int m = maskRow(s);
-        if (r.left[m] < 0) continue;
-        const int right = flip_h ? r.width - 1 - r.left[m] : r.right[m];
-        row_right[s] = std::max(row_right[s], x + right + 1);
-      }
-      // The triangle's corners on the page.
-      const PatchShape& p = patches[t];
-      std::array<Eigen::Vector2d, 3> c = {Eigen::Vector2d(r.origin, r.origin),
-                                          Eigen::Vector2d(r.origin + p.base, r.origin),
-                                          Eigen::Vector2d(r.origin + p.apex_x, r.origin + p.height)};
-      for (Eigen::Vector2d& q : c) {
-        if (flip_h) q.x() = r.width - q.x();
-        if (flip_v) q.y() = r.height - q.y();
-        q += Eigen::Vector2d(x, y_row + shift);
-      }
-      PatchPlacement& out = layout.placements[t];
-      out.page = page;
-      out.corners = c;
-      out.flipped_horizontally = flip_h;
-      out.flipped_vertically = flip_v;
+      place(t, flip_h, flip_v, shift, x);
       beta = flip_h ? r.alpha_left : r.alpha_right;  // (lines 10, 12) the free angle on the right
       mirror = !mirror;                              // (line 15)
+    }
+    // Row-end fill (beyond Algorithm 6.1): the space a row leaves when its height class runs out takes the
+    // next shorter patches, each at the height within the row where it lands leftmost. Without it, the rows
+    // of the few tallest patches stay mostly empty.
+    failures = 0;
+    for (size_t k = next; k < order.size() && failures < kFailuresToCloseARow; ++k) {
+      const uint32_t t = order[k];
+      if (placed[t]) continue;
+      const RowProfile& r = profiles[t];
+      int best_x = P, best_shift = 0;
+      bool best_flip_h = false, best_flip_v = false;
+      for (bool flip_h : {false, true})
+        for (bool flip_v : {false, true})
+          for (int shift = 0; shift + r.height <= row_height; ++shift) {
+            const int x = leftmostX(r, flip_h, flip_v, shift);
+            if (x < best_x) best_x = x, best_shift = shift, best_flip_h = flip_h, best_flip_v = flip_v;
+          }
+      if (best_x + r.width > P) {
+        ++failures;
+        continue;
+      }
+      failures = 0;
+      place(t, best_flip_h, best_flip_v, best_shift, best_x);
     }
     for (uint32_t i : skipped) addToPool(i);
     skipped.clear();

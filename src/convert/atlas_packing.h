@@ -63,5 +63,7 @@ struct PatchMask {
   std::vector<unsigned char> texels;
 };
 PatchMask patchMask(const PatchShape& patch, int border);
+/// The mask's margin around the triangle's bounding box (its base start sits at (origin, origin)).
+double patchMaskOrigin(int border);
 
 }  // namespace rc

@@ -36,7 +36,7 @@ struct StopPredicate {
     if (++calls % 2048 == 0 && *progress &&
         !(*progress)(double(initial_edges - current_edges) /
                      double(initial_edges > target_edges + 1 ? initial_edges - target_edges : 1)))
-      throw ConversionCancelled("mesh simplification");
+      throw ConversionCancelled("simplification");
     return current_edges <= target_edges || cost > max_cost;
   }
 };

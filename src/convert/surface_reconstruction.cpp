@@ -106,7 +106,7 @@ struct ReportingPriority {
   template <typename AdvancingFront, typename CellHandle>
   double operator()(const AdvancingFront& front, CellHandle& cell, const int& index) const {
     if (++calls % 4096 == 0 && *progress && !(*progress)(std::min(0.99, double(calls) / expected_calls)))
-      throw ConversionCancelled("surface reconstruction");
+      throw ConversionCancelled("reconstruction");
     return front.smallest_radius_delaunay_sphere(cell, index);
   }
 };
@@ -125,7 +125,7 @@ TriangleMesh reconstructSurface(const SurfelCloud& surfels, const Reconstruction
   const ReportingPriority priority{&progress, 12.0 * double(surfels.size())};
   CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(faces),
                                                priority, options.radius_ratio_bound, options.beta);
-  if (progress && !progress(1.0)) throw ConversionCancelled("surface reconstruction");
+  if (progress && !progress(1.0)) throw ConversionCancelled("reconstruction");
   TriangleMesh mesh;
   mesh.vertices = surfels;
   mesh.triangles.reserve(faces.size());

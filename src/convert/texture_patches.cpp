@@ -114,7 +114,7 @@ TexturePatch renderPatch(const PatchFrame& frame, double texels_per_unit, Textur
   patch.shape.base = frame.base * texels_per_unit;
   patch.shape.apex_x = frame.apex_x * texels_per_unit;
   patch.shape.height = frame.height * texels_per_unit;
-  patch.origin = options.border + 1.0;  // as patchMask()
+  patch.origin = patchMaskOrigin(options.border);  // the packing mask's raster
   patch.width = int(std::ceil(patch.shape.base + 2 * patch.origin));
   patch.height = int(std::ceil(patch.shape.height + 2 * patch.origin));
   const int W = patch.width, H = patch.height;
@@ -508,7 +508,7 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
       }
     }
   }
-  if (cancelled || (progress && !progress(1.0))) throw ConversionCancelled("texture generation");
+  if (cancelled || (progress && !progress(1.0))) throw ConversionCancelled("textures");
   if (stats) {
     *stats = TextureStats();
     stats->triangles = T;
