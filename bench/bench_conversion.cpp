@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "relaxed_connectivity/convert/procedural_paint.h"
 #include "relaxed_connectivity/convert/surfel_conversion.h"
 #include "relaxed_connectivity/convert/textured_mesh_renderer.h"
 #include "relaxed_connectivity/io/cloud_io.h"
@@ -40,22 +41,6 @@ double since(Clock::time_point t0) {
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
-/// Paints cells of two colours (size diag / 10) with a gradient across them and thin dark stripes.
-void paint(rc::SurfelCloud& cloud) {
-  Vec3 lo, hi;
-  cloud.bounds(&lo, &hi);
-  const double diag = (hi - lo).norm(), cell = diag / 10;
-  cloud.colors.resize(cloud.size());
-  for (size_t i = 0; i < cloud.size(); ++i) {
-    const Vec3 q = (cloud.positions[i] - lo) / cell;
-    const bool odd = (int(std::floor(q.x())) + int(std::floor(q.y())) + int(std::floor(q.z()))) & 1;
-    const double g = q.z() / 10.0;
-    double r = odd ? 0.9 : 0.2 + 0.5 * g, gr = odd ? 0.7 - 0.4 * g : 0.4, b = odd ? 0.2 : 0.8;
-    if (std::abs(std::sin(M_PI * 3 * q.x())) < 0.12) r *= 0.3, gr *= 0.3, b *= 0.3;  // stripes
-    cloud.colors[i] = {uint8_t(255 * r), uint8_t(255 * gr), uint8_t(255 * b), 255};
-  }
 }
 
 struct ViewQuality {
@@ -153,7 +138,7 @@ int main(int argc, char** argv) {
     surfels.normals.clear();
     rc::estimateNormals(surfels, rc::NormalEstimationConfig());
     rc::estimateRadii(surfels, rc::RadiusEstimationConfig());
-    paint(surfels);
+    rc::paintCells(surfels);
     const double prep = since(p0);
     rc::ConversionOptions options;
     options.simplification.max_error = 0;

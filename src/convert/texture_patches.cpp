@@ -305,14 +305,16 @@ double minSpacingOnTriangle(const PatchFrame& frame, const SurfelData& data, con
 }
 
 /// The refinement loop of 6.2.1 for one texture of one triangle.
+/// The refinement loop of 6.2.1 for one texture of one triangle, from `start_tpu` texels per unit (0: the
+/// coarsest patch).
 TexturePatch refinePatch(const PatchFrame& frame, TextureKind kind, double threshold, double depth,
                          const SurfelData& data, const TextureOptions& options,
-                         const splat_tile::WeightTable& weights, PatchScratch& s) {
+                         const splat_tile::WeightTable& weights, PatchScratch& s, double start_tpu = 0) {
   const double d_min = minSpacingOnTriangle(frame, data, s);
   const double finest = std::min(options.max_base_texels / frame.base,
                                  std::isfinite(d_min) && d_min > 0 ? 2 * std::sqrt(2.0) / d_min
                                                                    : std::numeric_limits<double>::infinity());
-  double tpu = std::min(options.start_base_texels / frame.base, finest);
+  double tpu = std::min(start_tpu > 0 ? start_tpu : options.start_base_texels / frame.base, finest);
   for (int step = 1;; ++step) {
     TexturePatch patch = renderPatch(frame, tpu, kind, depth, data, options, weights, s);
     patch.steps = step;
@@ -480,15 +482,30 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
         p.normal =
             refinePatch(f, TextureKind::kNormal, options.normal_error, depth, data, options, weights, s);
         // One layout for both textures (one set of texture coordinates): the finer resolution of the two.
-        const bool color_coarser = p.color.texels_per_unit < p.normal.texels_per_unit;
-        TexturePatch& coarser = color_coarser ? p.color : p.normal;
-        const double finer_tpu = std::max(p.color.texels_per_unit, p.normal.texels_per_unit);
-        if (coarser.texels_per_unit < finer_tpu) {
-          TexturePatch resampled =
-              renderPatch(f, finer_tpu, color_coarser ? TextureKind::kColor : TextureKind::kNormal, depth,
-                          data, options, weights, s);
-          resampled.refined_texels_per_unit = coarser.refined_texels_per_unit;
+        // The error is not monotone in the resolution (6.1 compares with a reconstruction that does not
+        // interpolate), so a texture taken to the other's finer resolution is refined on from there when it
+        // exceeds its threshold, and the other follows, until both agree.
+        for (int round = 0; round < 4 && p.color.texels_per_unit != p.normal.texels_per_unit; ++round) {
+          const bool color_coarser = p.color.texels_per_unit < p.normal.texels_per_unit;
+          TexturePatch& coarser = color_coarser ? p.color : p.normal;
+          const TextureKind kind = color_coarser ? TextureKind::kColor : TextureKind::kNormal;
+          const double threshold = color_coarser ? options.color_error : options.normal_error;
+          const int steps = coarser.steps;
+          const double refined = coarser.refined_texels_per_unit;
+          const double finer_tpu = std::max(p.color.texels_per_unit, p.normal.texels_per_unit);
+          coarser = refinePatch(f, kind, threshold, depth, data, options, weights, s, finer_tpu);
+          coarser.steps += steps;
+          if (coarser.texels_per_unit == finer_tpu) coarser.refined_texels_per_unit = refined;
+        }
+        if (p.color.texels_per_unit !=
+            p.normal.texels_per_unit) {  // (rounds exhausted: take the finer as is)
+          const bool color_coarser = p.color.texels_per_unit < p.normal.texels_per_unit;
+          TexturePatch& coarser = color_coarser ? p.color : p.normal;
+          TexturePatch resampled = renderPatch(f, std::max(p.color.texels_per_unit, p.normal.texels_per_unit),
+                                               color_coarser ? TextureKind::kColor : TextureKind::kNormal,
+                                               depth, data, options, weights, s);
           resampled.steps = coarser.steps;
+          resampled.refined_texels_per_unit = coarser.refined_texels_per_unit;
           resampled.at_resolution_limit = coarser.at_resolution_limit;
           coarser = std::move(resampled);
         }

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "relaxed_connectivity/convert/procedural_paint.h"
 #include "relaxed_connectivity/convert/surfel_conversion.h"
 #include "relaxed_connectivity/convert/textured_mesh_io.h"
 #include "relaxed_connectivity/io/cloud_io.h"
@@ -41,6 +42,7 @@ int main(int argc, char** argv) {
   rc::ConversionOptions options;
   std::vector<double> viewpoint;
   bool quiet = false, no_normal_texture = false;
+  double paint_cells = 0;
   app.add_option("input", input,
                  "point file (ply, pcd, off, obj, xyz); normals and radii are used if present")
       ->required();
@@ -72,6 +74,9 @@ int main(int argc, char** argv) {
   app.add_option("--viewpoint", viewpoint, "orient estimated normals towards x y z (a scanner)")->expected(3);
   app.add_option("--threads", options.texture.threads, "texture threads (0: all cores)")
       ->capture_default_str();
+  app.add_option(
+      "--paint-cells", paint_cells,
+      "paint the input procedurally first (cells per bounding box diagonal; for uncoloured scans)");
   app.add_option("--json", json_path, "write the summary here instead of stdout");
   app.add_flag("--quiet", quiet, "no progress line");
   CLI11_PARSE(app, argc, argv);
@@ -94,6 +99,7 @@ int main(int argc, char** argv) {
       rc::estimateNormals(surfels, config);
       normals_estimated = true;
     }
+    if (paint_cells > 0) rc::paintCells(surfels, paint_cells);
     const double read_seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     int last_percent = -1;
     rc::ConversionStage last_stage = rc::ConversionStage::kReconstruction;

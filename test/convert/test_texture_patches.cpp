@@ -182,7 +182,9 @@ TEST(TexturePatches, NormalTexturesReproduceTheSphereNormals) {
   for (size_t t = 0; t < patches.size(); ++t) {
     const TrianglePatches& p = patches[t];
     EXPECT_TRUE(p.normal.error <= options.normal_error || p.normal.at_resolution_limit) << t;
-    EXPECT_EQ(p.color.steps, 1) << "a uniform colour needs no refinement";
+    // A uniform colour needs no refinement: its first patch, then the render at the normals' resolution.
+    EXPECT_EQ(p.color.steps, 2) << t;
+    EXPECT_NEAR(p.color.refined_texels_per_unit * p.frame.base, options.start_base_texels, 1e-9) << t;
     // Each triangle's points: the sphere point projected onto them along the triangle normal.
     for (const Eigen::Vector3d& bary : {Eigen::Vector3d(1 / 3.0, 1 / 3.0, 1 / 3.0),
                                         Eigen::Vector3d(0.6, 0.2, 0.2), Eigen::Vector3d(0.2, 0.2, 0.6)}) {

@@ -12,9 +12,11 @@
 #include <sstream>
 
 #include "../shared_data.h"
+#include "relaxed_connectivity/convert/procedural_paint.h"
 #include "relaxed_connectivity/convert/surfel_conversion.h"
 #include "relaxed_connectivity/convert/textured_mesh_io.h"
 #include "relaxed_connectivity/convert/textured_mesh_renderer.h"
+#include "relaxed_connectivity/io/cloud_io.h"
 #include "relaxed_connectivity/io/pcd_io.h"
 #include "relaxed_connectivity/render/splat/image_io.h"
 #include "relaxed_connectivity/render/splat/surfel_renderer.h"
@@ -357,6 +359,34 @@ TEST(TexturedMesh, AColouredScanRendersLikeItsSurfels) {
   // noise that their fuzzy depth test blends and the mesh interpolates account for most of the difference;
   // the printed text on the carton survives. The bound leaves 2 dB for platform rounding.
   EXPECT_GT(psnr, 24.0);
+}
+
+TEST(TexturedMesh, ThePaintedIgeaPacksItsAtlasTightly) {
+  REQUIRE_CGAL();
+  RC_SKIP_WITHOUT_SHARED_DATA("igea.ply");
+  SurfelCloud igea = readCloud(test::sharedDataPath("igea.ply"));
+  estimateNormals(igea, NormalEstimationConfig());
+  estimateRadii(igea, RadiusEstimationConfig());
+  paintCells(igea);
+  ConversionOptions options;  // Table 6.1's triangle count, the default thresholds
+  options.simplification.max_error = 0;
+  options.simplification.target_triangles = 11340;
+  const ConversionResult r = convertSurfels(igea, options);
+  const AtlasLayout& layout = r.textured.layout;
+  size_t texels = 0;
+  for (const TexturePage& page : r.textured.pages) texels += size_t(page.width) * page.height;
+  std::printf(
+      "Igea: %zu triangles, %d page(s) of %d (last %d high), %.2f MB RGB, usage %.1f %% (%.1f %% with "
+      "borders), %.1f s\n",
+      r.textured.mesh.triangles.size(), layout.pages, layout.page_size, layout.last_page_height,
+      3e-6 * double(texels), 100 * layout.usage, 100 * layout.usage_with_borders, r.totalSeconds());
+  // Measured 82.7 % with borders (texels the patches claim, their 1-texel borders included) and 44.9 %
+  // inside the triangles; the thesis reports 93 % for its Igea (85-95 % typical), counting presumably the
+  // patches with their borders. Our smallest patches (uniform triangles: a 2-texel base) are mostly border.
+  EXPECT_GT(layout.usage_with_borders, 0.80);
+  EXPECT_GT(layout.usage, 0.40);
+  EXPECT_LT(3e-6 * double(texels), 2.6);                       // the thesis: 2.3 MB
+  EXPECT_LE(r.color_error_mean, options.texture.color_error);  // (patches at the spacing limit may exceed it)
 }
 
 }  // namespace

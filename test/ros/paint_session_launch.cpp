@@ -19,7 +19,7 @@ namespace {
 TEST(PaintSessionLaunch, ScansPaintsRendersAndFollowsTheObject) {
   ros::NodeHandle nh;
   SessionObserver session(nh);
-  expectRvizTopicsPublished(std::string(RC_SOURCE_DIR) + "/config/rviz/paint_session.rviz", 3);
+  expectRvizTopicsPublished(std::string(RC_SOURCE_DIR) + "/config/rviz/paint_session.rviz", 4);
   ASSERT_TRUE(
       waitFor([&] { return session.paint_stats.children > 200 && session.differential_updates > 10; }, 90))
       << session.paint_stats.children << " children, " << session.differential_updates

@@ -1,0 +1,17 @@
+// mesh_converter node: surfels -> textured meshes, as an action (see src/ros/mesh_converter.h).
+#include <ros/ros.h>
+
+#include "relaxed_connectivity/ros/mesh_converter.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "mesh_converter");
+  ros::NodeHandle nh, private_nh("~");
+  try {
+    rc::MeshConverter converter(nh, private_nh);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL_STREAM("mesh_converter: " << e.what());
+    return 1;
+  }
+  return 0;
+}
