@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -12,6 +13,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #endif
 
+#include "relaxed_connectivity/core/kd_tree.h"
 #include "relaxed_connectivity/mesh/mesh_metrics.h"
 
 namespace rc {
@@ -98,31 +100,72 @@ bool meshGenerationAvailable() {
   return true;
 }
 
-/// CGAL's default priority (the smallest Delaunay radius of a candidate), reporting progress on the way.
+/// CGAL's default priority (the smallest Delaunay radius of a candidate), reporting progress on the way, and
+/// refusing (infinity: never in the output) candidates with an edge longer than max_edge_spacing times the
+/// local sample spacing of its vertices: they bridge holes and gaps that the surfels do not cover (the open
+/// side of a single-view scan, the space between separate objects).
 struct ReportingPriority {
   const StageProgress* progress;
   double expected_calls;
+  const std::vector<double>* spacing;  // per surfel; null: no edge bound
+  double max_edge_spacing;
   mutable size_t calls = 0;
   template <typename AdvancingFront, typename CellHandle>
   double operator()(const AdvancingFront& front, CellHandle& cell, const int& index) const {
     if (++calls % 4096 == 0 && *progress && !(*progress)(std::min(0.99, double(calls) / expected_calls)))
       throw ConversionCancelled("reconstruction");
+    if (spacing) {
+      const auto a = cell->vertex((index + 1) & 3), b = cell->vertex((index + 2) & 3),
+                 c = cell->vertex((index + 3) & 3);
+      const double local =
+          max_edge_spacing * std::max({(*spacing)[a->id()], (*spacing)[b->id()], (*spacing)[c->id()]});
+      const double bound = local * local;
+      if (CGAL::squared_distance(a->point(), b->point()) > bound ||
+          CGAL::squared_distance(b->point(), c->point()) > bound ||
+          CGAL::squared_distance(c->point(), a->point()) > bound)
+        return std::numeric_limits<double>::infinity();
+    }
     return front.smallest_radius_delaunay_sphere(cell, index);
   }
 };
+
+/// Distance from each surfel to its k-th nearest neighbour.
+std::vector<double> sampleSpacing(const SurfelCloud& surfels, size_t k) {
+  const KdTree tree(surfels.positions);
+  std::vector<Neighbor> nn;
+  tree.knnBatch(surfels.positions, k + 1, nn);
+  std::vector<double> spacing(surfels.size());
+  for (size_t i = 0; i < surfels.size(); ++i) {
+    double d = 0;
+    for (size_t j = k + 1; j-- > 0;)
+      if (nn[i * (k + 1) + j].index != UINT32_MAX) {
+        d = std::sqrt(nn[i * (k + 1) + j].sq_dist);
+        break;
+      }
+    spacing[i] = d;
+  }
+  return spacing;
+}
 
 TriangleMesh reconstructSurface(const SurfelCloud& surfels, const ReconstructionOptions& options,
                                 ReconstructionStats* stats_out, const StageProgress& progress) {
   checkInput(surfels);
   if (!(options.radius_ratio_bound > 0) || !(options.beta > 0) || !(options.beta < M_PI / 2))
     throw std::invalid_argument("reconstructSurface: radius_ratio_bound must be > 0 and beta in (0, pi/2)");
+  if (!(options.max_edge_spacing >= 0) || options.spacing_neighbors < 1)
+    throw std::invalid_argument(
+        "reconstructSurface: max_edge_spacing must be >= 0 and spacing_neighbors >= 1");
   using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
   std::vector<Kernel::Point_3> points;
   points.reserve(surfels.size());
   for (const Vec3& p : surfels.positions) points.emplace_back(p.x(), p.y(), p.z());
   std::vector<std::array<std::size_t, 3>> faces;
   // (CGAL evaluated the priority about 12 times per surfel on the Igea and the bunny.)
-  const ReportingPriority priority{&progress, 12.0 * double(surfels.size())};
+  std::vector<double> spacing;
+  if (options.max_edge_spacing > 0) spacing = sampleSpacing(surfels, size_t(options.spacing_neighbors));
+  const ReportingPriority priority{&progress, 12.0 * double(surfels.size()),
+                                   options.max_edge_spacing > 0 ? &spacing : nullptr,
+                                   options.max_edge_spacing};
   CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(faces),
                                                priority, options.radius_ratio_bound, options.beta);
   if (progress && !progress(1.0)) throw ConversionCancelled("reconstruction");

@@ -18,6 +18,11 @@ struct ReconstructionOptions {
   /// Half the wedge angle [rad] within which only a candidate's radius decides its plausibility (CGAL's
   /// beta).
   double beta = 0.52;
+  /// Candidates with an edge longer than this many times the local sample spacing (the distance from a vertex
+  /// to its spacing_neighbors-th nearest surfel, the largest of the three) are refused: they would bridge
+  /// holes and gaps the surfels do not cover. 0: no bound (CGAL's plain advancing front).
+  double max_edge_spacing = 4.0;
+  int spacing_neighbors = 8;
   /// Throws std::invalid_argument if the mesh is not (vertex- and edge-) manifold after orientation.
   bool require_manifold = true;
 };

@@ -3,7 +3,7 @@
 // reports its stage and can be cancelled, and as a latched Marker for rviz.
 //
 // Subscribes  surfels (sensor_msgs/PointCloud2 with normals; kept, not converted, until a goal asks with
-//             use_latest: remap it to the painted object, e.g. /paint_model/surfels/painted)
+//             use_latest: remap it to the painted object, e.g. /surfels/painted)
 // Publishes   ~converted (visualization_msgs/Marker TRIANGLE_LIST, latched: the last result in the cloud's
 //             frame, each corner coloured from the texture at it)
 // Actions     ~convert (relaxed_connectivity/ConvertSurfels: goal = a cloud, a file or the latest cloud, and

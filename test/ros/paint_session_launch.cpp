@@ -1,13 +1,16 @@
 // launch/paint_session.launch end to end (paint_session_launch.test): scan -> paint model -> replayed stroke
 // -> paint_renderer images; the second 6-DOF input (object_pose) moves the object and the renderer follows
 // with a full update; the camera's interactive marker (camera_mover, dragged as rviz sends it) moves the
-// view, a non-finite drag is refused.
+// view, a non-finite drag is refused; the painted object converts to a textured mesh (mesh_converter).
+#include <actionlib/client/simple_action_client.h>
 #include <geometry_msgs/PoseStamped.h>
+#include <relaxed_connectivity/ConvertSurfelsAction.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 #include <visualization_msgs/InteractiveMarkerFeedback.h>
 
+#include <filesystem>
 #include <limits>
 
 #include "launch_test_support.h"
@@ -78,6 +81,40 @@ TEST(PaintSessionLaunch, ScansPaintsRendersAndFollowsTheObject) {
   drag.publish(feedback);
   waitFor([] { return false; }, 1.0);
   EXPECT_LT((camera().translation() - dragged.translation()).norm(), 1e-9);
+}
+
+TEST(PaintSessionLaunch, ThePaintedObjectConvertsToATexturedMesh) {
+  // (runs after the first test: the object is scanned and painted)
+  ros::NodeHandle nh;
+  SessionObserver session(nh);
+  ASSERT_TRUE(waitFor([&] { return session.paint_stats.children > 200; }, 60))
+      << session.paint_stats.children;
+  actionlib::SimpleActionClient<relaxed_connectivity::ConvertSurfelsAction> convert("mesh_converter/convert",
+                                                                                    true);
+  ASSERT_TRUE(convert.waitForServer(ros::Duration(10.0)));
+  relaxed_connectivity::ConvertSurfelsGoal goal;
+  goal.use_latest = true;  // the session's mesh_converter listens to paint_model's surfels/painted
+  goal.target_triangles = 4000;
+  goal.color_error = 0.05;
+  goal.write_obj = true;
+  std::vector<std::string> stages;
+  convert.sendGoal(goal, {}, {}, [&](const relaxed_connectivity::ConvertSurfelsFeedbackConstPtr& f) {
+    if (stages.empty() || stages.back() != f->stage) stages.push_back(f->stage);
+  });
+  ASSERT_TRUE(convert.waitForResult(ros::Duration(120.0)));
+  const auto result = convert.getResult();
+  ASSERT_EQ(convert.getState(), actionlib::SimpleClientGoalState::SUCCEEDED) << result->message;
+  EXPECT_GT(result->surfels, 50000u);                 // the painted box with its children, and the palette
+  EXPECT_NEAR(double(result->triangles), 4000, 200);  // (an open scan stops a little short of the count)
+  // Distances between the surfels and the mesh, relative to the diagonal (measured offline on a saved painted
+  // object: Hausdorff 1.3e-2, RMS 1.6e-4; before candidates longer than 4 sample spacings were refused, the
+  // reconstruction closed the scan's open bottom: Hausdorff 0.21, RMS 2.8e-2).
+  EXPECT_LT(result->hausdorff, 0.05);
+  EXPECT_LT(result->rms, 0.002);
+  EXPECT_EQ(stages.back(), "writing");
+  ASSERT_FALSE(result->files.empty());
+  for (const std::string& f : result->files) EXPECT_TRUE(std::filesystem::exists(f)) << f;
+  ROS_INFO_STREAM("session conversion: " << result->message << ", RMS " << result->rms);
 }
 
 }  // namespace
