@@ -11,12 +11,40 @@
 #if defined(RC_HAVE_CGAL)
 #include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Scale_space_reconstruction_3/Advancing_front_mesher.h>
+#include <CGAL/Scale_space_reconstruction_3/Weighted_PCA_smoother.h>
+#include <CGAL/Scale_space_surface_reconstruction_3.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/compute_average_spacing.h>
+#include <CGAL/poisson_surface_reconstruction.h>
+#include <CGAL/property_map.h>
 #endif
 
 #include "relaxed_connectivity/core/kd_tree.h"
 #include "relaxed_connectivity/mesh/mesh_metrics.h"
 
 namespace rc {
+
+ReconstructionMethod reconstructionMethodFromName(const std::string& name) {
+  if (name == "advancing_front") return ReconstructionMethod::kAdvancingFront;
+  if (name == "scale_space") return ReconstructionMethod::kScaleSpace;
+  if (name == "poisson") return ReconstructionMethod::kPoisson;
+  throw std::invalid_argument("reconstruction method '" + name +
+                              "': choose advancing_front, scale_space or poisson");
+}
+
+const char* reconstructionMethodName(ReconstructionMethod method) {
+  switch (method) {
+    case ReconstructionMethod::kAdvancingFront:
+      return "advancing_front";
+    case ReconstructionMethod::kScaleSpace:
+      return "scale_space";
+    case ReconstructionMethod::kPoisson:
+      return "poisson";
+  }
+  return "?";
+}
+
 namespace {
 
 void checkInput(const SurfelCloud& surfels) {
@@ -108,15 +136,26 @@ struct ReportingPriority {
   const StageProgress* progress;
   double expected_calls;
   const std::vector<double>* spacing;  // per surfel; null: no edge bound
+  const std::vector<Vec3>* positions;  // the surfels'
   double max_edge_spacing;
   mutable size_t calls = 0;
   template <typename AdvancingFront, typename CellHandle>
   double operator()(const AdvancingFront& front, CellHandle& cell, const int& index) const {
     if (++calls % 4096 == 0 && *progress && !(*progress)(std::min(0.99, double(calls) / expected_calls)))
       throw ConversionCancelled("reconstruction");
+    // Only facets of three surfels are bounded: not those of the infinite vertex, nor those of the vertex
+    // CGAL adds above coplanar input (its id is not a surfel's: checked against the surfel's position).
+    const auto& dt = front.triangulation_3();
+    auto isSurfel = [&](const auto& v) {
+      if (dt.is_infinite(v) || v->id() >= positions->size()) return false;
+      const Vec3& p = (*positions)[v->id()];
+      return v->point().x() == p.x() && v->point().y() == p.y() && v->point().z() == p.z();
+    };
     if (spacing) {
       const auto a = cell->vertex((index + 1) & 3), b = cell->vertex((index + 2) & 3),
                  c = cell->vertex((index + 3) & 3);
+      if (!isSurfel(a) || !isSurfel(b) || !isSurfel(c))
+        return front.smallest_radius_delaunay_sphere(cell, index);
       const double local =
           max_edge_spacing * std::max({(*spacing)[a->id()], (*spacing)[b->id()], (*spacing)[c->id()]});
       const double bound = local * local;
@@ -147,6 +186,79 @@ std::vector<double> sampleSpacing(const SurfelCloud& surfels, size_t k) {
   return spacing;
 }
 
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+/// Connected components of a mesh's triangles (through shared vertices).
+size_t countComponents(const TriangleMesh& mesh) {
+  std::vector<uint32_t> parent(mesh.vertices.size());
+  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto find = [&](uint32_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (const Triangle& t : mesh.triangles) {
+    parent[find(t[1])] = find(t[0]);
+    parent[find(t[2])] = find(t[0]);
+  }
+  std::vector<bool> used(parent.size(), false), root(parent.size(), false);
+  for (const Triangle& t : mesh.triangles)
+    for (uint32_t v : t) used[v] = true;
+  size_t count = 0;
+  for (uint32_t v = 0; v < parent.size(); ++v)
+    if (used[v] && !root[find(v)]) root[find(v)] = true, ++count;
+  return count;
+}
+
+/// Poisson reconstruction (CGAL's Delaunay-refined implicit function and surface mesher).
+TriangleMesh reconstructPoisson(const SurfelCloud& surfels, const ReconstructionOptions& options,
+                                ReconstructionStats* stats_out, const StageProgress& progress) {
+  using PointWithNormal = std::pair<Kernel::Point_3, Kernel::Vector_3>;
+  std::vector<PointWithNormal> input;
+  input.reserve(surfels.size());
+  for (size_t i = 0; i < surfels.size(); ++i) {
+    const Vec3& p = surfels.positions[i];
+    const Vec3 n = surfels.normals[i].normalized();
+    input.emplace_back(Kernel::Point_3(p.x(), p.y(), p.z()), Kernel::Vector_3(n.x(), n.y(), n.z()));
+  }
+  const double spacing = CGAL::compute_average_spacing<CGAL::Sequential_tag>(
+      input, 6, CGAL::parameters::point_map(CGAL::First_of_pair_property_map<PointWithNormal>()));
+  if (progress && !progress(0.1)) throw ConversionCancelled("reconstruction");
+  CGAL::Surface_mesh<Kernel::Point_3> output;
+  if (!CGAL::poisson_surface_reconstruction_delaunay(input.begin(), input.end(),
+                                                     CGAL::First_of_pair_property_map<PointWithNormal>(),
+                                                     CGAL::Second_of_pair_property_map<PointWithNormal>(),
+                                                     output, spacing, 20.0, 30.0, options.poisson_distance))
+    throw std::invalid_argument(
+        "reconstructSurface: the Poisson reconstruction failed (its solver did not "
+        "converge, or the normals are inconsistent)");
+  if (progress && !progress(1.0)) throw ConversionCancelled("reconstruction");
+  TriangleMesh mesh;
+  std::vector<uint32_t> index(output.number_of_vertices() + output.number_of_removed_vertices(), 0);
+  for (const auto v : output.vertices()) {
+    index[size_t(v)] = uint32_t(mesh.vertices.positions.size());
+    const auto& p = output.point(v);
+    mesh.vertices.positions.emplace_back(p.x(), p.y(), p.z());
+  }
+  for (const auto f : output.faces()) {
+    Triangle t{};
+    int k = 0;
+    for (const auto v : CGAL::vertices_around_face(output.halfedge(f), output)) {
+      if (k < 3) t[size_t(k)] = index[size_t(v)];
+      ++k;
+    }
+    if (k == 3) mesh.triangles.push_back(t);
+  }
+  const EdgeStatistics edges = edgeStatistics(mesh);
+  if (options.require_manifold && (edges.non_manifold_edges > 0 || edges.misoriented_edges > 0))
+    throw std::invalid_argument("reconstructSurface: the Poisson surface is not an oriented manifold");
+  ReconstructionStats stats;
+  stats.triangles = mesh.triangles.size();
+  stats.boundary_edges = edges.boundary_edges;
+  stats.components = countComponents(mesh);
+  if (stats_out) *stats_out = stats;
+  return mesh;
+}
+
 TriangleMesh reconstructSurface(const SurfelCloud& surfels, const ReconstructionOptions& options,
                                 ReconstructionStats* stats_out, const StageProgress& progress) {
   checkInput(surfels);
@@ -155,19 +267,46 @@ TriangleMesh reconstructSurface(const SurfelCloud& surfels, const Reconstruction
   if (!(options.max_edge_spacing >= 0) || options.spacing_neighbors < 1)
     throw std::invalid_argument(
         "reconstructSurface: max_edge_spacing must be >= 0 and spacing_neighbors >= 1");
-  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
   std::vector<Kernel::Point_3> points;
   points.reserve(surfels.size());
   for (const Vec3& p : surfels.positions) points.emplace_back(p.x(), p.y(), p.z());
-  std::vector<std::array<std::size_t, 3>> faces;
-  // (CGAL evaluated the priority about 12 times per surfel on the Igea and the bunny.)
+  if (options.scale_space_iterations < 0 || options.scale_space_neighbors < 3 ||
+      !(options.poisson_distance > 0))
+    throw std::invalid_argument(
+        "reconstructSurface: scale_space_iterations must be >= 0, scale_space_neighbors >= 3, "
+        "poisson_distance > 0");
+  if (options.method == ReconstructionMethod::kPoisson)
+    return reconstructPoisson(surfels, options, stats_out, progress);
   std::vector<double> spacing;
   if (options.max_edge_spacing > 0) spacing = sampleSpacing(surfels, size_t(options.spacing_neighbors));
-  const ReportingPriority priority{&progress, 12.0 * double(surfels.size()),
-                                   options.max_edge_spacing > 0 ? &spacing : nullptr,
-                                   options.max_edge_spacing};
-  CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(faces),
-                                               priority, options.radius_ratio_bound, options.beta);
+  std::vector<std::array<std::size_t, 3>> faces;
+  if (options.method == ReconstructionMethod::kScaleSpace) {
+    // Smooth, mesh the smoothed points with the advancing front (edges bounded by the median spacing), keep
+    // the facets on the original points.
+    using Reconstruction = CGAL::Scale_space_surface_reconstruction_3<Kernel>;
+    Reconstruction reconstruction(points.begin(), points.end());
+    reconstruction.increase_scale(size_t(options.scale_space_iterations),
+                                  CGAL::Scale_space_reconstruction_3::Weighted_PCA_smoother<Kernel>(
+                                      unsigned(options.scale_space_neighbors)));
+    if (progress && !progress(0.5)) throw ConversionCancelled("reconstruction");
+    double bound = 0;
+    if (!spacing.empty()) {
+      std::vector<double> sorted = spacing;
+      std::nth_element(sorted.begin(), sorted.begin() + long(sorted.size() / 2), sorted.end());
+      bound = options.max_edge_spacing * sorted[sorted.size() / 2];
+    }
+    reconstruction.reconstruct_surface(CGAL::Scale_space_reconstruction_3::Advancing_front_mesher<Kernel>(
+        bound, options.radius_ratio_bound, options.beta));
+    for (auto it = reconstruction.facets_begin(); it != reconstruction.facets_end(); ++it)
+      faces.push_back({(*it)[0], (*it)[1], (*it)[2]});
+  } else {
+    // (CGAL evaluated the priority about 12 times per surfel on the Igea and the bunny.)
+    const ReportingPriority priority{&progress, 12.0 * double(surfels.size()),
+                                     options.max_edge_spacing > 0 ? &spacing : nullptr, &surfels.positions,
+                                     options.max_edge_spacing};
+    CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(faces),
+                                                 priority, options.radius_ratio_bound, options.beta);
+  }
   if (progress && !progress(1.0)) throw ConversionCancelled("reconstruction");
   TriangleMesh mesh;
   mesh.vertices = surfels;

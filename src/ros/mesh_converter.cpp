@@ -57,6 +57,13 @@ MeshConverterParams readMeshConverterParams(const ros::NodeHandle& pnh) {
   pnh.param("border", c.atlas.border, c.atlas.border);
   pnh.param("max_page_size", c.atlas.max_page_size, c.atlas.max_page_size);
   pnh.param("require_manifold", c.reconstruction.require_manifold, c.reconstruction.require_manifold);
+  std::string method = reconstructionMethodName(c.reconstruction.method);
+  pnh.param("reconstruction", method, method);
+  try {
+    c.reconstruction.method = reconstructionMethodFromName(method);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("mesh_converter: ~") + e.what());
+  }
   std::vector<double> viewpoint;
   pnh.param("viewpoint", viewpoint, viewpoint);
   if (viewpoint.size() == 3) {

@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
   std::vector<double> viewpoint;
   bool quiet = false, no_normal_texture = false;
   double paint_cells = 0;
+  std::string method = "advancing_front";
   app.add_option("input", input,
                  "point file (ply, pcd, off, obj, xyz); normals and radii are used if present")
       ->required();
@@ -68,6 +69,8 @@ int main(int argc, char** argv) {
   app.add_option("--projection-depth", options.texture.projection_depth,
                  "surfels farther than this from a triangle are not drawn into it [m] (0: automatic)")
       ->capture_default_str();
+  app.add_option("--method", method, "reconstruction: advancing_front | scale_space (noisy scans) | poisson")
+      ->capture_default_str();
   app.add_flag(
       "--non-manifold", [&](int64_t) { options.reconstruction.require_manifold = false; },
       "keep going when the reconstruction is not a manifold");
@@ -81,6 +84,12 @@ int main(int argc, char** argv) {
   app.add_flag("--quiet", quiet, "no progress line");
   CLI11_PARSE(app, argc, argv);
   options.texture.normal_texture = !no_normal_texture;
+  try {
+    options.reconstruction.method = rc::reconstructionMethodFromName(method);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rc_convert: %s\n", e.what());
+    return 2;
+  }
   for (const std::string& out : outputs)
     if (!endsWith(out, ".obj") && !endsWith(out, ".glb")) {
       std::fprintf(stderr, "rc_convert: %s: outputs end in .obj or .glb\n", out.c_str());
@@ -134,8 +143,9 @@ int main(int argc, char** argv) {
     j << "{\n  \"input\": " << jsonString(input) << ",\n  \"points_read\": " << read_points
       << ", \"non_finite_dropped\": " << dropped << ", \"surfels\": " << surfels.size()
       << ", \"normals_estimated\": " << (normals_estimated ? "true" : "false")
-      << ", \"radii_estimated\": " << r.radii_estimated
-      << ",\n  \"reconstruction\": {\"triangles\": " << r.reconstruction.triangles
+      << ", \"radii_estimated\": " << r.radii_estimated << ",\n  \"reconstruction\": {\"method\": \""
+      << rc::reconstructionMethodName(options.reconstruction.method)
+      << "\", \"triangles\": " << r.reconstruction.triangles
       << ", \"components\": " << r.reconstruction.components
       << ", \"unused_surfels\": " << r.reconstruction.unused_surfels
       << ", \"boundary_edges\": " << r.reconstruction.boundary_edges
