@@ -31,6 +31,9 @@ struct AtlasOptions {
   /// usage, at most max_page_size (then several pages).
   int page_size = 0;
   int max_page_size = 4096;
+  /// Mip levels assembled in the atlas' pattern (6.5): level k halves level k - 1, each texel the mean of the
+  /// texels below it that belong to its patch, so no level blends two patches (buildTexturedMesh; 0: none).
+  int mip_levels = 0;
 };
 
 struct PatchPlacement {

@@ -13,6 +13,69 @@ uint8_t toByte(float value) {
   return uint8_t(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f));
 }
 
+/// Mip levels in the atlas' pattern: each texel takes the patch that owns most of the 2 x 2 texels below it
+/// (ties: the smaller index) and the mean of that patch's texels there; normals are averaged as vectors.
+void buildMips(TexturePage& page, int levels) {
+  page.mips.clear();
+  page.mips.reserve(size_t(levels));  // (the loop keeps pointers to the previous level)
+  uint32_t w = page.width, h = page.height;
+  const std::vector<Rgba>* color = &page.color;
+  const std::vector<Rgba>* normal = &page.normal;
+  const std::vector<int32_t>* owner = &page.owner;
+  for (int level = 1; level <= levels && (w > 1 || h > 1); ++level) {
+    TexturePage::Mip mip;
+    mip.width = (w + 1) / 2;
+    mip.height = (h + 1) / 2;
+    const size_t n = size_t(mip.width) * mip.height;
+    mip.color.assign(n, Rgba{0, 0, 0, 255});
+    if (!normal->empty()) mip.normal.assign(n, Rgba{128, 128, 255, 255});
+    mip.owner.assign(n, -1);
+    for (uint32_t y = 0; y < mip.height; ++y)
+      for (uint32_t x = 0; x < mip.width; ++x) {
+        size_t below[4];
+        int count = 0;
+        for (uint32_t dy = 0; dy < 2; ++dy)
+          for (uint32_t dx = 0; dx < 2; ++dx)
+            if (2 * x + dx < w && 2 * y + dy < h) below[count++] = size_t(2 * y + dy) * w + 2 * x + dx;
+        int32_t best = -1;
+        int best_votes = 0;
+        for (int a = 0; a < count; ++a) {
+          const int32_t id = (*owner)[below[a]];
+          if (id < 0) continue;
+          int votes = 0;
+          for (int b = 0; b < count; ++b) votes += (*owner)[below[b]] == id;
+          if (votes > best_votes || (votes == best_votes && id < best)) best = id, best_votes = votes;
+        }
+        const size_t i = size_t(y) * mip.width + x;
+        mip.owner[i] = best;
+        if (best < 0) continue;
+        Eigen::Vector3f c_sum = Eigen::Vector3f::Zero(), n_sum = Eigen::Vector3f::Zero();
+        for (int a = 0; a < count; ++a) {
+          if ((*owner)[below[a]] != best) continue;
+          const Rgba& c = (*color)[below[a]];
+          c_sum += Eigen::Vector3f(c[0], c[1], c[2]);
+          if (!normal->empty()) {
+            const Rgba& m = (*normal)[below[a]];
+            n_sum += Eigen::Vector3f(m[0], m[1], m[2]) / 127.5f - Eigen::Vector3f::Ones();
+          }
+        }
+        c_sum /= float(best_votes);
+        mip.color[i] = {uint8_t(std::lround(c_sum.x())), uint8_t(std::lround(c_sum.y())),
+                        uint8_t(std::lround(c_sum.z())), 255};
+        if (!normal->empty()) {
+          const Eigen::Vector3f u =
+              n_sum.norm() > 0 ? Eigen::Vector3f(n_sum.normalized()) : Eigen::Vector3f::UnitZ();
+          mip.normal[i] = {toByte(0.5f + 0.5f * u.x()), toByte(0.5f + 0.5f * u.y()),
+                           toByte(0.5f + 0.5f * u.z()), 255};
+        }
+      }
+    page.mips.push_back(std::move(mip));
+    const TexturePage::Mip& last = page.mips.back();
+    w = last.width, h = last.height;
+    color = &last.color, normal = &last.normal, owner = &last.owner;
+  }
+}
+
 }  // namespace
 
 Eigen::Vector3f samplePage(const std::vector<Rgba>& image, uint32_t width, uint32_t height, double u,
@@ -56,6 +119,7 @@ TexturedMesh buildTexturedMesh(const TriangleMesh& mesh, const std::vector<Trian
     page.width = uint32_t(P);
     page.height = uint32_t(k + 1 == out.layout.pages ? out.layout.last_page_height : P);
     page.color.assign(size_t(page.width) * page.height, Rgba{0, 0, 0, 255});
+    page.owner.assign(page.color.size(), -1);
     if (normals) page.normal.assign(page.color.size(), Rgba{128, 128, 255, 255});
   }
   out.page.resize(T);
@@ -109,6 +173,7 @@ TexturedMesh buildTexturedMesh(const TriangleMesh& mesh, const std::vector<Trian
         const int py = top + (place.flipped_vertically ? H - 1 - y : y);
         const size_t dst = size_t(py) * page.width + size_t(px), src = size_t(y) * W + x;
         const Eigen::Vector3f& c = cp.texels[src];
+        page.owner[dst] = int32_t(t);
         page.color[dst] = {toByte(c.x()), toByte(c.y()), toByte(c.z()), 255};
         if (normals) {
           const Vec3 n = p.normal.texels[src].cast<double>().normalized();
@@ -123,6 +188,8 @@ TexturedMesh buildTexturedMesh(const TriangleMesh& mesh, const std::vector<Trian
       ++vertex_corners[tri[size_t(c)]];
     }
   }
+  if (options.mip_levels < 0) throw std::invalid_argument("buildTexturedMesh: mip_levels must be >= 0");
+  for (TexturePage& page : out.pages) buildMips(page, options.mip_levels);
   out.mesh.vertices.colors.resize(mesh.vertices.size(), Rgba{200, 200, 200, 255});
   for (size_t v = 0; v < mesh.vertices.size(); ++v)
     if (vertex_corners[v]) {

@@ -18,6 +18,15 @@ struct TexturePage {
   uint32_t width = 0, height = 0;
   std::vector<Rgba> color;   ///< row-major, top row first
   std::vector<Rgba> normal;  ///< tangent-space normal map (empty without normal textures)
+  /// Per texel, the triangle whose patch claims it (-1: none); then per mip level (AtlasOptions::mip_levels)
+  /// the same at (width >> k) x (height >> k) (rounded up), with the level's colour and normal images.
+  std::vector<int32_t> owner;
+  struct Mip {
+    uint32_t width = 0, height = 0;
+    std::vector<Rgba> color, normal;
+    std::vector<int32_t> owner;
+  };
+  std::vector<Mip> mips;  ///< level 1, 2, ...
 };
 
 struct TexturedMesh {

@@ -41,6 +41,16 @@ std::vector<std::string> writeTexturedObj(const std::string& obj_path, const Tex
       files.push_back(beside(stem + "_normal" + std::to_string(k) + ".png"));
       writePng(files.back(), page.normal, page.width, page.height);
     }
+    for (size_t level = 0; level < page.mips.size(); ++level) {  // the atlas-pattern mip levels, beside
+      const TexturePage::Mip& mip = page.mips[level];
+      const std::string suffix = std::to_string(k) + "_mip" + std::to_string(level + 1) + ".png";
+      files.push_back(beside(stem + "_color" + suffix));
+      writePng(files.back(), mip.color, mip.width, mip.height);
+      if (normals) {
+        files.push_back(beside(stem + "_normal" + suffix));
+        writePng(files.back(), mip.normal, mip.width, mip.height);
+      }
+    }
   }
   // Materials
   const std::string mtl = beside(stem + ".mtl");

@@ -11,9 +11,11 @@
 namespace rc {
 
 /// Writes <stem>.obj, <stem>.mtl and per page <stem>_color<k>.png and (with normal maps) <stem>_normal<k>.png
-/// beside it (`obj_path` names the .obj). Faces carry their face normal (the normal map's frame) and one
-/// material per page (map_Kd, and map_Bump for the normal map). Returns the files written. Throws
-/// std::runtime_error naming the file that could not be written.
+/// beside it (`obj_path` names the .obj), and the pages' atlas-pattern mip levels as
+/// <stem>_color<k>_mip<L>.png (MTL has no way to name them: for engines that load their own mip chains).
+/// Faces carry their face normal (the normal map's frame) and one material per page (map_Kd, and map_Bump for
+/// the normal map). Returns the files written. Throws std::runtime_error naming the file that could not be
+/// written.
 std::vector<std::string> writeTexturedObj(const std::string& obj_path, const TexturedMesh& mesh);
 
 /// True when this build has tinygltf (libtinygltf-dev); writeGlb throws std::runtime_error otherwise.
@@ -21,7 +23,8 @@ bool glbAvailable();
 
 /// Writes a glTF 2.0 binary: one mesh with a primitive per page (POSITION, NORMAL, TANGENT, TEXCOORD_0,
 /// unindexed corners), one material per page (base colour texture, normal texture; metallic 0, roughness 1),
-/// the PNG pages embedded, and the node rotated from ROS' z-up to glTF's y-up. Throws std::runtime_error
+/// the PNG pages embedded (level 0 only: glTF stores no mip chain in PNG), and the node rotated from ROS'
+/// z-up to glTF's y-up. Throws std::runtime_error
 /// naming the file on failure.
 void writeGlb(const std::string& path, const TexturedMesh& mesh);
 

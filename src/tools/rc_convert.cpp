@@ -64,6 +64,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--no-normal-texture", no_normal_texture, "colour textures only");
   app.add_option("--border", options.atlas.border, "texels around each patch")->capture_default_str();
+  app.add_option("--mip-levels", options.atlas.mip_levels,
+                 "also write this many mip levels of each page in the atlas' pattern (OBJ output)")
+      ->capture_default_str();
   app.add_option("--max-page-size", options.atlas.max_page_size, "largest texture page (a power of two)")
       ->capture_default_str();
   app.add_option("--projection-depth", options.texture.projection_depth,

@@ -121,6 +121,47 @@ TEST(TexturedMesh, PagesHoldEachPatchWhereItsTextureCoordinatesPoint) {
       100 * tm.layout.usage_with_borders, r.geometric_error.hausdorff);
 }
 
+TEST(TexturedMesh, MipLevelsKeepThePatternAndNeverBlendTwoPatches) {
+  REQUIRE_CGAL();
+  ConversionOptions options;
+  options.simplification.max_error = 0;
+  options.simplification.target_triangles = 600;
+  const SurfelCloud surfels = paintedSphere(8000);
+  const TriangleMesh mesh = simplifyMesh(reconstructSurface(surfels), options.simplification);
+  std::vector<TrianglePatches> patches = computeTexturePatches(mesh, surfels);
+  // A distinct colour per patch: a mip texel owned by a patch must show exactly that colour.
+  auto code = [](size_t t) {
+    return Eigen::Vector3f(float(t % 7) / 6.0f, float((t / 7) % 7) / 6.0f, float((t / 49) % 7) / 6.0f);
+  };
+  for (size_t t = 0; t < patches.size(); ++t)
+    for (Eigen::Vector3f& texel : patches[t].color.texels) texel = code(t);
+  AtlasOptions atlas;
+  atlas.mip_levels = 3;
+  const TexturedMesh tm = buildTexturedMesh(mesh, patches, atlas);
+  size_t checked = 0, owned_by_each[4] = {0, 0, 0, 0};
+  for (const TexturePage& page : tm.pages) {
+    ASSERT_EQ(page.mips.size(), 3u);
+    uint32_t w = page.width, h = page.height;
+    for (size_t level = 0; level < 3; ++level) {
+      const TexturePage::Mip& mip = page.mips[level];
+      EXPECT_EQ(mip.width, (w + 1) / 2);
+      EXPECT_EQ(mip.height, (h + 1) / 2);
+      w = mip.width, h = mip.height;
+      for (size_t i = 0; i < mip.owner.size(); ++i) {
+        if (mip.owner[i] < 0) continue;
+        ++owned_by_each[level];
+        const Eigen::Vector3f expected = code(size_t(mip.owner[i])) * 255.0f;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(mip.color[i][c], expected[c], 0.51) << "level " << level + 1;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 1000u);
+  // Each level keeps about a quarter of the texels of the one below.
+  for (int level = 1; level < 3; ++level)
+    EXPECT_NEAR(double(owned_by_each[level]) / owned_by_each[level - 1], 0.25, 0.1);
+}
+
 /// The surfels' unshaded colour and the textured mesh's, from `views` directions around the origin.
 double worstPsnr(const SurfelCloud& surfels, const TexturedMesh& mesh, const std::vector<Vec3>& eyes,
                  const Vec3& target, double fov, double* worst_mismatch) {
