@@ -189,6 +189,7 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
   };
   int page = 0, y_row = 0, row_height = 0;
   std::vector<int> row_right;  // per texel row of the current row: first free column
+  std::vector<int> row_left;   // per texel row of the current row: its first claimed column (P: none)
   std::vector<bool> placed(patches.size(), false);
   // Mask row of strip row `s` for a patch at vertical offset `shift` in the row, flipped or not.
   auto maskRow = [](const RowProfile& r, bool flip_v, int shift, int s) {
@@ -204,12 +205,24 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
     }
     return x;
   };
+  // The rightmost column left of every texel the row holds (its first patch leaves a wedge at the page's
+  // left edge); -1 if the patch does not fit there.
+  auto rightmostXBeforeRowStart = [&](const RowProfile& r, bool flip_h, bool flip_v, int shift) {
+    int x = P;
+    for (int s = shift; s < shift + r.height; ++s) {
+      const int m = maskRow(r, flip_v, shift, s);
+      if (r.left[m] < 0) continue;
+      x = std::min(x, row_left[s] - 1 - (flip_h ? r.width - 1 - r.left[m] : r.right[m]));
+    }
+    return x >= P ? -1 : x;
+  };
   auto place = [&](uint32_t t, bool flip_h, bool flip_v, int shift, int x) {
     const RowProfile& r = profiles[t];
     for (int s = shift; s < shift + r.height; ++s) {
       const int m = maskRow(r, flip_v, shift, s);
       if (r.left[m] < 0) continue;
       row_right[s] = std::max(row_right[s], x + (flip_h ? r.width - 1 - r.left[m] : r.right[m]) + 1);
+      row_left[s] = std::min(row_left[s], x + (flip_h ? r.width - 1 - r.right[m] : r.left[m]));
     }
     // The triangle's corners on the page.
     const PatchShape& p = patches[t];
@@ -240,6 +253,7 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
     for (; next < order.size() && profiles[order[next]].height >= lowest; ++next)  // (line 4)
       if (!placed[order[next]]) addToPool(order[next]);
     row_right.assign(size_t(row_height), 0);
+    row_left.assign(size_t(row_height), P);
     double beta = M_PI / 2;  // (line 5)
     bool mirror = false;
     int failures = 0;
@@ -284,12 +298,21 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
       const RowProfile& r = profiles[t];
       int best_x = P, best_shift = 0;
       bool best_flip_h = false, best_flip_v = false;
+      // First the gap a row's first patch leaves on its left (pushed right against it), then the row's end.
       for (bool flip_h : {false, true})
         for (bool flip_v : {false, true})
           for (int shift = 0; shift + r.height <= row_height; ++shift) {
-            const int x = leftmostX(r, flip_h, flip_v, shift);
-            if (x < best_x) best_x = x, best_shift = shift, best_flip_h = flip_h, best_flip_v = flip_v;
+            const int x = rightmostXBeforeRowStart(r, flip_h, flip_v, shift);
+            if (x >= 0 && (best_x == P || x < best_x))
+              best_x = x, best_shift = shift, best_flip_h = flip_h, best_flip_v = flip_v;
           }
+      if (best_x == P)
+        for (bool flip_h : {false, true})
+          for (bool flip_v : {false, true})
+            for (int shift = 0; shift + r.height <= row_height; ++shift) {
+              const int x = leftmostX(r, flip_h, flip_v, shift);
+              if (x < best_x) best_x = x, best_shift = shift, best_flip_h = flip_h, best_flip_v = flip_v;
+            }
       if (best_x + r.width > P) {
         ++failures;
         continue;

@@ -421,10 +421,10 @@ TEST(TexturedMesh, ThePaintedIgeaPacksItsAtlasTightly) {
       "borders), %.1f s\n",
       r.textured.mesh.triangles.size(), layout.pages, layout.page_size, layout.last_page_height,
       3e-6 * double(texels), 100 * layout.usage, 100 * layout.usage_with_borders, r.totalSeconds());
-  // Measured 82.7 % with borders (texels the patches claim, their 1-texel borders included) and 44.9 %
+  // Measured 84.4 % with borders (texels the patches claim, their 1-texel borders included) and 45.1 %
   // inside the triangles; the thesis reports 93 % for its Igea (85-95 % typical), counting presumably the
   // patches with their borders. Our smallest patches (uniform triangles: a 2-texel base) are mostly border.
-  EXPECT_GT(layout.usage_with_borders, 0.80);
+  EXPECT_GT(layout.usage_with_borders, 0.82);
   EXPECT_GT(layout.usage, 0.40);
   EXPECT_LT(3e-6 * double(texels), 2.6);                       // the thesis: 2.3 MB
   EXPECT_LE(r.color_error_mean, options.texture.color_error);  // (patches at the spacing limit may exceed it)
