@@ -11,6 +11,7 @@
 #if defined(RC_HAVE_CGAL)
 #include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Random.h>
 #include <CGAL/Scale_space_reconstruction_3/Advancing_front_mesher.h>
 #include <CGAL/Scale_space_reconstruction_3/Weighted_PCA_smoother.h>
 #include <CGAL/Scale_space_surface_reconstruction_3.h>
@@ -262,6 +263,10 @@ TriangleMesh reconstructPoisson(const SurfelCloud& surfels, const Reconstruction
 TriangleMesh reconstructSurface(const SurfelCloud& surfels, const ReconstructionOptions& options,
                                 ReconstructionStats* stats_out, const StageProgress& progress) {
   checkInput(surfels);
+  // CGAL's default random generator orders the Delaunay insertion (spatial sorting) and seeds Poisson's
+  // mesher; cospherical input (a sampled sphere) has several Delaunay triangulations, so the result would
+  // depend on what ran before in the process. A fixed seed per call makes it a function of its input.
+  CGAL::get_default_random() = CGAL::Random(20071);
   if (!(options.radius_ratio_bound > 0) || !(options.beta > 0) || !(options.beta < M_PI / 2))
     throw std::invalid_argument("reconstructSurface: radius_ratio_bound must be > 0 and beta in (0, pi/2)");
   if (!(options.max_edge_spacing >= 0) || options.spacing_neighbors < 1)
