@@ -263,9 +263,9 @@ TriangleMesh reconstructPoisson(const SurfelCloud& surfels, const Reconstruction
 TriangleMesh reconstructSurface(const SurfelCloud& surfels, const ReconstructionOptions& options,
                                 ReconstructionStats* stats_out, const StageProgress& progress) {
   checkInput(surfels);
-  // CGAL's default random generator orders the Delaunay insertion (spatial sorting) and seeds Poisson's
-  // mesher; cospherical input (a sampled sphere) has several Delaunay triangulations, so the result would
-  // depend on what ran before in the process. A fixed seed per call makes it a function of its input.
+  // CGAL's default random generator seeds Poisson's surface mesher: a fixed seed per call makes its result
+  // the same from run to run. (Exactly cospherical input, such as a sampled sphere, has several Delaunay
+  // triangulations; which one the advancing front starts from can still depend on the heap's layout.)
   CGAL::get_default_random() = CGAL::Random(20071);
   if (!(options.radius_ratio_bound > 0) || !(options.beta > 0) || !(options.beta < M_PI / 2))
     throw std::invalid_argument("reconstructSurface: radius_ratio_bound must be > 0 and beta in (0, pi/2)");
