@@ -83,16 +83,22 @@ int nextPowerOfTwo(double v) {
 
 }  // namespace
 
+int longestEdge(const std::array<Eigen::Vector3d, 3>& v) {
+  int k = 0;
+  double longest = -1;
+  for (int e = 0; e < 3; ++e) {
+    const double length = (v[(e + 1) % 3] - v[e]).squaredNorm();
+    if (length > longest) longest = length, k = e;
+  }
+  return k;
+}
+
 PatchShape PatchShape::ofTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                   const Eigen::Vector3d& c, double texels_per_unit) {
   // The longest edge is the base; the apex is the vertex opposite it.
   const std::array<Eigen::Vector3d, 3> v = {a, b, c};
-  int k = 0;
-  double longest = -1;
-  for (int e = 0; e < 3; ++e) {
-    const double length = (v[(e + 1) % 3] - v[e]).norm();
-    if (length > longest) longest = length, k = e;
-  }
+  const int k = longestEdge(v);
+  const double longest = (v[(k + 1) % 3] - v[k]).norm();
   const Eigen::Vector3d& p0 = v[k];
   const Eigen::Vector3d& p1 = v[(k + 1) % 3];
   const Eigen::Vector3d& apex = v[(k + 2) % 3];

@@ -13,6 +13,10 @@
 
 namespace rc {
 
+/// The triangle's base: k such that the edge from v[k] to v[(k + 1) % 3] is the longest (ties: the first);
+/// v[(k + 2) % 3] is the apex. PatchShape::ofTriangle and the texture patches' frames both take it.
+int longestEdge(const std::array<Eigen::Vector3d, 3>& v);
+
 /// A triangle's texture patch in its own texel frame: the longest edge (the base) from (0, 0) to (base, 0),
 /// the third vertex (the apex) at (apex_x, height), 0 <= apex_x <= base, height > 0 (texels).
 struct PatchShape {

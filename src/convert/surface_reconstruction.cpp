@@ -169,24 +169,6 @@ struct ReportingPriority {
   }
 };
 
-/// Distance from each surfel to its k-th nearest neighbour.
-std::vector<double> sampleSpacing(const SurfelCloud& surfels, size_t k) {
-  const KdTree tree(surfels.positions);
-  std::vector<Neighbor> nn;
-  tree.knnBatch(surfels.positions, k + 1, nn);
-  std::vector<double> spacing(surfels.size());
-  for (size_t i = 0; i < surfels.size(); ++i) {
-    double d = 0;
-    for (size_t j = k + 1; j-- > 0;)
-      if (nn[i * (k + 1) + j].index != UINT32_MAX) {
-        d = std::sqrt(nn[i * (k + 1) + j].sq_dist);
-        break;
-      }
-    spacing[i] = d;
-  }
-  return spacing;
-}
-
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 
 /// Connected components of a mesh's triangles (through shared vertices).
@@ -283,7 +265,8 @@ TriangleMesh reconstructSurface(const SurfelCloud& surfels, const Reconstruction
   if (options.method == ReconstructionMethod::kPoisson)
     return reconstructPoisson(surfels, options, stats_out, progress);
   std::vector<double> spacing;
-  if (options.max_edge_spacing > 0) spacing = sampleSpacing(surfels, size_t(options.spacing_neighbors));
+  if (options.max_edge_spacing > 0)
+    spacing = KdTree(surfels.positions).kthNeighborDistances(size_t(options.spacing_neighbors));
   std::vector<std::array<std::size_t, 3>> faces;
   if (options.method == ReconstructionMethod::kScaleSpace) {
     // Smooth, mesh the smoothed points with the advancing front (edges bounded by the median spacing), keep

@@ -73,7 +73,9 @@ ConversionResult convertSurfels(const SurfelCloud& input, const ConversionOption
         [&](const StageProgress&) { result.geometric_error = geometricError(simplified, *surfels); });
   std::vector<TrianglePatches> patches;
   run(ConversionStage::kTextures, [&](const StageProgress& p) {
-    patches = computeTexturePatches(simplified, *surfels, options.texture, &result.texture, p);
+    TextureOptions texture = options.texture;
+    texture.border = options.atlas.border;  // the patches are the packing's masks
+    patches = computeTexturePatches(simplified, *surfels, texture, &result.texture, p);
   });
   double area_sum = 0;
   for (const TrianglePatches& p : patches) {

@@ -16,7 +16,7 @@ namespace rc {
 struct ConversionOptions {
   ReconstructionOptions reconstruction;
   SimplificationOptions simplification;  ///< default: max_error 0.0005 of the bounding box diagonal
-  TextureOptions texture;
+  TextureOptions texture;                ///< (its border is taken from atlas.border)
   AtlasOptions atlas;
   bool measure_geometric_error = true;
   ConversionOptions() { simplification.max_error = 0.0005; }

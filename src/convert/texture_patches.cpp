@@ -32,9 +32,10 @@ struct PatchScratch {
 
 struct SurfelData {
   const SurfelCloud* cloud;
-  std::vector<Eigen::Vector3f> colors;  // [0, 1]
-  std::vector<float> area;              // of the disc [m^2]
-  std::vector<float> spacing;           // distance to the nearest other surfel [m]
+  std::vector<Eigen::Vector3f> colors;   // [0, 1]
+  std::vector<Eigen::Vector3f> normals;  // unit
+  std::vector<float> area;               // of the disc [m^2]
+  std::vector<float> spacing;            // distance to the nearest other surfel [m]
   double max_radius = 0;
 };
 
@@ -98,9 +99,7 @@ void reconstructAt(double u, double v, TextureKind kind, const SurfelData& data,
     const uint32_t j = s.raster_surfel[k];
     const float w = weights[size_t(r2 * splat_tile::kWeightTableSteps)];
     *weight += w;
-    *sum += w * (kind == TextureKind::kColor
-                     ? data.colors[j]
-                     : Eigen::Vector3f(data.cloud->normals[j].normalized().cast<float>()));
+    *sum += w * (kind == TextureKind::kColor ? data.colors[j] : data.normals[j]);
   });
 }
 
@@ -185,8 +184,7 @@ TexturePatch renderPatch(const PatchFrame& frame, double texels_per_unit, Textur
   for (size_t k = 0; k < s.rasters.size(); ++k) {
     const SplatRaster& r = s.rasters[k];
     const uint32_t j = s.raster_surfel[k];
-    const Eigen::Vector3f value =
-        kind == TextureKind::kColor ? data.colors[j] : cloud.normals[j].normalized().cast<float>();
+    const Eigen::Vector3f value = kind == TextureKind::kColor ? data.colors[j] : data.normals[j];
     splat_tile::rasterizeSplat(r, rect, [&](int x, int y, float r2, float z) {
       const size_t i = size_t(y) * W + x;
       if (z > s.bound[i]) return;
@@ -282,8 +280,7 @@ TexturePatch renderPatch(const PatchFrame& frame, double texels_per_unit, Textur
       e = (data.colors[j] - t).norm();  // L2 in RGB (6.1)
     } else {
       const float length = t.norm();
-      e = length > 0 ? 1.0 - double(cloud.normals[j].normalized().cast<float>().dot(t / length))
-                     : 1.0;  // (6.2)
+      e = length > 0 ? 1.0 - double(data.normals[j].dot(t / length)) : 1.0;  // (6.2)
     }
     error_sum += data.area[j] * e;
     area_sum += data.area[j];
@@ -338,12 +335,8 @@ void fillEmpty(TexturePatch* patch, const Eigen::Vector3f& value) {
 
 PatchFrame patchFrame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   const std::array<Eigen::Vector3d, 3> v = {a, b, c};
-  int k = 0;
-  double longest = -1;
-  for (int e = 0; e < 3; ++e) {  // the same choice as PatchShape::ofTriangle
-    const double length = (v[(e + 1) % 3] - v[e]).norm();
-    if (length > longest) longest = length, k = e;
-  }
+  const int k = longestEdge(v);  // the base, as PatchShape::ofTriangle takes it
+  const double longest = (v[(k + 1) % 3] - v[k]).norm();
   PatchFrame f;
   f.corner = {k, (k + 1) % 3, (k + 2) % 3};
   f.origin = v[k];
@@ -358,14 +351,8 @@ PatchFrame patchFrame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const 
 }
 
 Eigen::Vector3f sampleBilinear(const TexturePatch& patch, double x, double y) {
-  const double fx = std::clamp(x - 0.5, 0.0, double(patch.width - 1));
-  const double fy = std::clamp(y - 0.5, 0.0, double(patch.height - 1));
-  const int x0 = std::min(int(fx), patch.width - 1), y0 = std::min(int(fy), patch.height - 1);
-  const int x1 = std::min(x0 + 1, patch.width - 1), y1 = std::min(y0 + 1, patch.height - 1);
-  const float tx = float(fx - x0), ty = float(fy - y0);
-  auto at = [&](int xx, int yy) { return patch.texels[size_t(yy) * patch.width + xx]; };
-  return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x1, y0)) +
-         ty * ((1 - tx) * at(x0, y1) + tx * at(x1, y1));
+  return bilinear(patch.width, patch.height, x, y,
+                  [&](int i, int j) { return patch.texels[size_t(j) * size_t(patch.width) + size_t(i)]; });
 }
 
 Eigen::Vector2d rasterCoordinates(const TexturePatch& patch, const PatchFrame& frame,
@@ -393,12 +380,14 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
   data.cloud = &surfels;
   data.colors.resize(N, Eigen::Vector3f::Ones());
   data.area.resize(N);
+  data.normals.resize(N);
   std::vector<double> radii(N);
   for (size_t i = 0; i < N; ++i) {
     if (!surfels.positions[i].allFinite() || !surfels.normals[i].allFinite() ||
         !(surfels.normals[i].norm() > 0))
       throw std::invalid_argument("computeTexturePatches: surfel " + std::to_string(i) +
                                   " has a non-finite position or a zero or non-finite normal");
+    data.normals[i] = surfels.normals[i].normalized().cast<float>();
     double r1, r2;
     if (surfels.hasAxes()) {
       r1 = surfels.axes1[i].norm();
@@ -416,14 +405,8 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
           Eigen::Vector3f(surfels.colors[i][0], surfels.colors[i][1], surfels.colors[i][2]) / 255.0f;
   }
   const KdTree tree(surfels.positions);
-  {
-    std::vector<Neighbor> nn;
-    tree.knnBatch(surfels.positions, 2, nn);
-    data.spacing.resize(N);
-    for (size_t i = 0; i < N; ++i)
-      data.spacing[i] = nn[2 * i + 1].index == UINT32_MAX ? std::numeric_limits<float>::infinity()
-                                                          : float(std::sqrt(nn[2 * i + 1].sq_dist));
-  }
+  const std::vector<double> spacing = tree.kthNeighborDistances(1);
+  data.spacing.assign(spacing.begin(), spacing.end());
   double depth = options.projection_depth;
   if (depth == 0) {
     std::vector<double> sorted = radii;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -36,7 +37,8 @@ struct TextureOptions {
   double refinement_factor = 1.41421356237;
   /// Never more texels along a base than this (a guard for duplicate surfels, whose d_min is 0).
   double max_base_texels = 512;
-  /// Texels around each triangle (atlas_packing.h: a patch claims its triangle plus this border).
+  /// Texels around each triangle (atlas_packing.h: a patch claims its triangle plus this border); must be the
+  /// atlas' border (convertSurfels takes it from AtlasOptions).
   int border = 1;
   /// Surfels farther than this from a triangle's plane are not splatted into its patch [m]; 0: the larger of
   /// four times the median surfel radius and 1 % of the bounding box diagonal.
@@ -97,6 +99,19 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
                                                    const TextureOptions& options = {},
                                                    TextureStats* stats = nullptr,
                                                    const StageProgress& progress = nullptr);
+
+/// Bilinear interpolation of a width x height grid of texels at continuous coordinates (x, y), texel (i, j)
+/// centred at (i + 0.5, j + 0.5), clamped to the grid; at(i, j) returns texel (i, j) as an Eigen::Vector3f.
+template <class At>
+Eigen::Vector3f bilinear(int width, int height, double x, double y, At&& at) {
+  const double fx = std::clamp(x - 0.5, 0.0, double(width - 1));
+  const double fy = std::clamp(y - 0.5, 0.0, double(height - 1));
+  const int x0 = std::min(int(fx), width - 1), y0 = std::min(int(fy), height - 1);
+  const int x1 = std::min(x0 + 1, width - 1), y1 = std::min(y0 + 1, height - 1);
+  const float tx = float(fx - x0), ty = float(fy - y0);
+  const Eigen::Vector3f a = at(x0, y0), b = at(x1, y0), c = at(x0, y1), d = at(x1, y1);
+  return (1 - ty) * ((1 - tx) * a + tx * b) + ty * ((1 - tx) * c + tx * d);
+}
 
 /// The texture's bilinear interpolation at continuous raster coordinates (texel centres at i + 0.5),
 /// clamped to the raster.

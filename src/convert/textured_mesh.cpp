@@ -80,17 +80,10 @@ void buildMips(TexturePage& page, int levels) {
 
 Eigen::Vector3f samplePage(const std::vector<Rgba>& image, uint32_t width, uint32_t height, double u,
                            double v) {
-  const double fx = std::clamp(u * width - 0.5, 0.0, double(width - 1));
-  const double fy = std::clamp(v * height - 0.5, 0.0, double(height - 1));
-  const uint32_t x0 = std::min(uint32_t(fx), width - 1), y0 = std::min(uint32_t(fy), height - 1);
-  const uint32_t x1 = std::min(x0 + 1, width - 1), y1 = std::min(y0 + 1, height - 1);
-  const float tx = float(fx - x0), ty = float(fy - y0);
-  auto at = [&](uint32_t x, uint32_t y) -> Eigen::Vector3f {
-    const Rgba& c = image[size_t(y) * width + x];
-    return Eigen::Vector3f(c[0], c[1], c[2]) / 255.0f;
-  };
-  return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x1, y0)) +
-         ty * ((1 - tx) * at(x0, y1) + tx * at(x1, y1));
+  return bilinear(int(width), int(height), u * width, v * height, [&](int i, int j) {
+    const Rgba& c = image[size_t(j) * width + size_t(i)];
+    return Eigen::Vector3f(Eigen::Vector3f(c[0], c[1], c[2]) / 255.0f);
+  });
 }
 
 TexturedMesh buildTexturedMesh(const TriangleMesh& mesh, const std::vector<TrianglePatches>& patches,
@@ -166,6 +159,12 @@ TexturedMesh buildTexturedMesh(const TriangleMesh& mesh, const std::vector<Trian
     const int top = int(
         std::lround(place.flipped_vertically ? place.corners[0].y() - (H - o) : place.corners[0].y() - o));
     const PatchMask mask = patchMask(cp.shape, options.border);
+    if (mask.width != W || mask.height != H)  // (the patches were made with another border)
+      throw std::invalid_argument("buildTexturedMesh: triangle " + std::to_string(t) + "'s patch is " +
+                                  std::to_string(W) + " x " + std::to_string(H) +
+                                  " texels, its mask at border " + std::to_string(options.border) + " " +
+                                  std::to_string(mask.width) + " x " + std::to_string(mask.height) +
+                                  ": TextureOptions::border must equal AtlasOptions::border");
     for (int y = 0; y < H; ++y)
       for (int x = 0; x < W; ++x) {
         if (!mask.texels[size_t(y) * W + x]) continue;

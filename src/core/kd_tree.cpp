@@ -161,6 +161,17 @@ void KdTree::knnBatch(const std::vector<Vec3>& queries, size_t k, std::vector<Ne
   for (long i = 0; i < static_cast<long>(queries.size()); ++i) knn(queries[i], k, out.data() + i * k);
 }
 
+std::vector<double> KdTree::kthNeighborDistances(size_t k) const {
+  std::vector<Neighbor> rows;
+  knnBatch(*points_, k + 1, rows);
+  std::vector<double> distances(points_->size());
+  for (size_t i = 0; i < distances.size(); ++i) {
+    const Neighbor& kth = rows[i * (k + 1) + k];
+    distances[i] = kth.index == UINT32_MAX ? std::numeric_limits<double>::infinity() : std::sqrt(kth.sq_dist);
+  }
+  return distances;
+}
+
 void KdTree::radiusBatch(const std::vector<Vec3>& queries, double radius, std::vector<size_t>& offsets,
                          std::vector<Neighbor>& out) const {
   if (!(radius >= 0.0))

@@ -44,6 +44,10 @@ class KdTree {
   /// with fewer than k candidates are padded with {UINT32_MAX, inf}. Multi-threaded.
   void knnBatch(const std::vector<Vec3>& queries, size_t k, std::vector<Neighbor>& out) const;
 
+  /// For each point of the tree, the distance to its k-th nearest other point (the (k + 1)-th nearest
+  /// counting the point itself; the sample spacing for k = 1); infinity when the tree has no more than k
+  /// points. Multi-threaded.
+  std::vector<double> kthNeighborDistances(size_t k) const;
   /// Batched radius queries in CSR form: the neighbours of query i are out[offsets[i] .. offsets[i+1]),
   /// unsorted, with squared distances. Multi-threaded (OpenMP); `offsets` and `out` keep their capacity.
   void radiusBatch(const std::vector<Vec3>& queries, double radius, std::vector<size_t>& offsets,

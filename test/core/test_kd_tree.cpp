@@ -193,5 +193,20 @@ TEST(KdTree, BatchedQueriesEqualSingleQueries) {
   EXPECT_GT(total, queries.size());  // the test is not vacuous
 }
 
+TEST(KdTree, KthNeighborDistancesAreTheBruteForceOnes) {
+  const std::vector<Vec3> pts = makePoints(Layout::kClustered, 800, 11);
+  const KdTree tree(pts);
+  for (size_t k : {1, 8}) {
+    const std::vector<double> d = tree.kthNeighborDistances(k);
+    ASSERT_EQ(d.size(), pts.size());
+    for (size_t i = 0; i < pts.size(); i += 37)
+      EXPECT_DOUBLE_EQ(d[i], std::sqrt(bruteKnnDists(pts, pts[i], k + 1)[k])) << "point " << i << ", k " << k;
+  }
+  const std::vector<Vec3> two = {Vec3(0, 0, 0), Vec3(3, 4, 0)};
+  const KdTree small(two);
+  EXPECT_DOUBLE_EQ(small.kthNeighborDistances(1)[0], 5.0);
+  EXPECT_TRUE(std::isinf(small.kthNeighborDistances(2)[1]));  // fewer than k other points
+}
+
 }  // namespace
 }  // namespace rc
