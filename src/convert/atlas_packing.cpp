@@ -39,6 +39,7 @@ struct RowProfile {
   std::vector<int> left, right;  // -1: the row claims nothing
   size_t claimed = 0;
   double alpha_left = 0, alpha_right = 0;  // base angles [rad]
+  std::vector<int> rows_by_length;         // the claimed rows, longest first
 };
 
 RowProfile profileOf(const PatchShape& p, int border) {
@@ -56,6 +57,10 @@ RowProfile profileOf(const PatchShape& p, int border) {
         r.right[y] = x;
         ++r.claimed;
       }
+  for (int y = 0; y < mask.height; ++y)
+    if (r.left[y] >= 0) r.rows_by_length.push_back(y);
+  std::stable_sort(r.rows_by_length.begin(), r.rows_by_length.end(),
+                   [&](int a, int b) { return r.right[a] - r.left[a] > r.right[b] - r.left[b]; });
   r.alpha_left = std::atan2(p.height, p.apex_x);
   r.alpha_right = std::atan2(p.height, p.base - p.apex_x);
   return r;
@@ -73,6 +78,16 @@ void eraseCandidate(AngleMap& map, double angle, uint32_t index) {
       map.erase(it);
       return;
     }
+}
+
+/// out = in >> by as a bitset (bit c of out is bit c + by of in; bit c of a bitset is bit c % 64 of word c /
+/// 64).
+void shiftDown(const std::vector<uint64_t>& in, int by, std::vector<uint64_t>& out) {
+  const int n = int(in.size()), q = by / 64, r = by % 64;
+  for (int k = 0; k < n; ++k) {
+    const uint64_t low = k + q < n ? in[size_t(k + q)] : 0, high = k + q + 1 < n ? in[size_t(k + q + 1)] : 0;
+    out[size_t(k)] = r == 0 ? low : (low >> r) | (high << (64 - r));
+  }
 }
 
 int nextPowerOfTwo(double v) {
@@ -195,7 +210,6 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
   };
   int page = 0, y_row = 0, row_height = 0;
   std::vector<int> row_right;  // per texel row of the current row: first free column
-  std::vector<int> row_left;   // per texel row of the current row: its first claimed column (P: none)
   std::vector<bool> placed(patches.size(), false);
   // Mask row of strip row `s` for a patch at vertical offset `shift` in the row, flipped or not.
   auto maskRow = [](const RowProfile& r, bool flip_v, int shift, int s) {
@@ -211,16 +225,80 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
     }
     return x;
   };
-  // The rightmost column left of every texel the row holds (its first patch leaves a wedge at the page's
-  // left edge); -1 if the patch does not fit there.
-  auto rightmostXBeforeRowStart = [&](const RowProfile& r, bool flip_h, bool flip_v, int shift) {
-    int x = P;
-    for (int s = shift; s < shift + r.height; ++s) {
-      const int m = maskRow(r, flip_v, shift, s);
-      if (r.left[m] < 0) continue;
-      x = std::min(x, row_left[s] - 1 - (flip_h ? r.width - 1 - r.left[m] : r.right[m]));
+  // The current row's free texels as one bitset per strip row (bit c of word c / 64: column c is free), and
+  // per strip row and run length L the bitset of columns where L free texels start (cached until the strip
+  // row changes).
+  const int W = (P + 63) / 64;
+  std::vector<std::vector<uint64_t>> free_bits;
+  struct RunStarts {
+    std::vector<uint64_t> bits;
+    int first = 0;            // the first column where the run starts (P: none)
+    uint32_t generation = 0;  // valid while it equals its strip row's generation
+  };
+  std::vector<std::vector<RunStarts>> run_starts;  // per strip row, by run length
+  std::vector<uint32_t> generation;                // per strip row: 1 + how often it changed
+  auto claim = [&](int s, int a, int b) {
+    std::vector<uint64_t>& bits = free_bits[size_t(s)];
+    for (int c = a; c <= b; ++c) bits[size_t(c / 64)] &= ~(uint64_t(1) << (c % 64));
+    ++generation[size_t(s)];
+  };
+  std::vector<uint64_t> shifted;
+  auto runStarts = [&](int s, int length) -> const RunStarts& {
+    std::vector<RunStarts>& by_length = run_starts[size_t(s)];
+    if (by_length.size() <= size_t(length)) by_length.resize(size_t(length) + 1);
+    RunStarts& out = by_length[size_t(length)];
+    if (out.generation == generation[size_t(s)]) return out;
+    out.generation = generation[size_t(s)];
+    // R_2k = R_k & (R_k >> k); R_L = R_c & (R_c >> (L - c)) for the largest power of two c <= L.
+    std::vector<uint64_t>& r = out.bits;
+    r = free_bits[size_t(s)];
+    shifted.resize(size_t(W));
+    int covered = 1;
+    auto andShifted = [&](int by) {
+      shiftDown(r, by, shifted);
+      for (int k = 0; k < W; ++k) r[size_t(k)] &= shifted[size_t(k)];
+    };
+    for (; 2 * covered <= length; covered *= 2) andShifted(covered);
+    if (length > covered) andShifted(length - covered);
+    out.first = P;
+    for (int k = 0; k < W; ++k)
+      if (r[size_t(k)]) {
+        out.first = 64 * k + __builtin_ctzll(r[size_t(k)]);
+        break;
+      }
+    return out;
+  };
+  // The leftmost column left of `before` where the patch fits between the texels the row holds, gaps
+  // included (-1: none): the columns where every texel row of the patch finds its run of free texels.
+  std::vector<uint64_t> fit(static_cast<size_t>(W));
+  auto leftmostFreeX = [&](const RowProfile& r, bool flip_h, bool flip_v, int shift, int before) {
+    const int last_x = std::min(P - r.width, before - 1);
+    if (last_x < 0) return -1;
+    // No texel row can start before the first run that holds it.
+    int first_x = 0;
+    for (int m : r.rows_by_length) {
+      const int s = shift + (flip_v ? r.height - 1 - m : m);  // its strip row
+      const int by = flip_h ? r.width - 1 - r.right[m] : r.left[m];
+      first_x = std::max(first_x, runStarts(s, r.right[m] - r.left[m] + 1).first - by);
+      if (first_x > last_x) return -1;
     }
-    return x >= P ? -1 : x;
+    int lo = first_x / 64, hi = last_x / 64;  // the words of `fit` that may still hold a column
+    std::fill(fit.begin() + lo, fit.begin() + hi + 1, ~uint64_t(0));
+    for (int m : r.rows_by_length) {  // the longest texel rows first: they rule out the most columns
+      const int s = shift + (flip_v ? r.height - 1 - m : m);
+      const std::vector<uint64_t>& starts = runStarts(s, r.right[m] - r.left[m] + 1).bits;
+      const int by = flip_h ? r.width - 1 - r.right[m] : r.left[m], q = by / 64, b = by % 64;
+      for (int k = lo; k <= hi; ++k) {  // fit &= starts >> by
+        const uint64_t low = k + q < W ? starts[size_t(k + q)] : 0;
+        const uint64_t high = k + q + 1 < W ? starts[size_t(k + q + 1)] : 0;
+        fit[size_t(k)] &= b == 0 ? low : (low >> b) | (high << (64 - b));
+      }
+      while (lo <= hi && !fit[size_t(lo)]) ++lo;
+      while (hi >= lo && !fit[size_t(hi)]) --hi;
+      if (lo > hi) return -1;
+    }
+    const int x = 64 * lo + __builtin_ctzll(fit[size_t(lo)]);
+    return x <= last_x ? x : -1;
   };
   auto place = [&](uint32_t t, bool flip_h, bool flip_v, int shift, int x) {
     const RowProfile& r = profiles[t];
@@ -228,7 +306,8 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
       const int m = maskRow(r, flip_v, shift, s);
       if (r.left[m] < 0) continue;
       row_right[s] = std::max(row_right[s], x + (flip_h ? r.width - 1 - r.left[m] : r.right[m]) + 1);
-      row_left[s] = std::min(row_left[s], x + (flip_h ? r.width - 1 - r.right[m] : r.left[m]));
+      claim(s, x + (flip_h ? r.width - 1 - r.right[m] : r.left[m]),
+            x + (flip_h ? r.width - 1 - r.left[m] : r.right[m]));
     }
     // The triangle's corners on the page.
     const PatchShape& p = patches[t];
@@ -259,7 +338,11 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
     for (; next < order.size() && profiles[order[next]].height >= lowest; ++next)  // (line 4)
       if (!placed[order[next]]) addToPool(order[next]);
     row_right.assign(size_t(row_height), 0);
-    row_left.assign(size_t(row_height), P);
+    free_bits.assign(size_t(row_height), std::vector<uint64_t>(size_t(W), ~uint64_t(0)));
+    if (P % 64)
+      for (std::vector<uint64_t>& bits : free_bits) bits.back() = (uint64_t(1) << (P % 64)) - 1;
+    run_starts.assign(size_t(row_height), {});
+    generation.assign(size_t(row_height), 1);
     double beta = M_PI / 2;  // (line 5)
     bool mirror = false;
     int failures = 0;
@@ -294,36 +377,38 @@ AtlasLayout packPatches(const std::vector<PatchShape>& patches, const AtlasOptio
       beta = flip_h ? r.alpha_left : r.alpha_right;  // (lines 10, 12) the free angle on the right
       mirror = !mirror;                              // (line 15)
     }
-    // Row-end fill (beyond Algorithm 6.1): the space a row leaves when its height class runs out takes the
-    // next shorter patches, each at the height within the row where it lands leftmost. Without it, the rows
-    // of the few tallest patches stay mostly empty.
-    failures = 0;
-    for (size_t k = next; k < order.size() && failures < kFailuresToCloseARow; ++k) {
+    // Gap fill (beyond Algorithm 6.1): the space a row leaves when its height class runs out, at its end and
+    // between its patches, takes the shorter patches, tallest first, each at the leftmost column where its
+    // texels fit (any height within the row, either flip). Without it, the rows of the few tallest patches
+    // stay mostly empty (Igea: 84 % of the atlas claimed with the row ends filled, 90.5 % with the gaps).
+    // A patch whose mask is at least as wide and as tall as one that found no place since the row last
+    // changed is not searched (a heuristic: only a differently shaped triangle could fit there).
+    std::vector<std::pair<int, int>> failed;
+    for (size_t k = next; k < order.size(); ++k) {
       const uint32_t t = order[k];
       if (placed[t]) continue;
       const RowProfile& r = profiles[t];
+      if (std::any_of(failed.begin(), failed.end(),
+                      [&](const auto& f) { return f.first <= r.width && f.second <= r.height; }))
+        continue;
       int best_x = P, best_shift = 0;
       bool best_flip_h = false, best_flip_v = false;
-      // First the gap a row's first patch leaves on its left (pushed right against it), then the row's end.
       for (bool flip_h : {false, true})
         for (bool flip_v : {false, true})
           for (int shift = 0; shift + r.height <= row_height; ++shift) {
-            const int x = rightmostXBeforeRowStart(r, flip_h, flip_v, shift);
-            if (x >= 0 && (best_x == P || x < best_x))
+            const int x = leftmostFreeX(r, flip_h, flip_v, shift, best_x);
+            if (x >= 0 && x < best_x)
               best_x = x, best_shift = shift, best_flip_h = flip_h, best_flip_v = flip_v;
           }
-      if (best_x == P)
-        for (bool flip_h : {false, true})
-          for (bool flip_v : {false, true})
-            for (int shift = 0; shift + r.height <= row_height; ++shift) {
-              const int x = leftmostX(r, flip_h, flip_v, shift);
-              if (x < best_x) best_x = x, best_shift = shift, best_flip_h = flip_h, best_flip_v = flip_v;
-            }
       if (best_x + r.width > P) {
-        ++failures;
+        failed.erase(
+            std::remove_if(failed.begin(), failed.end(),
+                           [&](const auto& f) { return f.first >= r.width && f.second >= r.height; }),
+            failed.end());
+        failed.emplace_back(r.width, r.height);
         continue;
       }
-      failures = 0;
+      failed.clear();
       place(t, best_flip_h, best_flip_v, best_shift, best_x);
     }
     for (uint32_t i : skipped) addToPool(i);

@@ -1,7 +1,8 @@
 // Packing triangular texture patches into square power-of-two texture pages (thesis 6.3, Algorithm 6.1): rows
 // of patches of similar height, each patch chosen by how well one of its base angles matches the free base
 // angle left by the previous one, flipped horizontally to match and vertically every second time, and pushed
-// as far left as its texels allow. Patches are never resized or sheared: each keeps the size its texture
+// as far left as its texels allow; then shorter patches fill the gaps and the end of the row, each at the
+// leftmost place its texels fit. Patches are never resized or sheared: each keeps the size its texture
 // error asked for (6.2.1). Collisions are tested on texels: a patch claims the texels its triangle touches
 // plus a border (so bilinear filtering never reads a neighbour's texels), and no texel is claimed twice.
 #pragma once
