@@ -85,8 +85,14 @@ ConversionResult convertSurfels(const SurfelCloud& input, const ConversionOption
     result.color_error_mean += area * p.color.error;
     result.normal_error_max = std::max(result.normal_error_max, p.normal.error);
     result.normal_error_mean += area * p.normal.error;
+    result.depth_error_max = std::max(result.depth_error_max, p.depth.error);
+    result.depth_error_mean += area * p.depth.error;
   }
-  if (area_sum > 0) result.color_error_mean /= area_sum, result.normal_error_mean /= area_sum;
+  if (area_sum > 0) {
+    result.color_error_mean /= area_sum;
+    result.normal_error_mean /= area_sum;
+    result.depth_error_mean /= area_sum;
+  }
   run(ConversionStage::kPacking,
       [&](const StageProgress&) { result.textured = buildTexturedMesh(simplified, patches, options.atlas); });
   return result;

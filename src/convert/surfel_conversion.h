@@ -34,8 +34,10 @@ struct ConversionResult {
   TextureStats texture;
   size_t radii_estimated = 0;  ///< surfels that came without radii (estimated, 3.3)
   /// Texture errors over the triangles: the largest and the area-weighted mean of the colour error (6.1)
-  /// and of the normal error (6.2) the patches ended with.
+  /// and of the normal error (6.2) the patches ended with, and of the depth error
+  /// (TextureOptions::depth_error).
   double color_error_max = 0, color_error_mean = 0, normal_error_max = 0, normal_error_mean = 0;
+  double depth_error_max = 0, depth_error_mean = 0;
   double seconds[5] = {0, 0, 0, 0, 0};  ///< per ConversionStage
   double totalSeconds() const;
 };

@@ -37,7 +37,23 @@ struct SurfelData {
   std::vector<float> area;               // of the disc [m^2]
   std::vector<float> spacing;            // distance to the nearest other surfel [m]
   double max_radius = 0;
+  double depth_unit = 1;  // the median surfel radius [m]: the depth error's unit
 };
+
+/// The attribute a texture of this kind interpolates, of surfel j's fragment at `height` above the triangle
+/// (depth: the height of the splat's disc there, not of its centre, so that curved surfaces keep their
+/// shape between centres).
+Eigen::Vector3f fragmentValue(TextureKind kind, const SurfelData& data, uint32_t j, float height) {
+  switch (kind) {
+    case TextureKind::kColor:
+      return data.colors[j];
+    case TextureKind::kNormal:
+      return data.normals[j];
+    case TextureKind::kDepth:
+      break;
+  }
+  return Eigen::Vector3f(height, 0, 0);
+}
 
 bool insideTriangle2d(double x, double y, const PatchFrame& f) {
   // Base from (0, 0) to (base, 0), apex (apex_x, height); a small tolerance for centres on an edge.
@@ -90,7 +106,8 @@ float depthBoundAt(double u, double v, const PatchScratch& s) {
 
 /// The weight-normalised reconstruction with visibility at one image point (u, v) (pixel coordinates):
 /// adds the weights and weighted values of the visible splats there.
-void reconstructAt(double u, double v, TextureKind kind, const SurfelData& data,
+/// `depth`: the camera's height above the triangle (a fragment at depth z lies depth - z above it).
+void reconstructAt(double u, double v, TextureKind kind, const SurfelData& data, double depth,
                    const splat_tile::WeightTable& weights, const PatchScratch& s, float* weight,
                    Eigen::Vector3f* sum) {
   const float bound = depthBoundAt(u, v, s);
@@ -99,7 +116,7 @@ void reconstructAt(double u, double v, TextureKind kind, const SurfelData& data,
     const uint32_t j = s.raster_surfel[k];
     const float w = weights[size_t(r2 * splat_tile::kWeightTableSteps)];
     *weight += w;
-    *sum += w * (kind == TextureKind::kColor ? data.colors[j] : data.normals[j]);
+    *sum += w * fragmentValue(kind, data, j, float(depth - z));
   });
 }
 
@@ -184,13 +201,12 @@ TexturePatch renderPatch(const PatchFrame& frame, double texels_per_unit, Textur
   for (size_t k = 0; k < s.rasters.size(); ++k) {
     const SplatRaster& r = s.rasters[k];
     const uint32_t j = s.raster_surfel[k];
-    const Eigen::Vector3f value = kind == TextureKind::kColor ? data.colors[j] : data.normals[j];
     splat_tile::rasterizeSplat(r, rect, [&](int x, int y, float r2, float z) {
       const size_t i = size_t(y) * W + x;
       if (z > s.bound[i]) return;
       const float w = weights[size_t(r2 * splat_tile::kWeightTableSteps)];
       s.weight[i] += w;
-      s.sum[i] += w * value;
+      s.sum[i] += w * fragmentValue(kind, data, j, float(depth - z));
     });
   }
   // Normalise into raster order (row 0 at the base). A texel whose centre lies outside the triangle takes
@@ -211,7 +227,7 @@ TexturePatch renderPatch(const PatchFrame& frame, double texels_per_unit, Textur
       if ((q - centre).squaredNorm() > 1e-12) {
         weight = 0;
         sum.setZero();
-        reconstructAt(q.x() - 0.5, H - 0.5 - q.y(), kind, data, weights, s, &weight, &sum);
+        reconstructAt(q.x() - 0.5, H - 0.5 - q.y(), kind, data, depth, weights, s, &weight, &sum);
       }
       if (weight > 0) {
         patch.texels[o] = sum / weight;
@@ -278,9 +294,11 @@ TexturePatch renderPatch(const PatchFrame& frame, double texels_per_unit, Textur
     double e;
     if (kind == TextureKind::kColor) {
       e = (data.colors[j] - t).norm();  // L2 in RGB (6.1)
-    } else {
+    } else if (kind == TextureKind::kNormal) {
       const float length = t.norm();
       e = length > 0 ? 1.0 - double(data.normals[j].dot(t / length)) : 1.0;  // (6.2)
+    } else {
+      e = std::abs(d.dot(frame.normal) - double(t.x())) / data.depth_unit;  // the centre's height
     }
     error_sum += data.area[j] * e;
     area_sum += data.area[j];
@@ -301,7 +319,6 @@ double minSpacingOnTriangle(const PatchFrame& frame, const SurfelData& data, con
   return d_min;
 }
 
-/// The refinement loop of 6.2.1 for one texture of one triangle.
 /// The refinement loop of 6.2.1 for one texture of one triangle, from `start_tpu` texels per unit (0: the
 /// coarsest patch).
 TexturePatch refinePatch(const PatchFrame& frame, TextureKind kind, double threshold, double depth,
@@ -369,9 +386,10 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
   if (surfels.empty()) throw std::invalid_argument("computeTexturePatches: no surfels");
   if (!surfels.hasNormals() || (!surfels.hasRadii() && !surfels.hasAxes()))
     throw std::invalid_argument("computeTexturePatches: the surfels need normals and radii (or axes)");
-  if (!(options.color_error >= 0) || !(options.normal_error >= 0) || !(options.start_base_texels > 0) ||
-      !(options.refinement_factor > 1) || !(options.max_base_texels >= options.start_base_texels) ||
-      options.border < 0 || !(options.projection_depth >= 0))
+  if (!(options.color_error >= 0) || !(options.normal_error >= 0) || !(options.depth_error >= 0) ||
+      !(options.start_base_texels > 0) || !(options.refinement_factor > 1) ||
+      !(options.max_base_texels >= options.start_base_texels) || options.border < 0 ||
+      !(options.projection_depth >= 0))
     throw std::invalid_argument(
         "computeTexturePatches: bad options (errors >= 0, start_base_texels > 0, refinement_factor > 1, "
         "max_base_texels >= start_base_texels, border >= 0, projection_depth >= 0)");
@@ -407,13 +425,15 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
   const KdTree tree(surfels.positions);
   const std::vector<double> spacing = tree.kthNeighborDistances(1);
   data.spacing.assign(spacing.begin(), spacing.end());
+  std::vector<double> sorted = radii;
+  std::nth_element(sorted.begin(), sorted.begin() + long(N / 2), sorted.end());
+  const double median_radius = sorted[N / 2];
+  data.depth_unit = median_radius > 0 ? median_radius : 1.0;
   double depth = options.projection_depth;
   if (depth == 0) {
-    std::vector<double> sorted = radii;
-    std::nth_element(sorted.begin(), sorted.begin() + long(N / 2), sorted.end());
     Vec3 lo, hi;
     surfels.bounds(&lo, &hi);
-    depth = std::max(4 * sorted[N / 2], 0.01 * (hi - lo).norm());
+    depth = std::max(4 * median_radius, 0.01 * (hi - lo).norm());
   }
 
   const size_t T = mesh.triangles.size();
@@ -461,39 +481,52 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
       TrianglePatches& p = out[t];
       p.frame = f;
       p.color = refinePatch(f, TextureKind::kColor, options.color_error, depth, data, options, weights, s);
-      if (options.normal_texture) {
-        p.normal =
-            refinePatch(f, TextureKind::kNormal, options.normal_error, depth, data, options, weights, s);
-        // One layout for both textures (one set of texture coordinates): the finer resolution of the two.
-        // The error is not monotone in the resolution (6.1 compares with a reconstruction that does not
-        // interpolate), so a texture taken to the other's finer resolution is refined on from there when it
-        // exceeds its threshold, and the other follows, until both agree.
-        for (int round = 0; round < 4 && p.color.texels_per_unit != p.normal.texels_per_unit; ++round) {
-          const bool color_coarser = p.color.texels_per_unit < p.normal.texels_per_unit;
-          TexturePatch& coarser = color_coarser ? p.color : p.normal;
-          const TextureKind kind = color_coarser ? TextureKind::kColor : TextureKind::kNormal;
-          const double threshold = color_coarser ? options.color_error : options.normal_error;
+      // One layout for all textures (one set of texture coordinates): the finest resolution of them. The
+      // error is not monotone in the resolution (6.1 compares with a reconstruction that does not
+      // interpolate), so a texture taken to a finer resolution is refined on from there when it exceeds its
+      // threshold, and the others follow, until all agree.
+      struct Texture {
+        TexturePatch* patch;
+        TextureKind kind;
+        double threshold;
+      };
+      std::vector<Texture> textures = {{&p.color, TextureKind::kColor, options.color_error}};
+      if (options.normal_texture) textures.push_back({&p.normal, TextureKind::kNormal, options.normal_error});
+      if (options.depth_texture) textures.push_back({&p.depth, TextureKind::kDepth, options.depth_error});
+      for (size_t k = 1; k < textures.size(); ++k)
+        *textures[k].patch =
+            refinePatch(f, textures[k].kind, textures[k].threshold, depth, data, options, weights, s);
+      auto finest = [&] {
+        double tpu = 0;
+        for (const Texture& x : textures) tpu = std::max(tpu, x.patch->texels_per_unit);
+        return tpu;
+      };
+      for (int round = 0; round < 4; ++round) {
+        const double finer_tpu = finest();
+        bool agreed = true;
+        for (const Texture& x : textures) {
+          TexturePatch& coarser = *x.patch;
+          if (coarser.texels_per_unit == finer_tpu) continue;
+          agreed = false;
           const int steps = coarser.steps;
           const double refined = coarser.refined_texels_per_unit;
-          const double finer_tpu = std::max(p.color.texels_per_unit, p.normal.texels_per_unit);
-          coarser = refinePatch(f, kind, threshold, depth, data, options, weights, s, finer_tpu);
+          coarser = refinePatch(f, x.kind, x.threshold, depth, data, options, weights, s, finer_tpu);
           coarser.steps += steps;
           if (coarser.texels_per_unit == finer_tpu) coarser.refined_texels_per_unit = refined;
         }
-        if (p.color.texels_per_unit !=
-            p.normal.texels_per_unit) {  // (rounds exhausted: take the finer as is)
-          const bool color_coarser = p.color.texels_per_unit < p.normal.texels_per_unit;
-          TexturePatch& coarser = color_coarser ? p.color : p.normal;
-          TexturePatch resampled = renderPatch(f, std::max(p.color.texels_per_unit, p.normal.texels_per_unit),
-                                               color_coarser ? TextureKind::kColor : TextureKind::kNormal,
-                                               depth, data, options, weights, s);
-          resampled.steps = coarser.steps;
-          resampled.refined_texels_per_unit = coarser.refined_texels_per_unit;
-          resampled.at_resolution_limit = coarser.at_resolution_limit;
-          coarser = std::move(resampled);
-        }
+        if (agreed) break;
       }
-      // A patch no splat reached: the nearest surfel's colour, the triangle's normal.
+      const double layout_tpu = finest();
+      for (const Texture& x : textures) {  // (rounds exhausted: the coarser ones resampled as they are)
+        TexturePatch& coarser = *x.patch;
+        if (coarser.texels_per_unit == layout_tpu) continue;
+        TexturePatch resampled = renderPatch(f, layout_tpu, x.kind, depth, data, options, weights, s);
+        resampled.steps = coarser.steps;
+        resampled.refined_texels_per_unit = coarser.refined_texels_per_unit;
+        resampled.at_resolution_limit = coarser.at_resolution_limit;
+        coarser = std::move(resampled);
+      }
+      // A patch no splat reached: the nearest surfel's colour, the triangle's normal, its plane.
       if (p.color.filled_texels == p.color.texels.size()) {
         Neighbor nb;
         tree.knn(centroid, 1, &nb);
@@ -501,6 +534,8 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
       }
       if (options.normal_texture && p.normal.filled_texels == p.normal.texels.size())
         fillEmpty(&p.normal, f.normal.cast<float>());
+      if (options.depth_texture && p.depth.filled_texels == p.depth.texels.size())
+        fillEmpty(&p.depth, Eigen::Vector3f::Zero());
       const size_t finished = ++done;
       if (progress && omp_get_thread_num() == 0 && finished >= reported + std::max<size_t>(1, T / 100)) {
         reported = finished;
@@ -513,6 +548,7 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
     *stats = TextureStats();
     stats->triangles = T;
     stats->projection_depth = depth;
+    stats->depth_unit = data.depth_unit;
     for (const TrianglePatches& p : out) {
       stats->texels += p.color.texels.size();
       auto refinedTexels = [&](const TexturePatch& t) {
@@ -523,6 +559,7 @@ std::vector<TrianglePatches> computeTexturePatches(const TriangleMesh& mesh, con
       };
       stats->color_refined_texels += size_t(refinedTexels(p.color));
       stats->normal_refined_texels += size_t(refinedTexels(p.normal));
+      stats->depth_refined_texels += size_t(refinedTexels(p.depth));
       stats->at_resolution_limit += p.color.at_resolution_limit;
       stats->empty_patches += p.color.filled_texels == p.color.texels.size();
     }

@@ -3,9 +3,10 @@
 // x-axis, with visibility splatting; the patch resolution is refined until the area-weighted error (6.1)
 // between the surfels and the bilinearly interpolated texture drops below a threshold, or the texel spacing
 // reaches d_min / (2 sqrt 2), d_min the smallest distance between two of the patch's surfels. Colour and
-// normal textures (6.2) are refined separately; both are then rendered at the finer of the two resolutions so
-// that they share one atlas layout (the thesis keeps their sizes apart, which needs a second set of texture
-// coordinates that OBJ lacks). Each patch is the packing mask's raster (atlas_packing.h): the triangle plus a
+// normal textures (6.2), and optionally depth textures (the surfels' heights above the triangle, for
+// displacement mapping), are refined separately; all are then rendered at the finest of their resolutions so
+// that they share one atlas layout (the thesis keeps their sizes apart, which needs more sets of texture
+// coordinates than OBJ has). Each patch is the packing mask's raster (atlas_packing.h): the triangle plus a
 // border, so bilinear filtering never reads a neighbour.
 #pragma once
 
@@ -23,7 +24,7 @@
 namespace rc {
 
 /// Which texture a patch holds.
-enum class TextureKind { kColor, kNormal };
+enum class TextureKind { kColor, kNormal, kDepth };
 
 struct TextureOptions {
   /// Colour threshold: (6.1) divided by the area of the patch's surfels, i.e. the area-weighted mean RGB
@@ -32,6 +33,10 @@ struct TextureOptions {
   /// Normal threshold: the area-weighted mean of (6.2), 1 - N_s . N_t.
   double normal_error = 0.002;
   bool normal_texture = true;
+  /// Depth threshold: the area-weighted mean |h_s - h_t| of a surfel's height above the triangle's plane and
+  /// the texture's, over the median surfel radius (scale-free, like the others).
+  double depth_error = 0.05;
+  bool depth_texture = false;
   /// Texels along the base at the first refinement step, and the factor the resolution grows by per step.
   double start_base_texels = 2;
   double refinement_factor = 1.41421356237;
@@ -66,24 +71,27 @@ struct TexturePatch {
   double refined_texels_per_unit = 0;
   int width = 0, height = 0;
   double origin = 0;
-  std::vector<Eigen::Vector3f> texels;  ///< RGB in [0, 1], or unit normals in the world frame
-  double error = 0;                     ///< the area-weighted mean error the refinement ended with
-  bool at_resolution_limit = false;     ///< stopped by the texel spacing limit, not by the threshold
-  int steps = 0;                        ///< refinement steps taken
-  uint32_t surfels = 0;                 ///< |P_t|: visible surfels with centres on the patch
-  uint32_t filled_texels = 0;           ///< texels no splat covered, filled from their neighbours
+  /// RGB in [0, 1], unit normals in the world frame, or (depth) x: the height above the triangle's plane
+  /// along its normal [m], y = z = 0.
+  std::vector<Eigen::Vector3f> texels;
+  double error = 0;                  ///< the area-weighted mean error the refinement ended with
+  bool at_resolution_limit = false;  ///< stopped by the texel spacing limit, not by the threshold
+  int steps = 0;                     ///< refinement steps taken
+  uint32_t surfels = 0;              ///< |P_t|: visible surfels with centres on the patch
+  uint32_t filled_texels = 0;        ///< texels no splat covered, filled from their neighbours
 };
 
 struct TrianglePatches {
   PatchFrame frame;
-  TexturePatch color, normal;  ///< normal: empty without normal_texture
+  TexturePatch color, normal, depth;  ///< normal, depth: empty without normal_texture, depth_texture
 };
 
 struct TextureStats {
   size_t triangles = 0;
-  size_t texels = 0;  ///< of each texture (colour, normal: one layout)
+  size_t texels = 0;  ///< of each texture (colour, normal, depth: one layout)
   /// Texels the colour and the normal refinement asked for on their own (the thesis' separate sizes).
-  size_t color_refined_texels = 0, normal_refined_texels = 0;
+  size_t color_refined_texels = 0, normal_refined_texels = 0, depth_refined_texels = 0;
+  double depth_unit = 0;           ///< the median surfel radius the depth error is measured in [m]
   size_t at_resolution_limit = 0;  ///< colour patches stopped by the spacing limit
   size_t empty_patches = 0;        ///< triangles no surfel reached (filled with the nearest surfel's colour)
   double projection_depth = 0;     ///< [m], as used

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -21,6 +22,7 @@ void buildMips(TexturePage& page, int levels) {
   uint32_t w = page.width, h = page.height;
   const std::vector<Rgba>* color = &page.color;
   const std::vector<Rgba>* normal = &page.normal;
+  const std::vector<float>* depth = &page.depth;
   const std::vector<int32_t>* owner = &page.owner;
   for (int level = 1; level <= levels && (w > 1 || h > 1); ++level) {
     TexturePage::Mip mip;
@@ -29,6 +31,7 @@ void buildMips(TexturePage& page, int levels) {
     const size_t n = size_t(mip.width) * mip.height;
     mip.color.assign(n, Rgba{0, 0, 0, 255});
     if (!normal->empty()) mip.normal.assign(n, Rgba{128, 128, 255, 255});
+    if (!depth->empty()) mip.depth.assign(n, 0.0f);
     mip.owner.assign(n, -1);
     for (uint32_t y = 0; y < mip.height; ++y)
       for (uint32_t x = 0; x < mip.width; ++x) {
@@ -50,6 +53,7 @@ void buildMips(TexturePage& page, int levels) {
         mip.owner[i] = best;
         if (best < 0) continue;
         Eigen::Vector3f c_sum = Eigen::Vector3f::Zero(), n_sum = Eigen::Vector3f::Zero();
+        float d_sum = 0;
         for (int a = 0; a < count; ++a) {
           if ((*owner)[below[a]] != best) continue;
           const Rgba& c = (*color)[below[a]];
@@ -58,8 +62,10 @@ void buildMips(TexturePage& page, int levels) {
             const Rgba& m = (*normal)[below[a]];
             n_sum += Eigen::Vector3f(m[0], m[1], m[2]) / 127.5f - Eigen::Vector3f::Ones();
           }
+          if (!depth->empty()) d_sum += (*depth)[below[a]];
         }
         c_sum /= float(best_votes);
+        if (!depth->empty()) mip.depth[i] = d_sum / float(best_votes);
         mip.color[i] = {uint8_t(std::lround(c_sum.x())), uint8_t(std::lround(c_sum.y())),
                         uint8_t(std::lround(c_sum.z())), 255};
         if (!normal->empty()) {
@@ -72,7 +78,7 @@ void buildMips(TexturePage& page, int levels) {
     page.mips.push_back(std::move(mip));
     const TexturePage::Mip& last = page.mips.back();
     w = last.width, h = last.height;
-    color = &last.color, normal = &last.normal, owner = &last.owner;
+    color = &last.color, normal = &last.normal, depth = &last.depth, owner = &last.owner;
   }
 }
 
@@ -93,13 +99,15 @@ TexturedMesh buildTexturedMesh(const TriangleMesh& mesh, const std::vector<Trian
     throw std::invalid_argument("buildTexturedMesh: " + std::to_string(patches.size()) + " patches for " +
                                 std::to_string(T) + " triangles");
   const bool normals = T > 0 && !patches[0].normal.texels.empty();
+  const bool depths = T > 0 && !patches[0].depth.texels.empty();
   std::vector<PatchShape> shapes(T);
   for (size_t t = 0; t < T; ++t) {
     shapes[t] = patches[t].color.shape;
     if (patches[t].color.texels.empty() ||
-        (normals && patches[t].normal.texels.size() != patches[t].color.texels.size()))
+        (normals && patches[t].normal.texels.size() != patches[t].color.texels.size()) ||
+        (depths && patches[t].depth.texels.size() != patches[t].color.texels.size()))
       throw std::invalid_argument("buildTexturedMesh: triangle " + std::to_string(t) +
-                                  " has no colour patch or a normal patch of another size");
+                                  " has no colour patch, or a normal or depth patch of another size");
   }
   TexturedMesh out;
   out.mesh.triangles = mesh.triangles;
@@ -114,6 +122,11 @@ TexturedMesh buildTexturedMesh(const TriangleMesh& mesh, const std::vector<Trian
     page.color.assign(size_t(page.width) * page.height, Rgba{0, 0, 0, 255});
     page.owner.assign(page.color.size(), -1);
     if (normals) page.normal.assign(page.color.size(), Rgba{128, 128, 255, 255});
+    if (depths) page.depth.assign(page.color.size(), 0.0f);
+  }
+  if (depths) {
+    out.depth_min = std::numeric_limits<float>::infinity();
+    out.depth_max = -out.depth_min;
   }
   out.page.resize(T);
   out.uv.resize(T);
@@ -179,6 +192,12 @@ TexturedMesh buildTexturedMesh(const TriangleMesh& mesh, const std::vector<Trian
           page.normal[dst] = {toByte(float(0.5 + 0.5 * n.dot(t_axis))),
                               toByte(float(0.5 + 0.5 * n.dot(b_axis))), toByte(float(0.5 + 0.5 * n.dot(N))),
                               255};
+        }
+        if (depths) {
+          const float d = p.depth.texels[src].x();
+          page.depth[dst] = d;
+          out.depth_min = std::min(out.depth_min, d);
+          out.depth_max = std::max(out.depth_max, d);
         }
       }
     for (int c = 0; c < 3; ++c) {

@@ -18,12 +18,16 @@ struct TexturePage {
   uint32_t width = 0, height = 0;
   std::vector<Rgba> color;   ///< row-major, top row first
   std::vector<Rgba> normal;  ///< tangent-space normal map (empty without normal textures)
+  /// Displacement: per texel the surface's height above its triangle's plane along the face normal [m]
+  /// (empty without depth textures; 0 where no patch claims the texel).
+  std::vector<float> depth;
   /// Per texel, the triangle whose patch claims it (-1: none); then per mip level (AtlasOptions::mip_levels)
   /// the same at (width >> k) x (height >> k) (rounded up), with the level's colour and normal images.
   std::vector<int32_t> owner;
   struct Mip {
     uint32_t width = 0, height = 0;
     std::vector<Rgba> color, normal;
+    std::vector<float> depth;
     std::vector<int32_t> owner;
   };
   std::vector<Mip> mips;  ///< level 1, 2, ...
@@ -43,6 +47,8 @@ struct TexturedMesh {
   std::vector<Eigen::Vector4f> tangent;
   std::vector<TexturePage> pages;
   AtlasLayout layout;
+  /// The range of the depth textures over all pages [m] (both 0 without depth textures).
+  float depth_min = 0, depth_max = 0;
 };
 
 /// Packs the patches (one per triangle of `mesh`, as computeTexturePatches made them) into pages and

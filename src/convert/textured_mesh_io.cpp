@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/convert/textured_mesh_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -32,6 +33,16 @@ std::vector<std::string> writeTexturedObj(const std::string& obj_path, const Tex
   auto beside = [&](const std::string& name) { return (dir / name).string(); };
   std::vector<std::string> files;
   const bool normals = !mesh.pages.empty() && !mesh.pages[0].normal.empty();
+  const bool depths = !mesh.pages.empty() && !mesh.pages[0].depth.empty();
+  // Depth pages: 16-bit grey, 0 .. 65535 spanning depth_min .. depth_max (the MTL's -mm base and gain).
+  const double depth_gain = std::max(double(mesh.depth_max) - mesh.depth_min, 1e-30);
+  auto writeDepth = [&](const std::string& path, const std::vector<float>& depth, uint32_t w, uint32_t h) {
+    std::vector<uint16_t> values(depth.size());
+    for (size_t i = 0; i < depth.size(); ++i)
+      values[i] =
+          uint16_t(std::lround(std::clamp((depth[i] - mesh.depth_min) / depth_gain, 0.0, 1.0) * 65535));
+    writeGray16Png(path, values, w, h);
+  };
   // Pages
   for (size_t k = 0; k < mesh.pages.size(); ++k) {
     const TexturePage& page = mesh.pages[k];
@@ -40,6 +51,10 @@ std::vector<std::string> writeTexturedObj(const std::string& obj_path, const Tex
     if (normals) {
       files.push_back(beside(stem + "_normal" + std::to_string(k) + ".png"));
       writePng(files.back(), page.normal, page.width, page.height);
+    }
+    if (depths) {
+      files.push_back(beside(stem + "_depth" + std::to_string(k) + ".png"));
+      writeDepth(files.back(), page.depth, page.width, page.height);
     }
     for (size_t level = 0; level < page.mips.size(); ++level) {  // the atlas-pattern mip levels, beside
       const TexturePage::Mip& mip = page.mips[level];
@@ -50,18 +65,25 @@ std::vector<std::string> writeTexturedObj(const std::string& obj_path, const Tex
         files.push_back(beside(stem + "_normal" + suffix));
         writePng(files.back(), mip.normal, mip.width, mip.height);
       }
+      if (depths) {
+        files.push_back(beside(stem + "_depth" + suffix));
+        writeDepth(files.back(), mip.depth, mip.width, mip.height);
+      }
     }
   }
   // Materials
   const std::string mtl = beside(stem + ".mtl");
   {
     std::ofstream out(mtl);
+    out.precision(9);
     if (!out) throw std::runtime_error(mtl + ": cannot open for writing");
     out << "# relaxed_connectivity textured mesh: one material per texture page\n";
     for (size_t k = 0; k < mesh.pages.size(); ++k) {
       out << "newmtl page" << k << "\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\n";
       out << "map_Kd " << stem << "_color" << k << ".png\n";
       if (normals) out << "map_Bump -bm 1 " << stem << "_normal" << k << ".png\n";
+      if (depths)
+        out << "disp -mm " << mesh.depth_min << " " << depth_gain << " " << stem << "_depth" << k << ".png\n";
     }
     if (!out) throw std::runtime_error(mtl + ": write failed");
   }

@@ -33,7 +33,8 @@ void MeshConverterParams::validate() const {
   if (!(s.max_error >= 0) || (s.max_error == 0 && s.target_triangles == 0))
     bad("simplify_error must be >= 0, and simplify_error or target_triangles > 0");
   const TextureOptions& t = conversion.texture;
-  if (!(t.color_error >= 0) || !(t.normal_error >= 0)) bad("color_error and normal_error must be >= 0");
+  if (!(t.color_error >= 0) || !(t.normal_error >= 0) || !(t.depth_error >= 0))
+    bad("color_error, normal_error and depth_error must be >= 0");
   if (conversion.atlas.border < 0) bad("border must be >= 0");
   const int p = conversion.atlas.max_page_size;
   if (p < 64 || (p & (p - 1))) bad("max_page_size must be a power of two >= 64, not " + std::to_string(p));
@@ -54,6 +55,8 @@ MeshConverterParams readMeshConverterParams(const ros::NodeHandle& pnh) {
   pnh.param("color_error", c.texture.color_error, c.texture.color_error);
   pnh.param("normal_error", c.texture.normal_error, c.texture.normal_error);
   pnh.param("normal_texture", c.texture.normal_texture, c.texture.normal_texture);
+  pnh.param("depth_error", c.texture.depth_error, c.texture.depth_error);
+  pnh.param("depth_texture", c.texture.depth_texture, c.texture.depth_texture);
   pnh.param("border", c.atlas.border, c.atlas.border);
   pnh.param("max_page_size", c.atlas.max_page_size, c.atlas.max_page_size);
   pnh.param("require_manifold", c.reconstruction.require_manifold, c.reconstruction.require_manifold);

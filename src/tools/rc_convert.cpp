@@ -63,6 +63,11 @@ int main(int argc, char** argv) {
                  "normal texture threshold: mean 1 - N.N (6.2)")
       ->capture_default_str();
   app.add_flag("--no-normal-texture", no_normal_texture, "colour textures only");
+  app.add_flag("--depth-texture", options.texture.depth_texture,
+               "also a depth (displacement) texture: the surface's height above each triangle (OBJ output)");
+  app.add_option("--depth-error", options.texture.depth_error,
+                 "depth texture threshold: mean |h_s - h_t| over the median surfel radius")
+      ->capture_default_str();
   app.add_option("--border", options.atlas.border, "texels around each patch")->capture_default_str();
   app.add_option("--mip-levels", options.atlas.mip_levels,
                  "also write this many mip levels of each page in the atlas' pattern (OBJ output)")
@@ -158,7 +163,8 @@ int main(int argc, char** argv) {
       << ", \"rms\": " << r.geometric_error.rms << ", \"diagonal\": " << r.geometric_error.diagonal
       << "},\n  \"texture_error\": {\"color_max\": " << r.color_error_max
       << ", \"color_mean\": " << r.color_error_mean << ", \"normal_max\": " << r.normal_error_max
-      << ", \"normal_mean\": " << r.normal_error_mean
+      << ", \"normal_mean\": " << r.normal_error_mean << ", \"depth_max\": " << r.depth_error_max
+      << ", \"depth_mean\": " << r.depth_error_mean
       << ", \"patches_at_resolution_limit\": " << r.texture.at_resolution_limit
       << ", \"empty_patches\": " << r.texture.empty_patches
       << "},\n  \"atlas\": {\"pages\": " << r.textured.layout.pages
@@ -168,6 +174,8 @@ int main(int argc, char** argv) {
       << ", \"usage_with_borders\": " << r.textured.layout.usage_with_borders
       << ", \"color_refined_texels\": " << r.texture.color_refined_texels
       << ", \"normal_refined_texels\": " << r.texture.normal_refined_texels
+      << ", \"depth_refined_texels\": " << r.texture.depth_refined_texels << ", \"depth_range\": ["
+      << r.textured.depth_min << ", " << r.textured.depth_max << "]"
       << "},\n  \"seconds\": {\"read\": " << read_seconds;
     for (int s = 0; s < 5; ++s)
       j << ", " << jsonString(rc::stageName(rc::ConversionStage(s))) << ": " << r.seconds[s];

@@ -1,7 +1,8 @@
 // The textured mesh (thesis 6.3, 6.4): pages hold each patch where its texture coordinates say (flips and
 // offsets), the tangent-space normal map decodes to the surface normals by glTF's formula; a painted sphere
 // converted end to end keeps its painted stripe in memory, in OBJ + MTL + PNG and in a glTF binary read back
-// as a viewer reads it, and renders like its surfels (PSNR); cancellation and bad input are reported. With
+// as a viewer reads it, and its depth texture in the OBJ's 16-bit displacement pages, and renders like its
+// surfels (PSNR); cancellation and bad input are reported. With
 // ../shared: a coloured scan (PCL's milk carton) converted and compared with its surfels from fixed views.
 #include <gtest/gtest.h>
 
@@ -329,6 +330,71 @@ TEST(TexturedMesh, TheStripeSurvivesTheFiles) {
 #else
   EXPECT_FALSE(glbAvailable());
 #endif
+  std::filesystem::remove_all(dir);
+}
+
+TEST(TexturedMesh, DepthTexturesReachTheObjAsDisplacement) {
+  REQUIRE_CGAL();
+  ConversionOptions options;
+  options.simplification.max_error = 0;
+  options.simplification.target_triangles = 2000;
+  options.texture.depth_texture = true;
+  options.texture.depth_error = 0.02;
+  const ConversionResult r = convertSurfels(paintedSphere(20000), options);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "rc_test_depth_texture";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::vector<std::string> files = writeTexturedObj((dir / "sphere.obj").string(), r.textured);
+  EXPECT_EQ(files.size(), 2 + 3 * r.textured.pages.size());
+  // The MTL names each depth page with the range its 16 bits span: disp -mm base gain file.
+  std::ifstream mtl(dir / "sphere.mtl");
+  std::vector<std::pair<double, double>> range;
+  std::vector<std::vector<uint16_t>> pages;
+  std::vector<std::pair<uint32_t, uint32_t>> sizes;
+  for (std::string line; std::getline(mtl, line);) {
+    std::istringstream in(line);
+    std::string key, mm, file;
+    double base, gain;
+    if (!(in >> key) || key != "disp") continue;
+    ASSERT_TRUE(in >> mm >> base >> gain >> file) << line;
+    EXPECT_EQ(mm, "-mm");
+    range.emplace_back(base, gain);
+    uint32_t w, h;
+    pages.push_back(readGray16Png((dir / file).string(), &w, &h));
+    sizes.emplace_back(w, h);
+  }
+  ASSERT_EQ(pages.size(), r.textured.pages.size());
+  // At each triangle's centroid the decoded depth is the sphere's height above the triangle.
+  const ObjTextureCoords obj = readObjTextureCoords((dir / "sphere.obj").string());
+  double error_sum = 0, height_sum = 0;
+  for (size_t f = 0; f < obj.face_vt.size(); ++f) {
+    const Triangle& tri = r.textured.mesh.triangles[size_t(obj.face_vt[f][0] / 3)];
+    const Vec3 a = r.textured.mesh.vertices.positions[tri[0]], b = r.textured.mesh.vertices.positions[tri[1]],
+               c = r.textured.mesh.vertices.positions[tri[2]];
+    const Vec3 q = (a + b + c) / 3, n = (b - a).cross(c - a).normalized();
+    const double qn = q.dot(n), height = -qn + std::sqrt(qn * qn - q.squaredNorm() + 1);
+    Eigen::Vector2f uv = Eigen::Vector2f::Zero();
+    for (int k : obj.face_vt[f]) uv += obj.vt[size_t(k)] / 3.0f;
+    const size_t page = size_t(obj.face_page[f]);
+    const auto [w, h] = sizes[page];
+    const float value = bilinear(int(w), int(h), uv.x() * w, (1.0 - uv.y()) * h, [&](int i, int j) {
+                          return Eigen::Vector3f(pages[page][size_t(j) * w + size_t(i)] / 65535.0f, 0, 0);
+                        }).x();
+    error_sum += std::abs(range[page].first + range[page].second * value - height);
+    height_sum += height;
+  }
+  const double mean_error = error_sum / double(obj.face_vt.size()),
+               mean_height = height_sum / double(obj.face_vt.size());
+  std::printf(
+      "depth: %zu triangles, mean height above them %.3f mm, decoded from the files with a mean "
+      "error of %.3f mm; depth error (of the median radius) mean %.4f, max %.4f\n",
+      obj.face_vt.size(), 1e3 * mean_height, 1e3 * mean_error, r.depth_error_mean, r.depth_error_max);
+  // Measured 0.23 mm on a mean height of 1.51 mm: the threshold (0.02 of the median radius, 0.35 mm) holds
+  // at the centroids after 16-bit quantisation too; the discs' own flatness (r^2 / 2 below the sphere at
+  // their rims) is most of what remains.
+  EXPECT_LT(mean_error, options.texture.depth_error * r.texture.depth_unit);
+  EXPECT_LT(mean_error, 0.2 * mean_height);
+  EXPECT_LE(r.depth_error_mean, options.texture.depth_error);
   std::filesystem::remove_all(dir);
 }
 

@@ -139,18 +139,16 @@ FloatImage readPfm(const std::string& path) {
   return image;
 }
 
-void writePatchIdPng(const std::string& path, const std::vector<int32_t>& patch_ids, uint32_t width,
-                     uint32_t height) {
-  checkSize(path, patch_ids.size(), width, height, 1);
+void writeGray16Png(const std::string& path, const std::vector<uint16_t>& values, uint32_t width,
+                    uint32_t height) {
+  checkSize(path, values.size(), width, height, 1);
   // Raw scanlines (filter 0), 16-bit big-endian samples, in stored (uncompressed) deflate blocks.
   std::vector<uint8_t> raw;
   raw.reserve(size_t(height) * (1 + 2 * width));
   for (uint32_t y = 0; y < height; ++y) {
     raw.push_back(0);
     for (uint32_t x = 0; x < width; ++x) {
-      const int32_t id = patch_ids[size_t(y) * width + x];
-      if (id < -1 || id > 65534) fail(path, "patch id " + std::to_string(id) + " does not fit 16 bits");
-      const uint32_t value = uint32_t(id + 1);
+      const uint16_t value = values[size_t(y) * width + x];
       raw.push_back(uint8_t(value >> 8));
       raw.push_back(uint8_t(value));
     }
@@ -184,15 +182,32 @@ void writePatchIdPng(const std::string& path, const std::vector<int32_t>& patch_
   writeFile(path, file);
 }
 
-std::vector<int32_t> readPatchIdPng(const std::string& path, uint32_t* width, uint32_t* height) {
+std::vector<uint16_t> readGray16Png(const std::string& path, uint32_t* width, uint32_t* height) {
   int w = 0, h = 0, channels = 0;
   std::unique_ptr<uint16_t, void (*)(void*)> data(stbi_load_16(path.c_str(), &w, &h, &channels, 1),
                                                   stbi_image_free);
   if (!data) fail(path, std::string("cannot read 16-bit PNG: ") + stbi_failure_reason());
-  std::vector<int32_t> ids(size_t(w) * h);
-  for (size_t i = 0; i < ids.size(); ++i) ids[i] = int32_t(data.get()[i]) - 1;
   *width = uint32_t(w);
   *height = uint32_t(h);
+  return std::vector<uint16_t>(data.get(), data.get() + size_t(w) * size_t(h));
+}
+
+void writePatchIdPng(const std::string& path, const std::vector<int32_t>& patch_ids, uint32_t width,
+                     uint32_t height) {
+  checkSize(path, patch_ids.size(), width, height, 1);
+  std::vector<uint16_t> values(patch_ids.size());
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (patch_ids[i] < -1 || patch_ids[i] > 65534)
+      fail(path, "patch id " + std::to_string(patch_ids[i]) + " does not fit 16 bits");
+    values[i] = uint16_t(patch_ids[i] + 1);
+  }
+  writeGray16Png(path, values, width, height);
+}
+
+std::vector<int32_t> readPatchIdPng(const std::string& path, uint32_t* width, uint32_t* height) {
+  const std::vector<uint16_t> values = readGray16Png(path, width, height);
+  std::vector<int32_t> ids(values.size());
+  for (size_t i = 0; i < ids.size(); ++i) ids[i] = int32_t(values[i]) - 1;
   return ids;
 }
 

@@ -33,6 +33,11 @@ std::vector<Rgba> readPng(const std::string& path, uint32_t* width, uint32_t* he
 void writePfm(const std::string& path, const FloatImage& image);
 FloatImage readPfm(const std::string& path);
 
+/// 16-bit greyscale PNG (rows top to bottom; stored uncompressed), and its reader (any 8- or 16-bit PNG, as
+/// 16-bit grey).
+void writeGray16Png(const std::string& path, const std::vector<uint16_t>& values, uint32_t width,
+                    uint32_t height);
+std::vector<uint16_t> readGray16Png(const std::string& path, uint32_t* width, uint32_t* height);
 /// 16-bit greyscale PNG of patch ids shifted by one (background -1 -> 0). Throws for ids outside [-1, 65534].
 void writePatchIdPng(const std::string& path, const std::vector<int32_t>& patch_ids, uint32_t width,
                      uint32_t height);
