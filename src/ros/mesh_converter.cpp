@@ -59,6 +59,7 @@ MeshConverterParams readMeshConverterParams(const ros::NodeHandle& pnh) {
   pnh.param("depth_texture", c.texture.depth_texture, c.texture.depth_texture);
   pnh.param("border", c.atlas.border, c.atlas.border);
   pnh.param("max_page_size", c.atlas.max_page_size, c.atlas.max_page_size);
+  pnh.param("fill_gaps", c.atlas.fill_gaps, c.atlas.fill_gaps);
   pnh.param("require_manifold", c.reconstruction.require_manifold, c.reconstruction.require_manifold);
   std::string method = reconstructionMethodName(c.reconstruction.method);
   pnh.param("reconstruction", method, method);

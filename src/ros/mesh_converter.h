@@ -11,10 +11,11 @@
 // Parameters  (private) output_dir (where goals without output_prefix write; "~/.ros/converted"),
 //             write_obj (true), write_glb (true) for goals that set neither, simplify_error (0.0005),
 //             target_triangles (0), color_error (0.03), normal_error (0.002), normal_texture (true),
-//             depth_error (0.05), depth_texture (false: no displacement texture),
-//             border (1), max_page_size (4096), reconstruction (advancing_front | scale_space | poisson),
-//             require_manifold (true), viewpoint ([x, y, z]: normals of
-//             files without them are oriented towards it; []: propagated); see config/convert.yaml.
+//             depth_error (0.05), depth_texture (false: no displacement texture), border (1),
+//             max_page_size (4096), fill_gaps (true: shorter patches fill each row's gaps), reconstruction
+//             (advancing_front | scale_space | poisson), require_manifold (true), viewpoint ([x, y, z]:
+//             normals of files without them are oriented towards it; []: propagated); see
+//             config/convert.yaml.
 #pragma once
 
 #include <actionlib/server/simple_action_server.h>

@@ -72,6 +72,9 @@ int main(int argc, char** argv) {
   app.add_option("--mip-levels", options.atlas.mip_levels,
                  "also write this many mip levels of each page in the atlas' pattern (OBJ output)")
       ->capture_default_str();
+  app.add_flag(
+      "--no-gap-fill", [&](int64_t) { options.atlas.fill_gaps = false; },
+      "pack rows and their ends only (faster; gaps between patches stay empty)");
   app.add_option("--max-page-size", options.atlas.max_page_size, "largest texture page (a power of two)")
       ->capture_default_str();
   app.add_option("--projection-depth", options.texture.projection_depth,
