@@ -31,12 +31,17 @@ std::string YamlReader::readFile(const std::string& path, Raise raise) {
   return text.str();
 }
 
-void YamlReader::fail(const YAML::Node& node, const std::string& problem) const {
+std::string YamlReader::at(const YAML::Node& node) const {
   std::ostringstream s;
   s << name_;
   if (node.IsDefined() && node.Mark().line >= 0)
     s << ":" << node.Mark().line + 1 << ":" << node.Mark().column + 1;
-  s << ": " << problem;
+  return s.str();
+}
+
+void YamlReader::fail(const YAML::Node& node, const std::string& problem) const {
+  std::ostringstream s;
+  s << at(node) << ": " << problem;
   raise_(s.str());
   throw std::runtime_error(s.str());  // raise_ is expected to throw; never return in any case
 }

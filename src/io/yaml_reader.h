@@ -27,6 +27,8 @@ class YamlReader {
   /// The bytes of a file (binary); fails with "<path>: cannot open the scene file".
   static std::string readFile(const std::string& path, Raise raise);
 
+  /// "<source>:<line>:<column>" of a node (just "<source>" for one without a position), as fail() names it.
+  std::string at(const YAML::Node& node) const;
   [[noreturn]] void fail(const YAML::Node& node, const std::string& problem) const;
   YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& where) const;
   /// Fails for a non-map or for a key outside `keys` (the message lists the known keys).

@@ -97,6 +97,10 @@ bool SphSimulator::load(const std::string& path, bool start, std::string* messag
     loop_.setError("");
     step_ms_ = 0.0;
     *message = "loaded " + path + ": " + std::to_string(scene_->particles.size()) + " particles";
+    for (const std::string& warning : scene_->warnings) {
+      ROS_WARN_STREAM("sph_sim: " << warning);
+      *message += "; " + warning;
+    }
     ROS_INFO_STREAM("sph_sim: " << *message);
   } catch (const std::exception& e) {
     *message = e.what();

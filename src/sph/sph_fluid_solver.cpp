@@ -72,6 +72,12 @@ void SphFluidConfig::validate() const {
   require(max_dt > 0.0 && std::isfinite(max_dt), "max_dt", "must be finite and > 0, got " + num(max_dt));
   require(instability_energy_growth > 1.0, "instability_energy_growth",
           "must be > 1, got " + num(instability_energy_growth));
+  require(instability_window >= 0, "instability_window",
+          "must be >= 0 (0 = off), got " + std::to_string(instability_window));
+  require(instability_window_growth > 1.0, "instability_window_growth",
+          "must be > 1, got " + num(instability_window_growth));
+  require(max_compression >= 0.0 && std::isfinite(max_compression), "max_compression",
+          "must be finite and >= 0 (0 = off), got " + num(max_compression));
   require(num_threads >= 0, "num_threads", "must be >= 0 (0 = all), got " + std::to_string(num_threads));
 }
 
@@ -643,14 +649,33 @@ const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
     stats_.instability = "non-finite positions or velocities";
   } else {
     // Energy available to the kinetic energy: what was there, gravity's work, what moving walls may add.
-    const double available =
-        energy_before + std::max(gravity_work, 0.0) + fluid_mass_ * max_boundary_speed2_ +
+    const double floor =
         1e-16 * fluid_mass_ *
-            (config_.soundSpeed() * config_.soundSpeed() + config_.gravity.norm() * config_.smoothing_length);
+        (config_.soundSpeed() * config_.soundSpeed() + config_.gravity.norm() * config_.smoothing_length);
+    const double inflow = std::max(gravity_work, 0.0) + fluid_mass_ * max_boundary_speed2_;
+    const double available = energy_before + inflow + floor;
+    // The window: restarted every instability_window steps and when fluid appears or changes phase.
+    if (window_mass_ != fluid_mass_ || step_count_ - window_start_ > uint64_t(config_.instability_window)) {
+      window_start_ = step_count_ - 1;
+      window_energy_ = energy_before;
+      window_mass_ = fluid_mass_;
+      window_inflow_ = 0.0;
+    }
+    window_inflow_ += inflow;
     if (kinetic > config_.instability_energy_growth * available) {
       stats_.unstable = true;
       stats_.instability = "kinetic energy grew from " + num(energy_before) + " (+ gravity work " +
                            num(gravity_work) + ") to " + num(kinetic) + " in one step";
+    } else if (config_.instability_window > 0 && force_terms_.empty() &&
+               kinetic > config_.instability_window_growth * (window_energy_ + window_inflow_ + floor)) {
+      stats_.unstable = true;
+      stats_.instability = "kinetic energy grew from " + num(window_energy_) + " (+ " + num(window_inflow_) +
+                           " from gravity and moving walls) to " + num(kinetic) + " in " +
+                           std::to_string(step_count_ - window_start_) + " steps";
+    } else if (config_.max_compression > 0 && stats_.max_compression > config_.max_compression) {
+      stats_.unstable = true;
+      stats_.instability = "fluid compressed by " + num(100 * stats_.max_compression) +
+                           " % (max_compression " + num(100 * config_.max_compression) + " %)";
     }
   }
   stats_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -670,7 +695,7 @@ void SphFluidSolver::announceStep(double dt) {
 bool SphFluidSolver::measureState() {
   const SphParticles& p = particles_;
   double kinetic = 0.0, compression = 0.0, max_speed = 0.0, max_err = 0.0, fluid_mass = 0.0,
-         boundary_v2 = 0.0;
+         boundary_v2 = 0.0, max_compression = 0.0;
   const bool summation_walls = config_.boundary_pressure == SphBoundaryPressure::kSummation;
   const double rho0 = config_.rest_density;
   bool finite = true;
@@ -689,12 +714,15 @@ bool SphFluidSolver::measureState() {
     compression += p.masses[i] * compressionEnergyOf(p.densities[i]);
     max_speed = std::max(max_speed, std::sqrt(v2));
     max_err = std::max(max_err, std::abs(p.densities[i] - config_.rest_density) / config_.rest_density);
+    if (p.phases[i] == 0)  // liquid (solids, phase >= 1, press together at contacts)
+      max_compression = std::max(max_compression, (p.densities[i] - rho0) / rho0);
     fluid_mass += p.masses[i];
   }
   stats_.kinetic_energy = kinetic;
   stats_.compression_energy = compression;
   stats_.max_speed = max_speed;
   stats_.max_density_error = max_err;
+  stats_.max_compression = max_compression;
   fluid_mass_ = fluid_mass;
   max_boundary_speed2_ = boundary_v2;
   return finite && std::isfinite(kinetic);
@@ -717,6 +745,11 @@ std::string SphFluidSolver::likelyCause() const {
       limit = l.first;
     }
   if (name) return "dt " + num(dt) + " exceeds the " + name + " limit " + num(limit);
+  if (stats_.max_compression > 0.1)  // clumping: pairs pulled together
+    return "particles clump (compressed by " + num(100 * stats_.max_compression) +
+           " %): a tensile instability (negative_pressure_scale " + num(config_.negative_pressure_scale) +
+           ") or too few neighbours (" + num(stats_.neighbors_per_particle) +
+           " per particle; h / spacing too small), or a stiffness far too low";
   return "dt " + num(dt) + " is within all limits (sound " + num(stats_.dt_sound) + ", viscosity " +
          num(stats_.dt_viscosity) +
          "); check the particle spacing against h, boundary velocities and "

@@ -49,6 +49,18 @@ struct SphFluidConfig {
   /// A step is unstable if the kinetic energy exceeds this factor times (kinetic + compression energy before
   /// the step + gravity work of the step + moving-boundary energy).
   double instability_energy_growth = 10.0;
+  /// The same over a window of steps: unstable if the kinetic energy exceeds instability_window_growth times
+  /// (the energy at the window's start + the gravity work and moving-boundary energy since), which catches
+  /// growth too slow for the one-step check (a tensile or time-step instability building up over a few
+  /// steps). The window restarts every instability_window steps and when the fluid's mass changes (sources).
+  /// Fluids only: with force terms (elastic solids, which a caller may drive) only the one-step check runs.
+  /// 0: off.
+  int instability_window = 10;
+  double instability_window_growth = 3.0;
+  /// Unstable if a liquid particle (phase 0) is compressed by more than this fraction of rho_0
+  /// ((rho - rho_0) / rho_0; weakly compressible SPH aims at about 0.01): particles clumping (tensile
+  /// instability, too few neighbours) or a stiffness far too low. 0: off.
+  double max_compression = 0.5;
   bool throw_on_instability = true;  ///< throw SphInstabilityError (else only StepStats::unstable)
   int num_threads = 0;               ///< OpenMP threads, 0 = all available
 
@@ -82,6 +94,7 @@ struct SphStepStats {
   double dt_elastic = 0.0;         ///< min over the force terms (elastic wave speed, 8.2)
   double max_speed = 0.0;          ///< fluid particles, after the step
   double max_density_error = 0.0;  ///< max |rho - rho_0| / rho_0 over fluid particles
+  double max_compression = 0.0;    ///< max (rho - rho_0) / rho_0 over liquid (phase 0) particles, >= 0
   double kinetic_energy = 0.0;     ///< fluid particles
   /// sum m e(rho) of the equation of state over the fluid particles, plus over the boundary particles with
   /// SphBoundaryPressure::kSummation (their e(rho) = 0 below rho_0, matching the clamped wall pressure).
@@ -191,6 +204,10 @@ class SphFluidSolver {
   double forces_dt_ = 0.0;  // the dt announced to the force terms for the current forces
   int num_threads_ = 1;
   double fluid_mass_ = 0.0, max_boundary_speed2_ = 0.0;
+  // The energy window (SphFluidConfig::instability_window): its first step, energy and fluid mass, and the
+  // energy that may enter the fluid since (gravity work, moving boundaries).
+  uint64_t window_start_ = 0;
+  double window_energy_ = 0.0, window_mass_ = -1.0, window_inflow_ = 0.0;
 
   // Original order.
   std::vector<Vec3> accelerations_, xsph_, predicted_;

@@ -134,6 +134,9 @@ struct SphScene {
   /// Fluid sources (key sources): runSphScene emits their layers before the first step and after every
   /// step; with temperature the new particles get the source's temperature (default: temperature.initial).
   std::vector<SphFluidSourceConfig> sources;
+  /// Settings known to give wrong results, each "<file>:<line>:<column>: warning: <what and why>" (the scene
+  /// still loads; rc_sph prints them, the sph_simulator node logs them).
+  std::vector<std::string> warnings;
 };
 
 /// Optional physics a scene may list under `enable:`: elasticity (key solids), collisions (key collisions;

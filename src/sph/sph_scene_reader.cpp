@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 #include <map>
 #include <set>
@@ -23,6 +24,15 @@
 #include "relaxed_connectivity/sph/sph_scene_reader_sections.h"
 
 namespace rc::sph_scene_reading {
+namespace {
+
+std::string shortNumber(double v) {
+  std::ostringstream s;
+  s << std::setprecision(3) << v;
+  return s.str();
+}
+
+}  // namespace
 
 void SceneReader::read(const YAML::Node& root) {
   src_.allowKeys(root,
@@ -107,9 +117,26 @@ void SceneReader::planeGeometry(const YAML::Node& p, const std::string& where, V
 
 void SceneReader::readSolver(const YAML::Node& node) {
   src_.allowKeys(node,
-                 {"smoothing_length", "smoothing_ratio", "rest_density", "stiffness", "speed_of_sound",
-                  "gamma", "negative_pressure_scale", "pressure_kernel", "boundary_pressure", "viscosity",
-                  "xsph", "gravity", "cfl", "fixed_dt", "max_dt", "instability_energy_growth", "threads"},
+                 {"smoothing_length",
+                  "smoothing_ratio",
+                  "rest_density",
+                  "stiffness",
+                  "speed_of_sound",
+                  "gamma",
+                  "negative_pressure_scale",
+                  "pressure_kernel",
+                  "boundary_pressure",
+                  "viscosity",
+                  "xsph",
+                  "gravity",
+                  "cfl",
+                  "fixed_dt",
+                  "max_dt",
+                  "instability_energy_growth",
+                  "instability_window",
+                  "instability_window_growth",
+                  "max_compression",
+                  "threads"},
                  "solver");
   SphFluidConfig& c = scene_.config;
   auto field = [&](const char* key, const char* config_field) -> YAML::Node {
@@ -144,10 +171,17 @@ void SceneReader::readSolver(const YAML::Node& node) {
   if (field("negative_pressure_scale", "negative_pressure_scale"))
     c.negative_pressure_scale =
         src_.number(node["negative_pressure_scale"], "solver.negative_pressure_scale");
-  if (const YAML::Node k = field("pressure_kernel", "pressure_kernel"))
+  if (const YAML::Node k = field("pressure_kernel", "pressure_kernel")) {
     c.pressure_kernel = src_.choice<SphPressureKernel>(
         k, "solver.pressure_kernel",
         {{"spiky", SphPressureKernel::kSpiky}, {"poly6", SphPressureKernel::kPoly6}});
+    if (c.pressure_kernel == SphPressureKernel::kSpiky)
+      warn(
+          k,
+          "solver.pressure_kernel spiky is not the gradient of the summation density's energy and pumps "
+          "energy into the fluid (docs/sph_choices.md: +28 % in a 2D dam break in 0.25 s, +454 % in inviscid "
+          "sloshing in 0.5 s); poly6, the default, conserves it");
+  }
   if (const YAML::Node b = field("boundary_pressure", "boundary_pressure"))
     c.boundary_pressure =
         src_.choice<SphBoundaryPressure>(b, "solver.boundary_pressure",
@@ -162,6 +196,14 @@ void SceneReader::readSolver(const YAML::Node& node) {
   if (field("instability_energy_growth", "instability_energy_growth"))
     c.instability_energy_growth =
         src_.number(node["instability_energy_growth"], "solver.instability_energy_growth");
+  if (field("instability_window", "instability_window"))
+    c.instability_window =
+        int(src_.integer(node["instability_window"], "solver.instability_window", 0, 1000000));
+  if (field("instability_window_growth", "instability_window_growth"))
+    c.instability_window_growth =
+        src_.number(node["instability_window_growth"], "solver.instability_window_growth");
+  if (field("max_compression", "max_compression"))
+    c.max_compression = src_.nonNegative(node["max_compression"], "solver.max_compression");
   if (field("threads", "num_threads"))
     c.num_threads = int(src_.integer(node["threads"], "solver.threads", 0, 4096));
   try {
@@ -178,6 +220,10 @@ void SceneReader::readSolver(const YAML::Node& node) {
     }
     src_.fail(at, "solver: " + message);
   }
+}
+
+void SceneReader::warn(const YAML::Node& node, const std::string& problem) {
+  scene_.warnings.push_back(src_.at(node) + ": warning: " + problem);
 }
 
 double SceneReader::blockSpacing(const YAML::Node& node, const std::string& where) const {
@@ -227,6 +273,14 @@ void SceneReader::readFluid(const YAML::Node& node, const std::string& where) {
   const size_t first = scene_.particles.size();
   addBox(node, where, box, dx, SphParticleKind::kFluid, v);
   readBlockTemperature(node, where, first);
+  // Too few neighbours: in 3D, fluid below h = 2.5 dx pairs up under compression (the poly6 gradient vanishes
+  // at r -> 0) and its pressures read low.
+  const double ratio = scene_.config.smoothing_length / dx;
+  if (dimension_ == 3 && ratio < 2.5 - 1e-9)
+    warn(node, where + ": h = " + shortNumber(ratio) + " x its spacing (about " +
+                   std::to_string(long(std::lround(4.0 / 3.0 * M_PI * ratio * ratio * ratio - 1))) +
+                   " neighbours): 3D fluid below h = 2.5 dx pairs up under compression and its hydrostatic "
+                   "pressure reads 16 % low at 2-2.2 dx (docs/sph_choices.md); use smoothing_ratio >= 2.5");
 }
 
 void SceneReader::readMoving(const YAML::Node& node, const std::string& where) {

@@ -81,6 +81,8 @@ class SceneReader {
   /// A plane entry's unit `normal` and its `offset` (or a `point` on it).
   void planeGeometry(const YAML::Node& p, const std::string& where, Vec3* normal, double* offset) const;
   void readSolver(const YAML::Node& node);
+  /// Adds "<file>:<line>:<column>: warning: <problem>" to the scene's warnings.
+  void warn(const YAML::Node& node, const std::string& problem);
   double blockSpacing(const YAML::Node& node, const std::string& where) const;
   /// Mass of a lattice particle of spacing dx (rest density with full support).
   double massFor(double dx);

@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "rc_sph: %s: %s\n", scene_path.c_str(), e.what());
     return 2;
   }
+  for (const std::string& warning : scene.warnings) std::fprintf(stderr, "rc_sph: %s\n", warning.c_str());
   if (frames > 0) scene.frame_count = frames;
   if (threads >= 0) scene.config.num_threads = threads;
 

@@ -246,6 +246,57 @@ TEST(SphFluidSolver, TooLargeFixedTimeStepIsDetectedWithItsStep) {
   for (int s = 0; s < 200; ++s) EXPECT_FALSE(adaptive.step().unstable);
 }
 
+// An instability that builds up over a few steps (each below the one-step factor) is caught by the window.
+TEST(SphFluidSolver, SlowEnergyGrowthIsCaughtByTheWindow) {
+  SphFluidConfig c;
+  c.stiffness = 2e5;
+  const SphParticles p = makeDamBreak2D(SphDamBreak2D(), c);
+  const double sound_limit = c.cfl * c.smoothing_length / c.soundSpeed();
+  auto failingStep = [&](double factor, int window, double max_compression, std::string* message) {
+    SphFluidConfig config = c;
+    config.fixed_dt = factor * sound_limit;
+    config.instability_window = window;
+    config.max_compression = max_compression;
+    config.throw_on_instability = false;
+    SphFluidSolver solver(config, p);
+    for (int s = 0; s < 400; ++s) {
+      const SphStepStats& stats = solver.step();
+      if (stats.unstable) {
+        *message = stats.instability;
+        return stats.step;
+      }
+    }
+    return uint64_t(0);
+  };
+  for (double factor : {2.0, 3.0, 4.0, 8.0}) {
+    std::string one, windowed, compressed;
+    const uint64_t a = failingStep(factor, 0, 0, &one), b = failingStep(factor, 10, 0, &windowed),
+                   d = failingStep(factor, 10, 0.5, &compressed);
+    std::printf("dt = %.0f x sound limit: one-step check %llu, window %llu, + compression %llu\n  %s\n  %s\n",
+                factor, (unsigned long long)a, (unsigned long long)b, (unsigned long long)d, windowed.c_str(),
+                compressed.c_str());
+    if (factor == 2.0) {  // stable: no monitor fires
+      EXPECT_EQ(a + b + d, 0u) << windowed << compressed;
+    } else if (factor == 3.0) {  // measured: the window at step 69, the compression (57.8 %) at step 68
+      EXPECT_EQ(a, 0u) << one;
+      EXPECT_GT(b, 0u);
+      EXPECT_GT(d, 0u);
+      EXPECT_LE(d, b);
+      EXPECT_NE(compressed.find("compressed by"), std::string::npos) << compressed;
+    } else if (factor == 4.0) {  // measured: energy x20 in 7 steps, never x10 in one
+      EXPECT_EQ(a, 0u) << one;
+      EXPECT_GT(b, 0u);
+      EXPECT_LE(b, 10u);
+      EXPECT_NE(windowed.find("step " + std::to_string(b) + " "), std::string::npos) << windowed;
+      EXPECT_NE(windowed.find("steps; likely cause: dt"), std::string::npos) << windowed;
+      EXPECT_NE(windowed.find("sound-speed limit"), std::string::npos) << windowed;
+    } else {  // fast: the one-step check too, the window no later
+      EXPECT_GT(a, 0u);
+      EXPECT_LE(b, a);
+    }
+  }
+}
+
 TEST(SphFluidSolver, PlanesReflectWithRestitution) {
   SphFluidConfig c;
   c.dimension = 2;

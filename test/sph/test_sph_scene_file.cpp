@@ -100,6 +100,9 @@ TEST(SphSceneFile, EveryShippedSceneLoadsWithItsParticleCounts) {
     EXPECT_EQ(scene.surface.enabled,
               std::count(scene.enabled_physics.begin(), scene.enabled_physics.end(), "surface") == 1);
     EXPECT_NO_THROW(scene.config.validate());
+    for (const std::string& warning : scene.warnings) std::printf("%s\n", warning.c_str());
+    const std::set<std::string> warned = {"dam_break_3d", "fig8_5_freezing_rod"};  // 3D fluid at h = 2 dx
+    EXPECT_EQ(scene.warnings.size(), warned.count(stem)) << stem;
     // A term per solid, plus the penalty with enable: [collisions].
     EXPECT_EQ(makeSphSolver(scene).forceTerms().size(),
               it->second.solids + (scene.collisions.enabled ? 1 : 0))
@@ -260,6 +263,51 @@ TEST(SphSceneFile, BadInputsNameFileLineAndProblem) {
     EXPECT_EQ(std::string(e.what()).rfind(path + ":7:1: scene: unknown key 'fraems'", 0), 0u) << e.what();
   }
   EXPECT_THROW(loadSphScene((dir / "missing.yaml").string()), SphSceneError);
+}
+
+// Settings known to give wrong results load, with a warning that names the line and the reason.
+TEST(SphSceneFile, SettingsKnownToGiveWrongResultsWarnWithTheirLine) {
+  EXPECT_TRUE(parseSphScene(kGoodHead, "good.yaml").warnings.empty());
+  const SphScene spiky = parseSphScene(
+      "dimension: 2\nspacing: 0.02\nsolver:\n  smoothing_ratio: 2.5\n  pressure_kernel: spiky\n"
+      "fluid:\n  - {lo: [0, 0], hi: [0.2, 0.2]}\nframes: {count: 2, time: 0.01}\n",
+      "spiky.yaml");
+  ASSERT_EQ(spiky.warnings.size(), 1u);
+  EXPECT_EQ(spiky.warnings[0].rfind("spiky.yaml:5:20: warning: solver.pressure_kernel spiky", 0), 0u)
+      << spiky.warnings[0];
+  EXPECT_EQ(spiky.config.pressure_kernel, SphPressureKernel::kSpiky);  // still as asked
+  const std::string three_d =
+      "dimension: 3\nspacing: 0.05\nsolver: {smoothing_ratio: RATIO}\nfluid:\n"
+      "  - {lo: [0, 0, 0], hi: [0.2, 0.2, 0.2]}\n  - {lo: [1, 0, 0], hi: [1.2, 0.2, 0.2], spacing: 0.02}\n"
+      "frames: {count: 2, time: 0.01}\n";
+  auto withRatio = [&](const char* ratio) {
+    std::string text = three_d;
+    text.replace(text.find("RATIO"), 5, ratio);
+    return parseSphScene(text, "3d.yaml");
+  };
+  // h = 2 x 0.05: the first block warns (about 33 neighbours); the second, at h = 5 x 0.02, does not.
+  const SphScene coarse = withRatio("2");
+  ASSERT_EQ(coarse.warnings.size(), 1u);
+  EXPECT_EQ(coarse.warnings[0].rfind(
+                "3d.yaml:5:5: warning: fluid[0]: h = 2 x its spacing (about 33 neighbours)", 0),
+            0u)
+      << coarse.warnings[0];
+  EXPECT_NE(coarse.warnings[0].find("smoothing_ratio >= 2.5"), std::string::npos);
+  EXPECT_TRUE(withRatio("2.5").warnings.empty());
+  // The monitors' keys.
+  const SphScene monitors = parseSphScene(
+      "dimension: 2\nspacing: 0.02\nsolver: {smoothing_ratio: 2.5, instability_window: 25, "
+      "instability_window_growth: 4, max_compression: 0}\nfluid:\n  - {lo: [0, 0], hi: [0.2, 0.2]}\n"
+      "frames: {count: 2, time: 0.01}\n",
+      "monitors.yaml");
+  EXPECT_EQ(monitors.config.instability_window, 25);
+  EXPECT_EQ(monitors.config.instability_window_growth, 4.0);
+  EXPECT_EQ(monitors.config.max_compression, 0.0);
+  expectErrorAt("dimension: 2\nspacing: 0.02\nsolver:\n  smoothing_ratio: 2.5\n  max_compression: -1\n", 5,
+                "max_compression");
+  expectErrorAt(
+      "dimension: 2\nspacing: 0.02\nsolver:\n  smoothing_ratio: 2.5\n  instability_window_growth: 0.5\n", 5,
+      "instability_window_growth");
 }
 
 TEST(SphSceneFile, MovingBoxesPlanesAndPerBoxSpacing) {
