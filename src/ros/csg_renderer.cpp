@@ -130,6 +130,9 @@ CsgRendererParams readCsgRendererParams(const ros::NodeHandle& pnh) {
   s.outputs = kOutputColor | kOutputDepth | kOutputWeight | kOutputPatchId;  // what the node uses
   readSplatParams(pnh, "csg_renderer", &s);
   p.validate();
+  if (s.backface_culling && !p.csg.empty() && CsgTree::parse(p.csg).hasComplementedPatches())
+    throw std::invalid_argument("csg_renderer: backface_culling with a CSG difference or complement (csg \"" +
+                                p.csg + "\") is not supported: render two-sided (backface_culling false)");
   return p;
 }
 
@@ -222,6 +225,9 @@ bool CsgRenderer::setCsgTree(relaxed_connectivity::SetCsgTree::Request& request,
                              relaxed_connectivity::SetCsgTree::Response& response) {
   try {
     CsgTree tree = CsgTree::parse(request.expression);
+    if (params_.splat.backface_culling && tree.hasComplementedPatches())
+      throw std::invalid_argument(
+          "backface_culling is on: a difference or complement would render wrongly (render two-sided)");
     response.success = true;
     response.message = tree.toString();
     std::lock_guard<std::mutex> lock(mutex_);

@@ -4,6 +4,7 @@
 // surfels (4.3).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -53,6 +54,9 @@ class CsgClipper : public FragmentClipper {
   bool clipsColorOnly(uint32_t surfel) const override { return color_only_[surfel] != 0; }
   /// Surfels of complemented patches (isInverted()) are shaded with the reversed normal.
   bool flipsNormal(uint32_t surfel) const override { return inverted_[surfel] != 0; }
+  bool flipsAnyNormal() const override {
+    return std::any_of(inverted_.begin(), inverted_.end(), [](auto v) { return v != 0; });
+  }
 
   /// Algorithm 4.4: x against `patch` from the partners of `surfel` in that patch (not inverted).
   Tri insidePatch(uint32_t surfel, int patch, const Vec3& x) const;

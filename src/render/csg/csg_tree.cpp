@@ -229,6 +229,13 @@ CsgTree CsgTree::normalized() const {
   return out;
 }
 
+bool CsgTree::hasComplementedPatches() const {
+  const CsgTree normal = isNormalized() ? *this : normalized();
+  for (const Node& n : normal.nodes())
+    if (n.op == Op::kLeaf && n.inverted) return true;
+  return false;
+}
+
 bool CsgTree::isNormalized() const {
   for (const Node& n : nodes_)
     if (n.op != Op::kLeaf && n.op != Op::kUnion && n.op != Op::kIntersection) return false;

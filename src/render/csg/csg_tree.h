@@ -41,6 +41,8 @@ class CsgTree {
   /// union/intersection nodes and leaves with an `inverted` flag.
   CsgTree normalized() const;
   bool isNormalized() const;
+  /// True if the normalised tree has a complemented leaf (the expression has a difference or complement).
+  bool hasComplementedPatches() const;
 
   /// Infix form with names where known ("A & (!B & !C)"); every nested binary node is parenthesised.
   std::string toString() const;

@@ -34,7 +34,8 @@ struct SplatConfig {
   double depth_tolerance_scale = 1.0;  ///< per-fragment fuzzy-depth tolerance multiplier (3.2.1)
   int threads = 0;                     ///< 0: all cores
   /// Surfels facing away from the camera are drawn too (two-sided, shaded with the flipped normal) unless
-  /// this is set; culling them halves the work for closed models.
+  /// this is set; culling them halves the work for closed models. Refused (std::invalid_argument) with a CSG
+  /// clipper that has complemented patches (differences): their rims rendered wrongly.
   bool backface_culling = false;
   // Deferred Phong shading (per pixel, from the blended normals)
   bool shading = true;

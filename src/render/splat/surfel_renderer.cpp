@@ -1020,6 +1020,11 @@ void SurfelRenderer::render(const SurfelCloud& cloud, const Camera& camera, Rend
                             SplatAccumulation* keep) const {
   const Clock::time_point start_total = Clock::now();
   checkRenderInputs(config_, cloud, camera, out, clipper);
+  if (config_.backface_culling && clipper && clipper->flipsAnyNormal())
+    throw std::invalid_argument(
+        "SurfelRenderer::render: backface_culling with complemented CSG patches (a difference or complement) "
+        "is not supported: culling leaves the rims of subtracted solids wrong; render two-sided "
+        "(backface_culling false)");
   if (keep && (clipper || (config_.outputs & kOutputPatchId)))
     throw std::invalid_argument(
         "SurfelRenderer::render: the accumulation is kept only without clipping and without the patch id "
