@@ -265,22 +265,84 @@ void SceneReader::addBox(const YAML::Node& node, const std::string& where, const
 }
 
 void SceneReader::readFluid(const YAML::Node& node, const std::string& where) {
-  src_.allowKeys(node, {"lo", "hi", "spacing", "velocity", "temperature"}, where);
-  const Box box = readBox(src_, node, where, dimension_);
-  const double dx = blockSpacing(node, where);
-  const Vec3 v =
-      node["velocity"] ? src_.vec(node["velocity"], where + ".velocity", dimension_, true) : Vec3::Zero();
+  src_.allowKeys(node, {"shape", "lo", "hi", "center", "radius", "spacing", "velocity", "temperature"},
+                 where);
+  enum class Shape { kBox, kSphere };
+  const Shape shape = node["shape"] ? src_.choice<Shape>(node["shape"], where + ".shape",
+                                                         {{"box", Shape::kBox}, {"sphere", Shape::kSphere}})
+                                    : Shape::kBox;
   const size_t first = scene_.particles.size();
-  addBox(node, where, box, dx, SphParticleKind::kFluid, v);
+  Vec3 centre;
+  if (shape == Shape::kBox) {
+    for (const char* key : {"center", "radius"})
+      if (node[key]) src_.fail(node[key], where + "." + key + ": only with shape: sphere");
+    const Box box = readBox(src_, node, where, dimension_);
+    const double dx = blockSpacing(node, where);
+    addBox(node, where, box, dx, SphParticleKind::kFluid, Vec3::Zero());
+    centre = 0.5 * (box.lo + box.hi);
+  } else {  // the lattice points of the bounding box within the radius (a disc in 2D)
+    for (const char* key : {"lo", "hi"})
+      if (node[key]) src_.fail(node[key], where + "." + key + ": not with shape: sphere (center and radius)");
+    centre = src_.vec(src_.require(node, "center", where), where + ".center", dimension_, true);
+    const double radius = src_.positive(src_.require(node, "radius", where), where + ".radius");
+    const double dx = blockSpacing(node, where);
+    const Vec3 half = dimension_ == 3 ? Vec3::Constant(radius) : Vec3(radius, radius, 0);
+    reserveLattice(node, where, centre - half, centre + half, dx, 0);
+    SphParticles box;
+    try {
+      addLatticeBox(box, centre - half, centre + half, dx, massFor(dx), dimension_, SphParticleKind::kFluid);
+    } catch (const std::invalid_argument& e) {
+      src_.fail(node, where + ": " + e.what());
+    }
+    for (size_t i = 0; i < box.size(); ++i)
+      if ((box.positions[i] - centre).norm() <= radius)
+        scene_.particles.add(box.positions[i], Vec3::Zero(), box.masses[i], SphParticleKind::kFluid);
+    if (scene_.particles.size() == first) src_.fail(node, where + ": the sphere holds no lattice point");
+  }
+  readVelocityField(node["velocity"], where + ".velocity", centre, first);
   readBlockTemperature(node, where, first);
   // Too few neighbours: in 3D, fluid below h = 2.5 dx pairs up under compression (the poly6 gradient vanishes
   // at r -> 0) and its pressures read low.
-  const double ratio = scene_.config.smoothing_length / dx;
+  const double ratio = scene_.config.smoothing_length / blockSpacing(node, where);
   if (dimension_ == 3 && ratio < 2.5 - 1e-9)
     warn(node, where + ": h = " + shortNumber(ratio) + " x its spacing (about " +
                    std::to_string(long(std::lround(4.0 / 3.0 * M_PI * ratio * ratio * ratio - 1))) +
                    " neighbours): 3D fluid below h = 2.5 dx pairs up under compression and its hydrostatic "
                    "pressure reads 16 % low at 2-2.2 dx (docs/sph_choices.md); use smoothing_ratio >= 2.5");
+}
+
+void SceneReader::readVelocityField(const YAML::Node& node, const std::string& where, const Vec3& centre,
+                                    size_t first) {
+  if (!node) return;
+  Vec3 uniform = Vec3::Zero(), about = centre, rotation = Vec3::Zero();
+  Eigen::Matrix3d gradient = Eigen::Matrix3d::Zero();
+  if (node.IsSequence()) {
+    uniform = src_.vec(node, where, dimension_, true);
+  } else {
+    src_.allowKeys(node, {"uniform", "gradient", "rotation", "about"}, where);
+    if (node["uniform"]) uniform = src_.vec(node["uniform"], where + ".uniform", dimension_, true);
+    if (node["about"]) about = src_.vec(node["about"], where + ".about", dimension_, true);
+    if (const YAML::Node g = node["gradient"]) {
+      if (!g.IsSequence() || int(g.size()) != dimension_)
+        src_.fail(g, where + ".gradient: expected " + std::to_string(dimension_) +
+                         " rows (the matrix A of v = A x)");
+      for (int r = 0; r < dimension_; ++r) {
+        if (!g[r].IsSequence() || int(g[r].size()) != dimension_)
+          src_.fail(g[r], where + ".gradient: expected rows of " + std::to_string(dimension_) + " numbers");
+        for (int c = 0; c < dimension_; ++c) gradient(r, c) = src_.number(g[r][c], where + ".gradient");
+      }
+    }
+    if (const YAML::Node w = node["rotation"]) {
+      if (dimension_ == 2)
+        rotation = Vec3(0, 0, src_.number(w, where + ".rotation (2D: the angular velocity about z)"));
+      else
+        rotation = src_.vec(w, where + ".rotation", 3, false);
+    }
+  }
+  for (size_t i = first; i < scene_.particles.size(); ++i) {
+    const Vec3 r = scene_.particles.positions[i] - about;
+    scene_.particles.velocities[i] = uniform + gradient * r + rotation.cross(r);
+  }
 }
 
 void SceneReader::readMoving(const YAML::Node& node, const std::string& where) {

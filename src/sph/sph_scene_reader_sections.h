@@ -92,6 +92,10 @@ class SceneReader {
   void addBox(const YAML::Node& node, const std::string& where, const Box& box, double dx,
               SphParticleKind kind, const Vec3& velocity);
   void readFluid(const YAML::Node& node, const std::string& where);
+  /// A block's `velocity`: [vx, vy(, vz)] (uniform), or a field {uniform: [..], gradient: [[..], ..] (v = A
+  /// (x - about)), rotation: w (2D, about z) | [wx, wy, wz] (v = w x (x - about)), about: [..] (default
+  /// `centre`)} set on the particles from `first` on.
+  void readVelocityField(const YAML::Node& node, const std::string& where, const Vec3& centre, size_t first);
   void readMoving(const YAML::Node& node, const std::string& where);
   void readBoundary(const YAML::Node& node);
   void readFrames(const YAML::Node& node);

@@ -310,6 +310,46 @@ TEST(SphSceneFile, SettingsKnownToGiveWrongResultsWarnWithTheirLine) {
       "instability_window_growth");
 }
 
+TEST(SphSceneFile, FluidSpheresAndVelocityFields) {
+  // A 3D ball spinning about z around its centre, plus a uniform drift.
+  const SphScene ball = parseSphScene(
+      "dimension: 3\nspacing: 0.1\nsolver: {smoothing_ratio: 2.5}\nfluid:\n"
+      "  - {shape: sphere, center: [1, 2, 3], radius: 0.5, velocity: {uniform: [0, 0, 1], rotation: [0, 0, "
+      "2]}}\n"
+      "frames: {count: 1, time: 0.01}\n",
+      "ball.yaml");
+  // Cell centres within the radius: about 4/3 pi 0.5^3 / 0.1^3 = 524.
+  EXPECT_NEAR(double(ball.particles.size()), 4.0 / 3.0 * M_PI * 125, 40);
+  double worst = 0;
+  for (size_t i = 0; i < ball.particles.size(); ++i) {
+    const Vec3 r = ball.particles.positions[i] - Vec3(1, 2, 3);
+    EXPECT_LE(r.norm(), 0.5);
+    worst = std::max(worst, (ball.particles.velocities[i] - Vec3(-2 * r.y(), 2 * r.x(), 1)).norm());
+  }
+  EXPECT_LT(worst, 1e-12);
+  // 2D: the rotation is a number (about z); the gradient is a 2 x 2 matrix about a given point.
+  const SphScene disc = parseSphScene(
+      "dimension: 2\nspacing: 0.05\nsolver: {smoothing_ratio: 3}\nfluid:\n"
+      "  - {lo: [0, 0], hi: [1, 1], velocity: {rotation: 1.5, gradient: [[1, 0], [0, -1]], about: [0, 0]}}\n"
+      "frames: {count: 1, time: 0.01}\n",
+      "disc.yaml");
+  for (size_t i = 0; i < disc.particles.size(); ++i) {
+    const Vec3& x = disc.particles.positions[i];
+    EXPECT_LT((disc.particles.velocities[i] - Vec3(x.x() - 1.5 * x.y(), -x.y() + 1.5 * x.x(), 0)).norm(),
+              1e-12);
+  }
+  const std::string head = "dimension: 2\nspacing: 0.05\nsolver: {smoothing_ratio: 3}\nfluid:\n";
+  const std::string tail = "frames: {count: 1, time: 0.01}\n";
+  expectErrorAt(head + "  - {shape: sphere, lo: [0, 0], center: [0, 0], radius: 1}\n" + tail, 5,
+                "not with shape: sphere");
+  expectErrorAt(head + "  - {shape: ball, center: [0, 0], radius: 1}\n" + tail, 5, "unknown 'ball'");
+  expectErrorAt(head + "  - {shape: sphere, center: [0, 0], radius: -1}\n" + tail, 5,
+                "radius must be positive");
+  expectErrorAt(head + "  - {lo: [0, 0], hi: [1, 1], velocity: {gradient: [[1, 0]]}}\n" + tail, 5,
+                "expected 2 rows");
+  expectErrorAt(head + "  - {lo: [0, 0], hi: [1, 1], velocity: {spin: 1}}\n" + tail, 5, "unknown key 'spin'");
+}
+
 TEST(SphSceneFile, MovingBoxesPlanesAndPerBoxSpacing) {
   const SphScene scene = parseSphScene(
       "dimension: 3\n"
