@@ -565,6 +565,19 @@ const SphStepStats& SphFluidSolver::step() {
   return advanceOneStep(0.0);
 }
 
+const SphStepStats& SphFluidSolver::stepUntil(double end_time) {
+  const double remaining = end_time - time_;
+  if (!(remaining > 0.0) || !std::isfinite(remaining))
+    throw std::invalid_argument("SphFluidSolver::stepUntil: end_time " + num(end_time) +
+                                " must lie after the current time " + num(time_));
+  advanceOneStep(remaining);
+  if (remaining <= stats_.dt) {  // as advance() ends its last step
+    time_ = end_time;
+    stats_.time = end_time;
+  }
+  return stats_;
+}
+
 const SphStepStats& SphFluidSolver::advance(double duration,
                                             const std::function<void(const SphStepStats&)>& after_step) {
   if (!(duration >= 0.0) || !std::isfinite(duration))

@@ -147,6 +147,9 @@ class SphFluidSolver {
 
   /// One time step. Throws SphInstabilityError if it is unstable and config().throw_on_instability.
   const SphStepStats& step();
+  /// One step of advance(end_time - time()): shortened to end on end_time if it would pass it (the time is
+  /// then set to end_time). Throws std::invalid_argument unless end_time > time().
+  const SphStepStats& stepUntil(double end_time);
   /// Steps until `duration` more time has passed (the last step is shortened to end on it). `after_step`,
   /// if set, is called after every step (after the last one's time is set to the end), e.g. for
   /// SphThermalModel::step with lastStats().dt.

@@ -35,6 +35,14 @@ struct SphParticleOutput {
   bool enabled() const { return every > 0 && (ply || vtp); }
 };
 
+/// Probes written while a scene runs (key `probes`): <name>_probes.csv in the output folder, a row at the
+/// start and after every frame (sph_probes.h): the liquid body's measures and, per point, the density and
+/// pressure there.
+struct SphProbeOutput {
+  bool enabled = false;
+  std::vector<Vec3> points;
+};
+
 /// Surface meshes written while a scene runs (`enable: [surface]`, key output.surface; thesis 8.2.7):
 /// marching cubes on the colour field of the integrated particles (fluid and solids), frame 0 and every
 /// `every`-th frame, as <name>_surface_NNNN.obj / .ply.
@@ -127,6 +135,7 @@ struct SphScene {
   double frame_time = 0.0;  ///< simulated seconds per frame
   SphParticleOutput output;
   SphSurfaceOutput surface;
+  SphProbeOutput probes;
   std::vector<SphSceneSolid> solids;
   SphSceneCollisions collisions;
   SphSceneThermal thermal;

@@ -37,7 +37,7 @@ std::string shortNumber(double v) {
 void SceneReader::read(const YAML::Node& root) {
   src_.allowKeys(root,
                  {"name", "dimension", "spacing", "enable", "solver", "fluid", "solids", "boundary", "moving",
-                  "frames", "output", "temperature", "phase_transition", "collisions", "sources"},
+                  "frames", "output", "temperature", "phase_transition", "collisions", "sources", "probes"},
                  "scene");
   if (root["name"]) scene_.name = src_.string(root["name"], "name");
   dimension_ = int(src_.integer(src_.require(root, "dimension", "scene"), "dimension", 2, 3));
@@ -70,6 +70,16 @@ void SceneReader::read(const YAML::Node& root) {
   if (root["sources"]) readSources(root["sources"]);
   readFrames(src_.require(root, "frames", "scene"));
   if (root["output"]) readOutput(root["output"]);
+  if (const YAML::Node probes = root["probes"]) {
+    src_.allowKeys(probes, {"points"}, "probes");
+    scene_.probes.enabled = true;
+    if (const YAML::Node points = probes["points"]) {
+      if (!points.IsSequence()) src_.fail(points, "probes.points: expected a list of points");
+      for (size_t i = 0; i < points.size(); ++i)
+        scene_.probes.points.push_back(
+            src_.vec(points[i], "probes.points[" + std::to_string(i) + "]", dimension_, true));
+    }
+  }
   if (enabled("surface")) finishSurface();
   if (enabled("skin")) finishSkins();
 }

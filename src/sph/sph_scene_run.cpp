@@ -7,7 +7,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <stdexcept>
 
 #include "relaxed_connectivity/io/obj_io.h"
 #include "relaxed_connectivity/io/ply_io.h"
@@ -15,6 +17,7 @@
 #include "relaxed_connectivity/sph/sph_elastic_solid.h"
 #include "relaxed_connectivity/sph/sph_fluid_source.h"
 #include "relaxed_connectivity/sph/sph_output.h"
+#include "relaxed_connectivity/sph/sph_probes.h"
 #include "relaxed_connectivity/sph/sph_simulation.h"
 #include "relaxed_connectivity/sph/sph_skinning.h"
 #include "relaxed_connectivity/sph/sph_surface.h"
@@ -56,10 +59,19 @@ class FrameWriter {
     surface_ = !out_dir.empty() && scene.surface.enabled && (scene.surface.obj || scene.surface.ply);
     if (!out_dir.empty())
       for (const SphSceneSkin& skin : scene.skins) skins_.push_back(skin.skin);
-    if (active_ || surface_ || !skins_.empty()) std::filesystem::create_directories(dir_);
+    probes_ = !out_dir.empty() && scene.probes.enabled;
+    if (active_ || surface_ || probes_ || !skins_.empty()) std::filesystem::create_directories(dir_);
+    if (probes_) {
+      probe_path_ = (dir_ / (scene.name + "_probes.csv")).string();
+      probe_file_.open(probe_path_);
+      if (!probe_file_) throw std::runtime_error(probe_path_ + ": cannot open for writing");
+      writeSphProbeHeader(probe_file_, scene.probes.points.size());
+      stats_.files.push_back(probe_path_);
+    }
   }
 
   void maybeWrite(int frame, const SphFluidSolver& solver) {
+    writeProbes(solver);
     maybeWriteSurface(frame, solver);
     maybeWriteSkins(frame, solver);
     if (!active_ || frame % scene_.output.every != 0) return;
@@ -97,6 +109,20 @@ class FrameWriter {
   /// Docked lattice points per particle of the solids with fracture (nullptr if none has it).
   const std::vector<uint32_t>* dockedPoints(const SphFluidSolver& solver) {
     return sphDockedPoints(solver, docked_) ? &docked_ : nullptr;
+  }
+
+  /// One row of <name>_probes.csv.
+  void writeProbes(const SphFluidSolver& solver) {
+    if (!probes_) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    const SphKernels kernels(solver.config().dimension, solver.config().smoothing_length);
+    std::vector<SphPointSample> samples;
+    for (const Vec3& point : scene_.probes.points)
+      samples.push_back(sampleSphPoint(solver.particles(), kernels, point));
+    writeSphProbeRow(probe_file_, solver.time(), measureSphBody(solver.particles()), samples);
+    probe_file_.flush();
+    if (!probe_file_) throw std::runtime_error(probe_path_ + ": write failed");
+    stats_.output_seconds += secondsSince(t0);
   }
 
   /// Marching cubes surface of the frame (8.2.7): <name>_surface_NNNN.obj / .ply.
@@ -167,6 +193,9 @@ class FrameWriter {
   }
 
   const SphScene& scene_;
+  bool probes_ = false;
+  std::string probe_path_;
+  std::ofstream probe_file_;
   std::filesystem::path dir_;
   SphRunStats& stats_;
   bool active_ = false, surface_ = false;
@@ -313,7 +342,8 @@ SphRunStats runSphScene(SphSimulation& simulation, const SphRunOptions& options)
           break;
         }
         step_started = std::chrono::steady_clock::now();
-        const SphStepStats& st = solver.step();
+        const SphStepStats& st =
+            solver.stepUntil(frame_end);  // (a first step longer than the frame ends on it)
         frame_seconds += st.seconds;
         if (after_step) {
           const auto thermal_started = std::chrono::steady_clock::now();
