@@ -275,12 +275,19 @@ void SceneReader::addBox(const YAML::Node& node, const std::string& where, const
 }
 
 void SceneReader::readFluid(const YAML::Node& node, const std::string& where) {
-  src_.allowKeys(node, {"shape", "lo", "hi", "center", "radius", "spacing", "velocity", "temperature"},
+  src_.allowKeys(node,
+                 {"shape", "lo", "hi", "center", "radius", "mesh", "scale", "translation", "spacing",
+                  "velocity", "temperature"},
                  where);
-  enum class Shape { kBox, kSphere };
-  const Shape shape = node["shape"] ? src_.choice<Shape>(node["shape"], where + ".shape",
-                                                         {{"box", Shape::kBox}, {"sphere", Shape::kSphere}})
-                                    : Shape::kBox;
+  enum class Shape { kBox, kSphere, kMesh };
+  const Shape shape =
+      node["shape"]
+          ? src_.choice<Shape>(node["shape"], where + ".shape",
+                               {{"box", Shape::kBox}, {"sphere", Shape::kSphere}, {"mesh", Shape::kMesh}})
+          : Shape::kBox;
+  for (const char* key : {"mesh", "scale", "translation"})
+    if (node[key] && shape != Shape::kMesh)
+      src_.fail(node[key], where + "." + key + ": only with shape: mesh");
   const size_t first = scene_.particles.size();
   Vec3 centre;
   if (shape == Shape::kBox) {
@@ -290,6 +297,27 @@ void SceneReader::readFluid(const YAML::Node& node, const std::string& where) {
     const double dx = blockSpacing(node, where);
     addBox(node, where, box, dx, SphParticleKind::kFluid, Vec3::Zero());
     centre = 0.5 * (box.lo + box.hi);
+  } else if (shape == Shape::kMesh) {  // the lattice points inside the closed mesh (winding number > 1/2)
+    for (const char* key : {"lo", "hi", "center", "radius"})
+      if (node[key])
+        src_.fail(node[key], where + "." + key + ": not with shape: mesh (mesh, scale, translation)");
+    Vec3 half;
+    const TriangleMesh mesh = readSolidMesh(node, where, Eigen::Matrix3d::Identity(), &centre, &half);
+    const double dx = blockSpacing(node, where);
+    reserveLattice(node, where, centre - half, centre + half, dx, 0);
+    SphParticles box;
+    try {
+      addLatticeBox(box, -half, half, dx, massFor(dx), dimension_, SphParticleKind::kFluid);
+    } catch (const std::invalid_argument& e) {
+      src_.fail(node, where + ": " + e.what());
+    }
+    const FastWindingNumber winding(mesh);
+    for (size_t i = 0; i < box.size(); ++i)
+      if (std::abs(winding(box.positions[i])) > 0.5)
+        scene_.particles.add(centre + box.positions[i], Vec3::Zero(), box.masses[i], SphParticleKind::kFluid);
+    if (scene_.particles.size() == first)
+      src_.fail(node["mesh"], where + ".mesh: holds no lattice point of spacing " + std::to_string(dx) +
+                                  " (mesh too small for the spacing, or not closed?)");
   } else {  // the lattice points of the bounding box within the radius (a disc in 2D)
     for (const char* key : {"lo", "hi"})
       if (node[key]) src_.fail(node[key], where + "." + key + ": not with shape: sphere (center and radius)");

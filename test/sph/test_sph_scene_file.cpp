@@ -350,6 +350,33 @@ TEST(SphSceneFile, FluidSpheresAndVelocityFields) {
   expectErrorAt(head + "  - {lo: [0, 0], hi: [1, 1], velocity: {spin: 1}}\n" + tail, 5, "unknown key 'spin'");
 }
 
+TEST(SphSceneFile, FluidFromAClosedMesh) {
+  // An octahedron |x| + |y| + |z| <= 1 as an OBJ beside the scene, scaled by 0.5 and moved to (2, 1, 0).
+  const fs::path dir = tempDir("fluid_mesh");
+  TriangleMesh octahedron;
+  const Vec3 corners[] = {Vec3(1, 0, 0),  Vec3(-1, 0, 0), Vec3(0, 1, 0),
+                          Vec3(0, -1, 0), Vec3(0, 0, 1),  Vec3(0, 0, -1)};
+  for (const Vec3& c : corners) octahedron.vertices.positions.push_back(c);
+  for (uint32_t x : {0u, 1u})
+    for (uint32_t y : {2u, 3u})
+      for (uint32_t z : {4u, 5u}) {
+        const bool flip = ((x == 1) != (y == 3)) != (z == 5);  // outward orientation
+        octahedron.triangles.push_back(flip ? Triangle{x, z, y} : Triangle{x, y, z});
+      }
+  writeObjMesh((dir / "octahedron.obj").string(), octahedron);
+  const std::string scene_path = (dir / "drop.yaml").string();
+  std::ofstream(scene_path) << "dimension: 3\nspacing: 0.025\nsolver: {smoothing_ratio: 2.5}\nfluid:\n"
+                               "  - {shape: mesh, mesh: octahedron.obj, scale: 0.5, translation: [2, 1, 0]}\n"
+                               "frames: {count: 1, time: 0.01}\n";
+  const SphScene scene = loadSphScene(scene_path);
+  // Volume 4/3 r^3 with r = 0.5: 0.1667 m^3 over 0.025^3 = 10,667 cells.
+  EXPECT_NEAR(double(scene.particles.size()), 4.0 / 3.0 * 0.125 / std::pow(0.025, 3), 200);
+  for (const Vec3& x : scene.particles.positions) EXPECT_LE((x - Vec3(2, 1, 0)).cwiseAbs().sum(), 0.5 + 1e-9);
+  const std::string head = "dimension: 3\nspacing: 0.025\nsolver: {smoothing_ratio: 2.5}\nfluid:\n";
+  expectErrorAt(head + "  - {lo: [0, 0, 0], hi: [1, 1, 1], mesh: octahedron.obj}\n", 5,
+                "only with shape: mesh");
+}
+
 TEST(SphSceneFile, MovingBoxesPlanesAndPerBoxSpacing) {
   const SphScene scene = parseSphScene(
       "dimension: 3\n"
