@@ -340,13 +340,18 @@ void SceneReader::readFluid(const YAML::Node& node, const std::string& where) {
   readVelocityField(node["velocity"], where + ".velocity", centre, first);
   readBlockTemperature(node, where, first);
   // Too few neighbours: in 3D, fluid below h = 2.5 dx pairs up under compression (the poly6 gradient vanishes
-  // at r -> 0) and its pressures read low.
+  // at r -> 0) and its pressures read low; in 2D, below h = 2 dx the kernel sums are too coarse.
   const double ratio = scene_.config.smoothing_length / blockSpacing(node, where);
   if (dimension_ == 3 && ratio < 2.5 - 1e-9)
     warn(node, where + ": h = " + shortNumber(ratio) + " x its spacing (about " +
                    std::to_string(long(std::lround(4.0 / 3.0 * M_PI * ratio * ratio * ratio - 1))) +
                    " neighbours): 3D fluid below h = 2.5 dx pairs up under compression and its hydrostatic "
                    "pressure reads 16 % low at 2-2.2 dx (docs/sph_choices.md); use smoothing_ratio >= 2.5");
+  if (dimension_ == 2 && ratio < 2 - 1e-9)
+    warn(node, where + ": h = " + shortNumber(ratio) + " x its spacing (about " +
+                   std::to_string(long(std::lround(M_PI * ratio * ratio - 1))) +
+                   " neighbours): too few for the kernel sums; Monaghan's elliptical drop is 3.7 % off at "
+                   "h = 1.5 dx, 2.2 % at 2 dx, 0.5 % at 3 dx (docs/validation.md); use smoothing_ratio >= 2");
 }
 
 void SceneReader::readVelocityField(const YAML::Node& node, const std::string& where, const Vec3& centre,

@@ -294,6 +294,17 @@ TEST(SphSceneFile, SettingsKnownToGiveWrongResultsWarnWithTheirLine) {
       << coarse.warnings[0];
   EXPECT_NE(coarse.warnings[0].find("smoothing_ratio >= 2.5"), std::string::npos);
   EXPECT_TRUE(withRatio("2.5").warnings.empty());
+  // 2D: below h = 2 dx.
+  const SphScene sparse = parseSphScene(
+      "dimension: 2\nspacing: 0.02\nsolver: {smoothing_ratio: 1.5}\nfluid:\n  - {lo: [0, 0], hi: [0.2, "
+      "0.2]}\n"
+      "frames: {count: 2, time: 0.01}\n",
+      "sparse.yaml");
+  ASSERT_EQ(sparse.warnings.size(), 1u);
+  EXPECT_NE(sparse.warnings[0].find("sparse.yaml:5:5: warning: fluid[0]: h = 1.5 x its spacing (about 6 "
+                                    "neighbours): too few"),
+            std::string::npos)
+      << sparse.warnings[0];
   // The monitors' keys.
   const SphScene monitors = parseSphScene(
       "dimension: 2\nspacing: 0.02\nsolver: {smoothing_ratio: 2.5, instability_window: 25, "
