@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/ros/sph_simulator.h"
 
+#include <relaxed_connectivity/SphProbes.h>
 #include <relaxed_connectivity/SphStats.h>
 #include <visualization_msgs/Marker.h>
 
@@ -12,6 +13,7 @@
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 #include "relaxed_connectivity/ros/simulation_loop.h"
 #include "relaxed_connectivity/sph/sph_output.h"
+#include "relaxed_connectivity/sph/sph_probes.h"
 #include "relaxed_connectivity/sph/sph_scene_reader.h"
 #include "relaxed_connectivity/sph/sph_simulation.h"
 #include "relaxed_connectivity/sph/sph_surface.h"
@@ -52,6 +54,7 @@ SphSimulator::SphSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   particles_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("particles", 1);
   surface_pub_ = private_nh_.advertise<visualization_msgs::Marker>("surface", 1);
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::SphStats>("stats", 1);
+  probes_pub_ = private_nh_.advertise<relaxed_connectivity::SphProbes>("probes", 10);
   if (!params_.scene.empty()) {
     std::string message;
     if (!load(params_.scene, params_.autostart, &message)) throw std::invalid_argument(message);
@@ -189,6 +192,37 @@ void SphSimulator::publish() {
   stats.frozen = simulation_->frozen();
   stats.instability = loop_.error();
   stats_pub_.publish(stats);
+  if (scene_->probes.enabled) {  // the scene's probes (its key probes), as rc_sph writes them per frame
+    const SphFluidConfig& config = simulation_->solver().config();
+    const SphKernels kernels(config.dimension, config.smoothing_length);
+    const SphBodyMeasures body = measureSphBody(particles);
+    auto point = [](const Vec3& v) {
+      geometry_msgs::Point p;
+      p.x = v.x(), p.y = v.y(), p.z = v.z();
+      return p;
+    };
+    relaxed_connectivity::SphProbes probes;
+    probes.header = stats.header;
+    probes.scene = scene_->name;
+    probes.time = stats.time;
+    probes.particles = uint32_t(body.particles);
+    probes.mass = body.mass;
+    probes.kinetic_energy = body.kinetic_energy;
+    probes.momentum.x = body.momentum.x(), probes.momentum.y = body.momentum.y();
+    probes.momentum.z = body.momentum.z();
+    probes.centre = point(body.centre);
+    probes.lo = point(body.lo);
+    probes.hi = point(body.hi);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) probes.second_moments[size_t(3 * r + c)] = body.second_moments(r, c);
+    for (const Vec3& x : scene_->probes.points) {
+      const SphPointSample sample = sampleSphPoint(particles, kernels, x);
+      probes.points.push_back(point(x));
+      probes.densities.push_back(sample.density);
+      probes.pressures.push_back(sample.pressure);
+    }
+    probes_pub_.publish(probes);
+  }
 }
 
 bool SphSimulator::loadCallback(relaxed_connectivity::LoadSphScene::Request& request,

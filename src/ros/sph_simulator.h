@@ -6,7 +6,9 @@
 //             (uint8: 0 fluid, 1 static boundary, 2 moving boundary); scenes with temperature add
 //             temperature (float32) and phase (uint8: 0 fluid, else the solid's id)), ~surface
 //             (visualization_msgs/Marker, TRIANGLE_LIST of the fluid surface, 8.2.7; only with ~surface
-//             true), ~stats (relaxed_connectivity/SphStats), all in frame_id
+//             true), ~stats (relaxed_connectivity/SphStats), ~probes (relaxed_connectivity/SphProbes:
+//             the liquid's measures and density and pressure at points, for scenes with the key probes), all
+//             in frame_id
 // Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N | reset),
 //             ~load_scene (relaxed_connectivity/LoadSphScene; a bad file is reported and changes nothing)
 // Parameters  (private) scene (file; empty: wait for ~load_scene), frame_id, rate (frames per second),
@@ -69,7 +71,7 @@ class SphSimulator {
   std::unique_ptr<SphScene> scene_;
   std::unique_ptr<SphSimulation> simulation_;  // solver, temperature, phase changes, sources
   double step_ms_ = 0.0;
-  ros::Publisher particles_pub_, surface_pub_, stats_pub_;
+  ros::Publisher particles_pub_, surface_pub_, stats_pub_, probes_pub_;
   ros::ServiceServer load_srv_;
 };
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/LoadSphScene.h>
 #include <relaxed_connectivity/SimulationCommand.h>
+#include <relaxed_connectivity/SphProbes.h>
 #include <relaxed_connectivity/SphStats.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -11,6 +12,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <mutex>
@@ -252,6 +254,57 @@ TEST(SphDemoLaunch, TemperatureScenesFreezeAndPublishTemperatureAndPhase) {
   EXPECT_FLOAT_EQ(coldest, -20.0f);  // the held rod
   EXPECT_LE(warmest, 20.0f);
   EXPECT_GT(warmest, 0.0f);
+}
+
+// A scene with probes: ~probes carries the liquid's measures and the point samples each frame, as rc_sph's
+// CSV does (test_sph_probes.cpp).
+TEST(SphDemoLaunch, ScenesWithProbesPublishThem) {
+  ros::NodeHandle nh;
+  std::mutex mutex;
+  std::vector<relaxed_connectivity::SphProbes> received;
+  ros::Subscriber probes_sub = nh.subscribe<relaxed_connectivity::SphProbes>(
+      "sph_sim/probes", 100, [&](const relaxed_connectivity::SphProbesConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        received.push_back(*m);
+      });
+  ros::ServiceClient load = nh.serviceClient<LoadSphScene>("sph_sim/load_scene");
+  ros::ServiceClient command = nh.serviceClient<SimulationCommand>("sph_sim/command");
+  ASSERT_TRUE(load.waitForExistence(ros::Duration(30.0)));
+  ASSERT_TRUE(waitFor([&] { return probes_sub.getNumPublishers() > 0; }, 30.0));
+  const std::string path = "/tmp/sph_demo_launch_probes.yaml";
+  std::ofstream(path) << "name: probed_drop\ndimension: 2\nspacing: 0.05\n"
+                         "solver: {smoothing_ratio: 3, gravity: [0, 0]}\n"
+                         "fluid:\n  - {shape: sphere, center: [0, 0], radius: 0.5, velocity: [1, 0]}\n"
+                         "probes: {points: [[0, 0], [4, 4]]}\nframes: {count: 10, time: 0.002}\n";
+  const rc::SphScene scene = rc::loadSphScene(path);
+  LoadSphScene load_drop;
+  load_drop.request.path = path;
+  load_drop.request.start = false;
+  ASSERT_TRUE(load.call(load_drop));
+  ASSERT_TRUE(load_drop.response.success) << load_drop.response.message;
+  SimulationCommand step;
+  step.request.command = "step";
+  step.request.steps = 5;
+  ASSERT_TRUE(command.call(step));
+  relaxed_connectivity::SphProbes stepped;
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (const auto& m : received)
+          if (m.scene == "probed_drop" && m.time > 0) stepped = m;
+        return stepped.time > 0;
+      },
+      10.0));
+  std::remove(path.c_str());
+  EXPECT_EQ(stepped.particles, scene.particles.size());
+  EXPECT_GT(stepped.mass, 0.0);
+  EXPECT_NEAR(stepped.momentum.x, stepped.mass, 1e-6 * stepped.mass);  // at 1 m/s, no forces on a free drop
+  EXPECT_NEAR(stepped.centre.x, stepped.time, 1e-6);
+  ASSERT_EQ(stepped.points.size(), 2u);
+  ASSERT_EQ(stepped.densities.size(), 2u);
+  EXPECT_NEAR(stepped.densities[0], 1000.0, 1.0);
+  EXPECT_TRUE(std::isnan(stepped.densities[1]));
+  EXPECT_NEAR(stepped.second_moments[0], stepped.second_moments[4], 1e-3);  // a disc
 }
 
 // config/rviz/sph_demo.rviz shows topics that sph_sim publishes.
