@@ -176,6 +176,21 @@ TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
   EXPECT_FALSE(loaded.running);
 }
 
+/// Loads a scene paused and asks for `steps` steps (both services must succeed).
+void loadPausedAndStep(ros::ServiceClient& load, ros::ServiceClient& command, const std::string& path,
+                       uint32_t steps) {
+  LoadSphScene request;
+  request.request.path = path;
+  request.request.start = false;
+  ASSERT_TRUE(load.call(request));
+  ASSERT_TRUE(request.response.success) << request.response.message;
+  SimulationCommand step;
+  step.request.command = "step";
+  step.request.steps = steps;
+  ASSERT_TRUE(command.call(step));
+  ASSERT_TRUE(step.response.success) << step.response.message;
+}
+
 // A scene with temperature (Fig. 8.5 in 2D): each step runs heat conduction and freezing as rc_sph does;
 // the particles carry temperature and phase, and the stats count the frozen particles (16 of 64 after 480
 // steps in rc_sph).
@@ -199,16 +214,7 @@ TEST(SphDemoLaunch, TemperatureScenesFreezeAndPublishTemperatureAndPhase) {
   // A paused node publishes only after a command: connect first.
   ASSERT_TRUE(waitFor(
       [&] { return particles_sub.getNumPublishers() > 0 && stats_sub.getNumPublishers() > 0; }, 30.0));
-  LoadSphScene load_rod;
-  load_rod.request.path = dir + "freezing_rod_2d.yaml";
-  load_rod.request.start = false;
-  ASSERT_TRUE(load.call(load_rod));
-  ASSERT_TRUE(load_rod.response.success) << load_rod.response.message;
-  SimulationCommand step;
-  step.request.command = "step";
-  step.request.steps = 480;
-  ASSERT_TRUE(command.call(step));
-  ASSERT_TRUE(step.response.success) << step.response.message;
+  ASSERT_NO_FATAL_FAILURE(loadPausedAndStep(load, command, dir + "freezing_rod_2d.yaml", 480));
   const SphStats stepped =
       waitForStats(inbox, [](const SphStats& m) { return m.scene == "freezing_rod_2d" && m.step == 480; });
   EXPECT_EQ(stepped.step, 480u);
@@ -277,15 +283,7 @@ TEST(SphDemoLaunch, ScenesWithProbesPublishThem) {
                          "fluid:\n  - {shape: sphere, center: [0, 0], radius: 0.5, velocity: [1, 0]}\n"
                          "probes: {points: [[0, 0], [4, 4]]}\nframes: {count: 10, time: 0.002}\n";
   const rc::SphScene scene = rc::loadSphScene(path);
-  LoadSphScene load_drop;
-  load_drop.request.path = path;
-  load_drop.request.start = false;
-  ASSERT_TRUE(load.call(load_drop));
-  ASSERT_TRUE(load_drop.response.success) << load_drop.response.message;
-  SimulationCommand step;
-  step.request.command = "step";
-  step.request.steps = 5;
-  ASSERT_TRUE(command.call(step));
+  ASSERT_NO_FATAL_FAILURE(loadPausedAndStep(load, command, path, 5));
   relaxed_connectivity::SphProbes stepped;
   ASSERT_TRUE(waitFor(
       [&] {
