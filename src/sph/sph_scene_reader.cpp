@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -17,6 +18,7 @@
 
 #include <Eigen/Geometry>
 
+#include "relaxed_connectivity/core/kd_tree.h"
 #include "relaxed_connectivity/mesh/fast_winding_number.h"
 #include "relaxed_connectivity/sph/sph_kernels.h"
 #include "relaxed_connectivity/sph/sph_lattice.h"
@@ -362,7 +364,7 @@ void SceneReader::readVelocityField(const YAML::Node& node, const std::string& w
   if (node.IsSequence()) {
     uniform = src_.vec(node, where, dimension_, true);
   } else {
-    src_.allowKeys(node, {"uniform", "gradient", "rotation", "about"}, where);
+    src_.allowKeys(node, {"uniform", "gradient", "rotation", "about", "file"}, where);
     if (node["uniform"]) uniform = src_.vec(node["uniform"], where + ".uniform", dimension_, true);
     if (node["about"]) about = src_.vec(node["about"], where + ".about", dimension_, true);
     if (const YAML::Node g = node["gradient"]) {
@@ -386,6 +388,51 @@ void SceneReader::readVelocityField(const YAML::Node& node, const std::string& w
     const Vec3 r = scene_.particles.positions[i] - about;
     scene_.particles.velocities[i] = uniform + gradient * r + rotation.cross(r);
   }
+  if (node.IsMap() && node["file"]) {  // plus the velocity of the nearest sample of the file
+    std::vector<Vec3> points, velocities;
+    readVelocitySamples(node["file"], where + ".file", &points, &velocities);
+    const KdTree tree(points);
+    for (size_t i = first; i < scene_.particles.size(); ++i) {
+      Neighbor nearest;
+      tree.knn(scene_.particles.positions[i], 1, &nearest);
+      scene_.particles.velocities[i] += velocities[nearest.index];
+    }
+  }
+}
+
+void SceneReader::readVelocitySamples(const YAML::Node& node, const std::string& what,
+                                      std::vector<Vec3>* points, std::vector<Vec3>* velocities) const {
+  const std::string file = src_.string(node, what);
+  std::filesystem::path path(file);
+  if (path.is_relative()) path = std::filesystem::path(src_.sourceName()).parent_path() / path;
+  std::ifstream in(path);
+  if (!in) src_.fail(node, what + ": cannot open '" + path.string() + "'");
+  const int n = dimension_;  // per line: the point, then the velocity (n numbers each)
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const size_t hash = line.find('#');
+    if (hash != std::string::npos) line.erase(hash);
+    for (char& c : line)
+      if (c == ',') c = ' ';
+    std::istringstream fields(line);
+    std::vector<double> values;
+    for (std::string token; fields >> token;) {
+      char* end = nullptr;
+      const double v = std::strtod(token.c_str(), &end);
+      if (end == token.c_str() || *end != '\0' || !std::isfinite(v))
+        src_.fail(node, what + ": " + path.string() + ":" + std::to_string(number) + ": '" + token +
+                            "' is not a finite number");
+      values.push_back(v);
+    }
+    if (values.empty()) continue;
+    if (int(values.size()) != 2 * n)
+      src_.fail(node, what + ": " + path.string() + ":" + std::to_string(number) + ": expected " +
+                          std::to_string(2 * n) + " numbers (" + (n == 2 ? "x y vx vy" : "x y z vx vy vz") +
+                          "), got " + std::to_string(values.size()));
+    points->emplace_back(values[0], values[1], n == 3 ? values[2] : 0.0);
+    velocities->emplace_back(values[size_t(n)], values[size_t(n) + 1], n == 3 ? values[5] : 0.0);
+  }
+  if (points->empty()) src_.fail(node, what + ": '" + path.string() + "' holds no samples");
 }
 
 void SceneReader::readMoving(const YAML::Node& node, const std::string& where) {

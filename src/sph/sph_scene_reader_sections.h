@@ -94,8 +94,13 @@ class SceneReader {
   void readFluid(const YAML::Node& node, const std::string& where);
   /// A block's `velocity`: [vx, vy(, vz)] (uniform), or a field {uniform: [..], gradient: [[..], ..] (v = A
   /// (x - about)), rotation: w (2D, about z) | [wx, wy, wz] (v = w x (x - about)), about: [..] (default
-  /// `centre`)} set on the particles from `first` on.
+  /// `centre`), file: samples (each particle adds the velocity of the nearest sample)} set on the particles
+  /// from `first` on.
   void readVelocityField(const YAML::Node& node, const std::string& where, const Vec3& centre, size_t first);
+  /// Velocity samples of a text file (relative to the scene file): per line x y (z) vx vy (vz), '#' starts a
+  /// comment, commas count as spaces; errors name the file's line.
+  void readVelocitySamples(const YAML::Node& node, const std::string& what, std::vector<Vec3>* points,
+                           std::vector<Vec3>* velocities) const;
   void readMoving(const YAML::Node& node, const std::string& where);
   void readBoundary(const YAML::Node& node);
   void readFrames(const YAML::Node& node);

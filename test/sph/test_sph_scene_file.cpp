@@ -349,6 +349,32 @@ TEST(SphSceneFile, FluidSpheresAndVelocityFields) {
     EXPECT_LT((disc.particles.velocities[i] - Vec3(x.x() - 1.5 * x.y(), -x.y() + 1.5 * x.x(), 0)).norm(),
               1e-12);
   }
+  // Samples from a file (beside the scene): each particle adds the velocity of the nearest sample.
+  const fs::path dir = tempDir("velocity_file");
+  std::ofstream(dir / "samples.txt") << "# x y vx vy\n0 0 1 0\n1, 1, 0, 2  # comma separated\n\n";
+  std::ofstream(dir / "field.yaml")
+      << "dimension: 2\nspacing: 0.05\nsolver: {smoothing_ratio: 3}\nfluid:\n"
+         "  - {lo: [0, 0], hi: [1, 1], velocity: {uniform: [0, 1], file: samples.txt}}\n"
+         "frames: {count: 1, time: 0.01}\n";
+  const SphScene sampled = loadSphScene((dir / "field.yaml").string());
+  for (size_t i = 0; i < sampled.particles.size(); ++i) {
+    const Vec3& x = sampled.particles.positions[i];
+    if (std::abs(x.x() + x.y() - 1) < 1e-9) continue;  // as near to both samples
+    const Vec3 expected = x.x() + x.y() < 1 ? Vec3(1, 1, 0) : Vec3(0, 3, 0);
+    EXPECT_EQ(sampled.particles.velocities[i], expected) << x.transpose();
+  }
+  std::ofstream(dir / "bad.txt") << "0 0 1 0\n0 0 1\n";
+  std::ofstream(dir / "bad.yaml") << "dimension: 2\nspacing: 0.05\nsolver: {smoothing_ratio: 3}\nfluid:\n"
+                                     "  - {lo: [0, 0], hi: [1, 1], velocity: {file: bad.txt}}\n"
+                                     "frames: {count: 1, time: 0.01}\n";
+  try {
+    loadSphScene((dir / "bad.yaml").string());
+    ADD_FAILURE() << "no error";
+  } catch (const SphSceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.txt:2: expected 4 numbers (x y vx vy), got 3"),
+              std::string::npos)
+        << e.what();
+  }
   const std::string head = "dimension: 2\nspacing: 0.05\nsolver: {smoothing_ratio: 3}\nfluid:\n";
   const std::string tail = "frames: {count: 1, time: 0.01}\n";
   expectErrorAt(head + "  - {shape: sphere, lo: [0, 0], center: [0, 0], radius: 1}\n" + tail, 5,
