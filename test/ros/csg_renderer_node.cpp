@@ -1,7 +1,7 @@
 // csg_renderer with two sphere patches on patch topics, checked against exact CSG ray casting
 // (analytic_csg.h): the tree selects patches, "0 - 1" carves patch 1 into patch 0 at the analytic depth, bad
 // expressions and bad clouds are rejected with a reason while the last good state keeps rendering, and
-// nothing is re-rendered while nothing changes.
+// nothing is re-rendered while nothing changes; a second node with back-face culling refuses differences.
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/CsgRenderStats.h>
@@ -367,6 +367,29 @@ TEST_F(CsgRendererNode, RendersTreesRejectsBadInputAndIdles) {
 }
 
 }  // namespace
+
+// With back-face culling on, a tree with a difference or complement is refused with the reason and the node
+// keeps its tree; intersections and unions are accepted.
+TEST(CsgRendererCulling, DifferencesAreRefusedIntersectionsAccepted) {
+  ros::NodeHandle nh;
+  ros::ServiceClient set_tree =
+      nh.serviceClient<relaxed_connectivity::SetCsgTree>("culling_renderer/set_csg_tree");
+  ASSERT_TRUE(set_tree.waitForExistence(ros::Duration(30.0)));
+  relaxed_connectivity::SetCsgTree difference;
+  difference.request.expression = "0 - 1";
+  ASSERT_TRUE(set_tree.call(difference));
+  EXPECT_FALSE(difference.response.success);
+  EXPECT_NE(difference.response.message.find("backface_culling"), std::string::npos)
+      << difference.response.message;
+  relaxed_connectivity::SetCsgTree complement;
+  complement.request.expression = "!0";
+  ASSERT_TRUE(set_tree.call(complement));
+  EXPECT_FALSE(complement.response.success);
+  relaxed_connectivity::SetCsgTree union_tree;
+  union_tree.request.expression = "0 | 1";
+  ASSERT_TRUE(set_tree.call(union_tree));
+  EXPECT_TRUE(union_tree.response.success) << union_tree.response.message;
+}
 
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
