@@ -215,23 +215,27 @@ Eigen::VectorXd LinearElasticModel::solveStatic(
     throw std::invalid_argument("solveStatic: forces has " + std::to_string(forces.size()) + " entries for " +
                                 std::to_string(dofs) + " dofs");
   Eigen::VectorXd u = Eigen::VectorXd::Zero(dofs);
-  std::vector<char> fixed(mesh_.numNodes(), 0);
+  std::vector<char> fixed(dofs, 0);
   for (const DisplacementConstraint& c : constraints) {
     if (c.node < 0 || c.node >= mesh_.numNodes())
       throw std::invalid_argument("solveStatic: constraint on node " + std::to_string(c.node) +
                                   " (mesh has " + std::to_string(mesh_.numNodes()) + " nodes)");
-    if (fixed[c.node])
-      throw std::invalid_argument("solveStatic: node " + std::to_string(c.node) + " constrained twice");
-    if (!c.displacement.allFinite())
-      throw std::invalid_argument("solveStatic: constraint on node " + std::to_string(c.node) +
-                                  " is not finite");
-    fixed[c.node] = 1;
-    u.segment<3>(3 * c.node) = c.displacement;
+    for (int k = 0; k < 3; ++k) {
+      if (!c.held[k]) continue;
+      if (fixed[3 * c.node + k])
+        throw std::invalid_argument("solveStatic: component " + std::string(1, char('x' + k)) + " of node " +
+                                    std::to_string(c.node) + " constrained twice");
+      if (!std::isfinite(c.displacement[k]))
+        throw std::invalid_argument("solveStatic: constraint on node " + std::to_string(c.node) +
+                                    " is not finite");
+      fixed[3 * c.node + k] = 1;
+      u[3 * c.node + k] = c.displacement[k];
+    }
   }
   std::vector<int> free_index(dofs, -1);
   int num_free = 0;
   for (int d = 0; d < dofs; ++d)
-    if (!fixed[d / 3]) free_index[d] = num_free++;
+    if (!fixed[d]) free_index[d] = num_free++;
   if (num_free == 0) return u;
 
   // K_ff u_f = f_f - K_fc u_c.
@@ -260,6 +264,14 @@ Eigen::VectorXd LinearElasticModel::solveStatic(
   for (int d = 0; d < dofs; ++d)
     if (free_index[d] >= 0) u[d] = u_free[free_index[d]];
   return u;
+}
+
+Eigen::VectorXd LinearElasticModel::reactions(const Eigen::VectorXd& displacements,
+                                              const Eigen::VectorXd& forces) const {
+  if (displacements.size() != numDofs() || forces.size() != numDofs())
+    throw std::invalid_argument("reactions: displacements and forces need " + std::to_string(numDofs()) +
+                                " entries");
+  return stiffness_ * displacements - forces;
 }
 
 std::vector<Vector6d> LinearElasticModel::elementStresses(int e, const Eigen::VectorXd& displacements) const {

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -19,10 +20,12 @@ namespace rc {
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
-/// All three displacement components of a node prescribed (Dirichlet).
+/// Prescribed displacement components of a node (Dirichlet): those with held[k] take displacement[k], the
+/// others stay free (a roller or a symmetry plane holds only the normal component).
 struct DisplacementConstraint {
   int node;
   Vec3 displacement;
+  std::array<bool, 3> held = {true, true, true};
 };
 
 /// Integration data of one element: samples, basis gradients and K_e (immutable, shared between models).
@@ -71,12 +74,14 @@ class LinearElasticModel {
   /// m_i = sum_e mu_i^e V_e rho (9.21).
   const Eigen::VectorXd& lumpedMasses() const { return lumped_masses_; }
 
-  /// Solves K U = F for the free dofs with the constrained nodes held at their displacements (sparse LDLT).
-  /// Returns the full displacement vector. Throws std::invalid_argument for a wrong force size, a bad or
-  /// repeated node, and std::runtime_error if K restricted to the free dofs is singular (rigid motions not
-  /// removed by the constraints).
+  /// Solves K U = F for the free dofs with the held components at their displacements (sparse LDLT).
+  /// Returns the full displacement vector. Throws std::invalid_argument for a wrong force size, a bad node or
+  /// a component held twice, and std::runtime_error if K restricted to the free dofs is singular (rigid
+  /// motions not removed by the constraints).
   Eigen::VectorXd solveStatic(const Eigen::VectorXd& forces,
                               const std::vector<DisplacementConstraint>& constraints) const;
+  /// The forces the constraints exert: K U - F (zero, up to round-off, at free dofs).
+  Eigen::VectorXd reactions(const Eigen::VectorXd& displacements, const Eigen::VectorXd& forces) const;
 
   /// Stress (Voigt: xx, yy, zz, xy, yz, zx) at each integration sample of element e.
   std::vector<Vector6d> elementStresses(int e, const Eigen::VectorXd& displacements) const;

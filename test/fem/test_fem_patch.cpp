@@ -319,6 +319,54 @@ TEST(LinearElasticity, PatchTestFailsWithoutGradientCorrection) {
   EXPECT_GT(result.max_displacement_error, 1e-5);
 }
 
+// Rollers: symmetry planes x = 0, y = 0, z = 0 each hold only their normal component, and the face x = 2 is
+// pulled to u_x = 2 delta (its other components free). The exact solution is uniaxial stress, u = (delta x,
+// -nu delta y, -nu delta z), which every patch mesh reproduces; the reactions on the pulled face add up to
+// E delta times its area, those of the opposite face to minus that, and free dofs carry none.
+TEST(LinearElasticity, RollersGiveUniaxialStressAndItsReactions) {
+  const double youngs = 1000.0, nu = 0.3, delta = 1e-3;
+  for (const NamedMesh& named : patchMeshes()) {
+    const PolyhedralMesh& mesh = named.mesh;
+    const LinearElasticModel model(mesh, youngs, nu);
+    std::vector<DisplacementConstraint> constraints;
+    for (int i = 0; i < mesh.numNodes(); ++i) {
+      const Vec3& x = mesh.node(i);
+      DisplacementConstraint c{
+          i, Vec3(std::abs(x.x() - kHi.x()) < 1e-12 ? delta * kHi.x() : 0.0, 0, 0), {false, false, false}};
+      c.held = {std::abs(x.x()) < 1e-12 || std::abs(x.x() - kHi.x()) < 1e-12, std::abs(x.y()) < 1e-12,
+                std::abs(x.z()) < 1e-12};
+      if (c.held[0] || c.held[1] || c.held[2]) constraints.push_back(c);
+    }
+    const Eigen::VectorXd f = Eigen::VectorXd::Zero(model.numDofs());
+    const Eigen::VectorXd u = model.solveStatic(f, constraints);
+    double error = 0;
+    for (int i = 0; i < mesh.numNodes(); ++i) {
+      const Vec3& x = mesh.node(i);
+      error = std::max(
+          error, (u.segment<3>(3 * i) - delta * Vec3(x.x(), -nu * x.y(), -nu * x.z())).cwiseAbs().maxCoeff());
+    }
+    const Eigen::VectorXd r = model.reactions(u, f);
+    double pulled = 0, opposite = 0, free_dofs = 0;
+    std::vector<char> held(size_t(model.numDofs()), 0);
+    for (const DisplacementConstraint& c : constraints)
+      for (int k = 0; k < 3; ++k) held[size_t(3 * c.node + k)] = c.held[k];
+    for (int i = 0; i < mesh.numNodes(); ++i) {
+      if (std::abs(mesh.node(i).x() - kHi.x()) < 1e-12) pulled += r[3 * i];
+      if (std::abs(mesh.node(i).x()) < 1e-12) opposite += r[3 * i];
+      for (int k = 0; k < 3; ++k)
+        if (!held[size_t(3 * i + k)]) free_dofs = std::max(free_dofs, std::abs(r[3 * i + k]));
+    }
+    const double area = kHi.y() * kHi.z(), expected = youngs * delta * area;
+    std::printf(
+        "%-7s rollers: displacement error %.2e (of %.1e), reactions %.6f / %.6f (exact %.6f), free %.1e\n",
+        named.name.c_str(), error, delta * kHi.x(), pulled, opposite, expected, free_dofs);
+    EXPECT_LT(error, 1e-10 * delta * kHi.x()) << named.name;
+    EXPECT_NEAR(pulled, expected, 1e-9 * expected) << named.name;
+    EXPECT_NEAR(opposite, -expected, 1e-9 * expected) << named.name;
+    EXPECT_LT(free_dofs, 1e-9 * expected) << named.name;
+  }
+}
+
 TEST(LinearElasticity, SolveStaticRejectsBadInput) {
   const LinearElasticModel model(PolyhedralMesh::hexahedralGrid(kLo, kHi, 1, 1, 1), 1000.0, 0.3);
   const Eigen::VectorXd f = Eigen::VectorXd::Zero(model.numDofs());
@@ -326,6 +374,17 @@ TEST(LinearElasticity, SolveStaticRejectsBadInput) {
   EXPECT_THROW(model.solveStatic(Eigen::VectorXd::Zero(3), {{0, Vec3::Zero()}}), std::invalid_argument);
   EXPECT_THROW(model.solveStatic(f, {{8, Vec3::Zero()}}), std::invalid_argument);
   EXPECT_THROW(model.solveStatic(f, {{0, Vec3::Zero()}, {0, Vec3::Zero()}}), std::invalid_argument);
+  // A component held twice is refused; two constraints on different components of a node are not.
+  try {
+    model.solveStatic(f, {{0, Vec3::Zero(), {false, true, false}}, {0, Vec3::Zero(), {false, true, true}}});
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("component y of node 0 constrained twice"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(model.solveStatic(
+                   f, {{0, Vec3::Zero(), {true, false, false}}, {0, Vec3::Zero(), {false, true, false}}}),
+               std::runtime_error);  // (then singular: rigid motions remain, not "twice")
 }
 
 // ---------------------------------------------------------------------------------------------------------
