@@ -5,6 +5,7 @@
 // of config/fem/fig9_3_single_element.yaml.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -61,6 +62,27 @@ struct FemSceneOutput {
   VtuEncoding encoding = VtuEncoding::kAppendedRaw;
 };
 
+/// What a run computes (key analysis): the implicit warped dynamics over the frames, or the linear static
+/// equilibrium K U = F of the rest mesh with the held regions and loads (one solve; output frames 0 and 1).
+enum class FemAnalysis { kDynamic, kStatic };
+
+/// Key held: the nodes whose rest positions lie in the box [lo, hi] (closed, with a tolerance of 1e-9 of the
+/// mesh's diagonal) hold the listed components at `displacement` (a roller or a symmetry plane holds one).
+struct FemHeldRegion {
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  std::array<bool, 3> components = {true, true, true};
+  Vec3 displacement = Vec3::Zero();
+  std::vector<int> nodes;  ///< filled by the reader (never empty)
+};
+
+/// Key loads: a total force spread equally over the nodes in the box [lo, hi] (nodal forces; on a regular
+/// grid face the consistent load differs at its rim, which a resolution study sees).
+struct FemLoad {
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  Vec3 force = Vec3::Zero();
+  std::vector<int> nodes;  ///< filled by the reader (never empty)
+};
+
 /// A loaded scene: the placed rest mesh, material, dynamics options (incl. ground), initial velocities.
 struct FemScene {
   std::string name;  ///< `name:` or the file name without extension
@@ -77,6 +99,11 @@ struct FemScene {
   int frame_count = 1, steps_per_frame = 1;
   std::vector<FemSceneCut> cuts;  ///< sorted by time
   FemSceneOutput output;
+  FemAnalysis analysis = FemAnalysis::kDynamic;
+  std::vector<FemHeldRegion> held;  ///< analysis: static only (so far)
+  std::vector<FemLoad> loads;       ///< analysis: static only (so far)
+  /// analysis: static: a body force per unit mass (e.g. gravity), f_i = m_i a on the lumped masses (9.21).
+  Vec3 body_acceleration = Vec3::Zero();
   double frameTime() const { return steps_per_frame * dynamics.time_step; }
 };
 

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -45,20 +46,38 @@ class SceneReader {
       : src_(src), scene_(*scene), base_dir_(std::move(base_dir)) {}
 
   void read(const YAML::Node& root) {
-    src_.allowKeys(
-        root, {"name", "mesh", "placement", "material", "dynamics", "ground", "frames", "cuts", "output"},
-        "scene");
+    src_.allowKeys(root,
+                   {"name", "mesh", "placement", "material", "dynamics", "ground", "frames", "cuts", "output",
+                    "analysis", "held", "loads", "body_acceleration"},
+                   "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
+    if (const YAML::Node a = root["analysis"])
+      scene_.analysis = src_.choice<FemAnalysis>(
+          a, "analysis", {{"dynamic", FemAnalysis::kDynamic}, {"static", FemAnalysis::kStatic}});
+    const bool dynamic = scene_.analysis == FemAnalysis::kDynamic;
+    for (const char* key : {"held", "loads", "body_acceleration"})
+      if (root[key] && dynamic)
+        src_.fail(root[key],
+                  std::string(key) + ": only with analysis: static (dynamic runs do not take them yet)");
+    for (const char* key : {"ground", "cuts"})
+      if (root[key] && !dynamic) src_.fail(root[key], std::string(key) + ": not with analysis: static");
     readMaterial(src_.require(root, "material", "scene"));
-    readDynamics(src_.require(root, "dynamics", "scene"));
+    if (dynamic || root["dynamics"]) readDynamics(src_.require(root, "dynamics", "scene"));
     if (root["ground"]) readGround(root["ground"]);
-    readFrames(src_.require(root, "frames", "scene"));
+    if (dynamic || root["frames"]) readFrames(src_.require(root, "frames", "scene"));
+    if (!dynamic) scene_.frame_count = 1;  // frame 0: the rest state, frame 1: the equilibrium
     if (root["cuts"]) readCuts(root["cuts"]);
     if (root["output"]) readOutput(root["output"]);
     const YAML::Node mesh = src_.require(root, "mesh", "scene");
     readMesh(mesh);
     PolyhedralMesh built = buildMesh(mesh);
     place(root["placement"], std::move(built), mesh);
+    if (root["body_acceleration"])
+      scene_.body_acceleration = src_.vec3(root["body_acceleration"], "body_acceleration");
+    if (root["held"]) readHeld(root["held"]);
+    if (root["loads"]) readLoads(root["loads"]);
+    if (!dynamic && scene_.held.empty())
+      src_.fail(root, "analysis: static needs 'held' regions (else the body is free to move rigidly)");
   }
 
  private:
@@ -134,6 +153,73 @@ class SceneReader {
       if (s["contact_updates"])
         d.pcg_contact_updates =
             int(src_.integer(s["contact_updates"], "dynamics.solver.contact_updates", 0, 1000000));
+    }
+  }
+
+  /// The nodes of the placed mesh in the closed box of `node` (keys lo, hi); fails if none is.
+  std::vector<int> nodesInBox(const YAML::Node& node, const std::string& where, Vec3* lo, Vec3* hi) const {
+    *lo = src_.vec3(src_.require(node, "lo", where), where + ".lo");
+    *hi = src_.vec3(src_.require(node, "hi", where), where + ".hi");
+    for (int k = 0; k < 3; ++k)
+      if (!((*lo)[k] <= (*hi)[k])) src_.fail(node["hi"], where + ": hi must not be below lo");
+    const PolyhedralMesh& mesh = *scene_.mesh;
+    Vec3 mesh_lo = mesh.node(0), mesh_hi = mesh.node(0);
+    for (int i = 0; i < mesh.numNodes(); ++i) {
+      mesh_lo = mesh_lo.cwiseMin(mesh.node(i));
+      mesh_hi = mesh_hi.cwiseMax(mesh.node(i));
+    }
+    const double tolerance = 1e-9 * (mesh_hi - mesh_lo).norm();
+    std::vector<int> nodes;
+    for (int i = 0; i < mesh.numNodes(); ++i)
+      if (((mesh.node(i) - *lo).array() >= -tolerance).all() &&
+          ((*hi - mesh.node(i)).array() >= -tolerance).all())
+        nodes.push_back(i);
+    if (nodes.empty()) src_.fail(node, where + ": the box holds no node of the mesh");
+    return nodes;
+  }
+
+  void readHeld(const YAML::Node& node) {
+    if (!node.IsSequence())
+      src_.fail(node, "held: expected a list of regions {lo, hi, components, displacement}");
+    for (size_t r = 0; r < node.size(); ++r) {
+      const std::string where = "held[" + std::to_string(r) + "]";
+      src_.allowKeys(node[r], {"lo", "hi", "components", "displacement"}, where);
+      FemHeldRegion region;
+      region.nodes = nodesInBox(node[r], where, &region.lo, &region.hi);
+      if (const YAML::Node c = node[r]["components"]) {
+        const std::string names = src_.string(c, where + ".components");
+        region.components = {false, false, false};
+        for (char k : names) {
+          if (k < 'x' || k > 'z')
+            src_.fail(c, where + ".components: '" + names + "' (letters of xyz, e.g. xz)");
+          if (region.components[size_t(k - 'x')])
+            src_.fail(c, where + ".components: '" + names + "' repeats " + k);
+          region.components[size_t(k - 'x')] = true;
+        }
+        if (names.empty()) src_.fail(c, where + ".components: empty (letters of xyz)");
+      }
+      if (node[r]["displacement"])
+        region.displacement = src_.vec3(node[r]["displacement"], where + ".displacement");
+      for (const FemHeldRegion& other : scene_.held)
+        for (int k = 0; k < 3; ++k)
+          if (other.components[size_t(k)] && region.components[size_t(k)])
+            for (int i : region.nodes)
+              if (std::find(other.nodes.begin(), other.nodes.end(), i) != other.nodes.end())
+                src_.fail(node[r], where + ": node " + std::to_string(i) + " already holds " +
+                                       std::string(1, char('x' + k)) + " in an earlier region");
+      scene_.held.push_back(std::move(region));
+    }
+  }
+
+  void readLoads(const YAML::Node& node) {
+    if (!node.IsSequence()) src_.fail(node, "loads: expected a list of {lo, hi, force}");
+    for (size_t r = 0; r < node.size(); ++r) {
+      const std::string where = "loads[" + std::to_string(r) + "]";
+      src_.allowKeys(node[r], {"lo", "hi", "force"}, where);
+      FemLoad load;
+      load.nodes = nodesInBox(node[r], where, &load.lo, &load.hi);
+      load.force = src_.vec3(src_.require(node[r], "force", where), where + ".force");
+      scene_.loads.push_back(std::move(load));
     }
   }
 

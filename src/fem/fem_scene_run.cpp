@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "relaxed_connectivity/fem/fem_static.h"
 #include "relaxed_connectivity/io/pvd_io.h"
 
 namespace rc {
@@ -35,9 +36,82 @@ std::string jsonString(const std::string& s) {
   return out + "\"";
 }
 
+std::string vec3Json(const Vec3& v) {
+  return "[" + formatNumber(v.x()) + "," + formatNumber(v.y()) + "," + formatNumber(v.z()) + "]";
+}
+
+/// ,"analysis":"static","max_displacement":..,"held_reactions":[[..],..],"load_displacements":[[..],..]
+std::string staticJson(const FemRunStats& s) {
+  std::string j = ",\"analysis\":\"static\",\"max_displacement\":" + formatNumber(s.max_displacement) +
+                  ",\"held_reactions\":[";
+  for (size_t k = 0; k < s.held_reactions.size(); ++k) j += (k ? "," : "") + vec3Json(s.held_reactions[k]);
+  j += "],\"load_displacements\":[";
+  for (size_t k = 0; k < s.load_displacements.size(); ++k)
+    j += (k ? "," : "") + vec3Json(s.load_displacements[k]);
+  return j + "]";
+}
+
+/// analysis: static: one solve, the rest state and the equilibrium as frames 0 and 1.
+FemRunStats runFemStatic(const FemScene& scene, const FemRunOptions& options) {
+  FemRunStats stats;
+  stats.scene = scene.name;
+  stats.static_analysis = true;
+  stats.frame_count = 1;
+  stats.nodes_start = stats.nodes = scene.mesh->numNodes();
+  stats.elements_start = stats.elements = scene.mesh->numElements();
+  stats.bodies = 1;
+  FemStaticResult result;
+  try {
+    result = solveFemStatic(scene);
+  } catch (const std::exception& e) {
+    stats.error = e.what();
+    return stats;
+  }
+  stats.frames = 1;
+  stats.max_displacement = result.max_displacement;
+  stats.held_reactions = result.held_reactions;
+  stats.load_displacements = result.load_displacements;
+  stats.times.solve = stats.wall_seconds = result.seconds;
+  const bool write =
+      !options.out_dir.empty() && scene.output.every > 0 && (scene.output.vtu || scene.output.obj);
+  if (!write) return stats;
+  const Clock::time_point start = Clock::now();
+  std::filesystem::create_directories(options.out_dir);
+  const int n = scene.mesh->numNodes();
+  Eigen::VectorXd rest(3 * n), velocities = Eigen::VectorXd::Zero(3 * n);
+  for (int i = 0; i < n; ++i) rest.segment<3>(3 * i) = scene.mesh->node(i);
+  const Eigen::VectorXd deformed = rest + result.displacements;
+  std::vector<PvdEntry> pvd;
+  for (int frame = 0; frame <= 1; ++frame) {
+    const std::vector<FemBodyState> states = {
+        {scene.mesh.get(), frame == 0 ? &rest : &deformed, &velocities}};
+    const std::string number = frame == 0 ? "0000" : "0001";
+    const std::filesystem::path dir(options.out_dir);
+    if (scene.output.vtu) {
+      const std::string file = scene.name + "_" + number + ".vtu";
+      writeFemVtu((dir / file).string(), states, scene.output.encoding);
+      stats.files.push_back((dir / file).string());
+      pvd.push_back({file, double(frame)});
+    }
+    if (scene.output.obj) {
+      const std::string file = (dir / (scene.name + "_surface_" + number + ".obj")).string();
+      writeFemObj(file, states);
+      stats.files.push_back(file);
+    }
+  }
+  if (!pvd.empty()) {
+    const std::string pvd_path = (std::filesystem::path(options.out_dir) / (scene.name + ".pvd")).string();
+    writePvd(pvd_path, pvd);
+    stats.files.push_back(pvd_path);
+  }
+  stats.times.output = secondsSince(start);
+  return stats;
+}
+
 }  // namespace
 
 FemRunStats runFemScene(const FemScene& scene, const FemRunOptions& options) {
+  if (scene.analysis == FemAnalysis::kStatic) return runFemStatic(scene, options);
   FemRunStats stats;
   stats.scene = scene.name;
   stats.frame_count = scene.frame_count;
@@ -153,6 +227,7 @@ std::string femRunStatsJson(const FemRunStats& s) {
     << ",\"unconverged_solves\":" << s.unconverged_solves
     << ",\"min_ground_distance\":" << formatNumber(s.min_ground_distance)
     << ",\"kinetic_energy\":" << formatNumber(s.kinetic_energy)
+    << (s.static_analysis ? staticJson(s) : std::string())
     << ",\"error\":" << (s.error.empty() ? std::string("null") : jsonString(s.error))
     << ",\"files\":" << s.files.size() << "}";
   return j.str();

@@ -43,12 +43,18 @@ struct FemRunStats {
   long unconverged_solves = 0;
   double min_ground_distance = 0.0;  ///< at the end
   double kinetic_energy = 0.0;       ///< at the end, all bodies
-  std::string error;                 ///< empty: completed; else why the run stopped
+  /// analysis: static (fem_static.h): the largest displacement, per held region the sum of its reactions,
+  /// per load region the mean displacement of its nodes.
+  bool static_analysis = false;
+  double max_displacement = 0.0;
+  std::vector<Vec3> held_reactions, load_displacements;
+  std::string error;  ///< empty: completed; else why the run stopped
   std::vector<std::string> files;
 };
 
 /// Runs scene.frame_count frames of scene.steps_per_frame steps, writing the outputs the scene asks for.
-/// A failing step or cut stops the run (reported in FemRunStats::error); I/O errors throw.
+/// A failing step or cut stops the run (reported in FemRunStats::error); I/O errors throw. A static scene
+/// is solved once (solveFemStatic); its outputs are frame 0 (rest) and frame 1 (the equilibrium).
 FemRunStats runFemScene(const FemScene& scene, const FemRunOptions& options = {});
 
 /// The statistics as one line of JSON (no newline); non-finite numbers become null.

@@ -129,6 +129,9 @@ std::vector<Vec3> nodeVelocityIncrements(const WarpedDynamics& from) {
 
 FemSimulation::FemSimulation(const FemScene& scene) : scene_(scene) {
   if (!scene_.mesh) throw std::invalid_argument("FemSimulation: the scene has no mesh");
+  if (scene_.analysis != FemAnalysis::kDynamic)
+    throw std::invalid_argument("FemSimulation: '" + scene_.name +
+                                "' is a static scene (analysis: static): runFemScene / rc_fem solve it once");
   bodies_.push_back(makeBody(*scene_.mesh, std::vector<Vec3>(scene_.mesh->numNodes(), Vec3::Zero()),
                              scene_.initial_velocities));
 }
