@@ -158,10 +158,7 @@ class SceneReader {
 
   /// The nodes of the placed mesh in the closed box of `node` (keys lo, hi); fails if none is.
   std::vector<int> nodesInBox(const YAML::Node& node, const std::string& where, Vec3* lo, Vec3* hi) const {
-    *lo = src_.vec3(src_.require(node, "lo", where), where + ".lo");
-    *hi = src_.vec3(src_.require(node, "hi", where), where + ".hi");
-    for (int k = 0; k < 3; ++k)
-      if (!((*lo)[k] <= (*hi)[k])) src_.fail(node["hi"], where + ": hi must not be below lo");
+    src_.box(node, where, lo, hi);
     const PolyhedralMesh& mesh = *scene_.mesh;
     Vec3 mesh_lo = mesh.node(0), mesh_hi = mesh.node(0);
     for (int i = 0; i < mesh.numNodes(); ++i) {
@@ -179,48 +176,50 @@ class SceneReader {
   }
 
   void readHeld(const YAML::Node& node) {
-    if (!node.IsSequence())
-      src_.fail(node, "held: expected a list of regions {lo, hi, components, displacement}");
-    for (size_t r = 0; r < node.size(); ++r) {
-      const std::string where = "held[" + std::to_string(r) + "]";
-      src_.allowKeys(node[r], {"lo", "hi", "components", "displacement"}, where);
-      FemHeldRegion region;
-      region.nodes = nodesInBox(node[r], where, &region.lo, &region.hi);
-      if (const YAML::Node c = node[r]["components"]) {
-        const std::string names = src_.string(c, where + ".components");
-        region.components = {false, false, false};
-        for (char k : names) {
-          if (k < 'x' || k > 'z')
-            src_.fail(c, where + ".components: '" + names + "' (letters of xyz, e.g. xz)");
-          if (region.components[size_t(k - 'x')])
-            src_.fail(c, where + ".components: '" + names + "' repeats " + k);
-          region.components[size_t(k - 'x')] = true;
-        }
-        if (names.empty()) src_.fail(c, where + ".components: empty (letters of xyz)");
-      }
-      if (node[r]["displacement"])
-        region.displacement = src_.vec3(node[r]["displacement"], where + ".displacement");
-      for (const FemHeldRegion& other : scene_.held)
-        for (int k = 0; k < 3; ++k)
-          if (other.components[size_t(k)] && region.components[size_t(k)])
-            for (int i : region.nodes)
-              if (std::find(other.nodes.begin(), other.nodes.end(), i) != other.nodes.end())
-                src_.fail(node[r], where + ": node " + std::to_string(i) + " already holds " +
-                                       std::string(1, char('x' + k)) + " in an earlier region");
-      scene_.held.push_back(std::move(region));
+    src_.forEachEntry(node, "held", "regions {lo, hi, components, displacement}",
+                      [&](const YAML::Node& entry, const std::string& where) {
+                        src_.allowKeys(entry, {"lo", "hi", "components", "displacement"}, where);
+                        FemHeldRegion region;
+                        region.nodes = nodesInBox(entry, where, &region.lo, &region.hi);
+                        if (const YAML::Node c = entry["components"])
+                          region.components = components(c, where);
+                        if (entry["displacement"])
+                          region.displacement = src_.vec3(entry["displacement"], where + ".displacement");
+                        for (const FemHeldRegion& other : scene_.held)
+                          for (int k = 0; k < 3; ++k)
+                            if (other.components[size_t(k)] && region.components[size_t(k)])
+                              for (int i : region.nodes)
+                                if (std::find(other.nodes.begin(), other.nodes.end(), i) != other.nodes.end())
+                                  src_.fail(entry, where + ": node " + std::to_string(i) + " already holds " +
+                                                       std::string(1, char('x' + k)) +
+                                                       " in an earlier region");
+                        scene_.held.push_back(std::move(region));
+                      });
+  }
+
+  /// Key components: letters of xyz, each at most once.
+  std::array<bool, 3> components(const YAML::Node& node, const std::string& where) const {
+    const std::string names = src_.string(node, where + ".components");
+    std::array<bool, 3> held = {false, false, false};
+    if (names.empty()) src_.fail(node, where + ".components: empty (letters of xyz)");
+    for (char k : names) {
+      if (k < 'x' || k > 'z')
+        src_.fail(node, where + ".components: '" + names + "' (letters of xyz, e.g. xz)");
+      if (held[size_t(k - 'x')]) src_.fail(node, where + ".components: '" + names + "' repeats " + k);
+      held[size_t(k - 'x')] = true;
     }
+    return held;
   }
 
   void readLoads(const YAML::Node& node) {
-    if (!node.IsSequence()) src_.fail(node, "loads: expected a list of {lo, hi, force}");
-    for (size_t r = 0; r < node.size(); ++r) {
-      const std::string where = "loads[" + std::to_string(r) + "]";
-      src_.allowKeys(node[r], {"lo", "hi", "force"}, where);
-      FemLoad load;
-      load.nodes = nodesInBox(node[r], where, &load.lo, &load.hi);
-      load.force = src_.vec3(src_.require(node[r], "force", where), where + ".force");
-      scene_.loads.push_back(std::move(load));
-    }
+    src_.forEachEntry(node, "loads", "{lo, hi, force}",
+                      [&](const YAML::Node& entry, const std::string& where) {
+                        src_.allowKeys(entry, {"lo", "hi", "force"}, where);
+                        FemLoad load;
+                        load.nodes = nodesInBox(entry, where, &load.lo, &load.hi);
+                        load.force = src_.vec3(src_.require(entry, "force", where), where + ".force");
+                        scene_.loads.push_back(std::move(load));
+                      });
   }
 
   void readGround(const YAML::Node& node) {

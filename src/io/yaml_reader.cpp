@@ -39,6 +39,12 @@ std::string YamlReader::at(const YAML::Node& node) const {
   return s.str();
 }
 
+void YamlReader::box(const YAML::Node& map, const std::string& where, Vec3* lo, Vec3* hi) const {
+  *lo = vec3(require(map, "lo", where), where + ".lo");
+  *hi = vec3(require(map, "hi", where), where + ".hi");
+  if (!(lo->array() <= hi->array()).all()) fail(map["hi"], where + ": hi must not be below lo");
+}
+
 void YamlReader::fail(const YAML::Node& node, const std::string& problem) const {
   std::ostringstream s;
   s << at(node) << ": " << problem;

@@ -43,6 +43,16 @@ class YamlReader {
   std::string string(const YAML::Node& node, const std::string& what) const;
   /// [x, y, z].
   Vec3 vec3(const YAML::Node& node, const std::string& what) const;
+  /// The closed box {lo: [..], hi: [..]} of a map (keys required; fails where hi lies below lo).
+  void box(const YAML::Node& map, const std::string& where, Vec3* lo, Vec3* hi) const;
+  /// Calls read(entry, "<what>[k]") for every entry of the list `node`; fails with "<what>: expected a list
+  /// of <items>" for anything else.
+  template <class Read>
+  void forEachEntry(const YAML::Node& node, const std::string& what, const std::string& items,
+                    Read&& read) const {
+    if (!node.IsSequence()) fail(node, what + ": expected a list of " + items);
+    for (size_t k = 0; k < node.size(); ++k) read(node[k], what + "[" + std::to_string(k) + "]");
+  }
   /// The value of one of the named choices (an enum); fails with "<what>: unknown '<name>' (known: a, b)".
   template <class Value>
   Value choice(const YAML::Node& node, const std::string& what,

@@ -369,22 +369,18 @@ class SceneReader {
   }
 
   void readPins(const YAML::Node& node) {
-    if (!node.IsSequence()) src_.fail(node, "pins: expected a list of {lo, hi[, velocity]}");
-    for (size_t k = 0; k < node.size(); ++k) {
-      const std::string where = "pins[" + std::to_string(k) + "]";
-      src_.allowKeys(node[k], {"lo", "hi", "velocity"}, where);
-      ShellScenePin pin;
-      pin.lo = src_.vec3(src_.require(node[k], "lo", where), where + ".lo");
-      pin.hi = src_.vec3(src_.require(node[k], "hi", where), where + ".hi");
-      if (!(pin.lo.array() <= pin.hi.array()).all())
-        src_.fail(node[k]["hi"], where + ": hi must not be below lo");
-      if (node[k]["velocity"]) pin.velocity = src_.vec3(node[k]["velocity"], where + ".velocity");
-      size_t inside = 0;
-      for (const Vec3& p : scene_.surfels.positions)
-        inside += (p.array() >= pin.lo.array()).all() && (p.array() <= pin.hi.array()).all();
-      if (inside == 0) src_.fail(node[k], where + ": the box holds no surfel of the source");
-      scene_.pins.push_back(pin);
-    }
+    src_.forEachEntry(
+        node, "pins", "{lo, hi[, velocity]}", [&](const YAML::Node& entry, const std::string& where) {
+          src_.allowKeys(entry, {"lo", "hi", "velocity"}, where);
+          ShellScenePin pin;
+          src_.box(entry, where, &pin.lo, &pin.hi);
+          if (entry["velocity"]) pin.velocity = src_.vec3(entry["velocity"], where + ".velocity");
+          size_t inside = 0;
+          for (const Vec3& p : scene_.surfels.positions)
+            inside += (p.array() >= pin.lo.array()).all() && (p.array() <= pin.hi.array()).all();
+          if (inside == 0) src_.fail(entry, where + ": the box holds no surfel of the source");
+          scene_.pins.push_back(pin);
+        });
   }
 
   void readBalloon(const YAML::Node& node) {

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "../shared_data.h"
+#include "fem_scene_test_support.h"
 #include "relaxed_connectivity/fem/fem_mesh_source.h"
 #include "relaxed_connectivity/fem/fem_output.h"
 #include "relaxed_connectivity/fem/fem_scene_reader.h"
@@ -38,18 +39,11 @@ std::vector<std::string> shippedScenes() {
 }
 
 std::string parseError(const std::string& yaml) {
-  try {
-    parseFemScene(yaml, "bad.yaml");
-  } catch (const FemSceneError& e) {
-    return e.what();
-  }
-  return "";
+  return femSceneParseError(yaml);
 }
 
 void expectErrorAt(const std::string& yaml, int line, const std::string& words) {
-  const std::string message = parseError(yaml);
-  EXPECT_EQ(message.rfind("bad.yaml:" + std::to_string(line) + ":", 0), 0u) << message;
-  EXPECT_NE(message.find(words), std::string::npos) << message;
+  expectFemSceneErrorAt(yaml, line, words);
 }
 
 const char* kMinimal =

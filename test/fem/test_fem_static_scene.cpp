@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <string>
 
+#include "fem_scene_test_support.h"
 #include "relaxed_connectivity/fem/fem_scene_reader.h"
 #include "relaxed_connectivity/fem/fem_scene_run.h"
 #include "relaxed_connectivity/fem/fem_static.h"
@@ -15,14 +16,7 @@ namespace rc {
 namespace {
 
 void expectErrorAt(const std::string& yaml, int line, const std::string& words) {
-  try {
-    parseFemScene(yaml, "static.yaml", ".");
-    ADD_FAILURE() << "no error for: " << yaml;
-  } catch (const FemSceneError& e) {
-    const std::string message = e.what();
-    EXPECT_EQ(message.rfind("static.yaml:" + std::to_string(line) + ":", 0), 0u) << message;
-    EXPECT_NE(message.find(words), std::string::npos) << message;
-  }
+  expectFemSceneErrorAt(yaml, line, words);
 }
 
 const char* kRollers =

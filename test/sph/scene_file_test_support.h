@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "../scene_error_support.h"
 #include "relaxed_connectivity/core/triangle_mesh.h"
 #include "relaxed_connectivity/sph/sph_scene_reader.h"
 
@@ -21,19 +22,12 @@ inline std::string sphSceneDir() {
 
 /// The loader's message for `yaml` read as "bad.yaml" (empty if it loads).
 inline std::string parseError(const std::string& yaml) {
-  try {
-    parseSphScene(yaml, "bad.yaml");
-  } catch (const SphSceneError& e) {
-    return e.what();
-  }
-  return "";
+  return test::sceneParseError<SphSceneError>([&] { parseSphScene(yaml, "bad.yaml"); });
 }
 
 /// The message starts with "bad.yaml:<line>:" and contains `words`.
 inline void expectErrorAt(const std::string& yaml, int line, const std::string& words) {
-  const std::string message = parseError(yaml);
-  EXPECT_EQ(message.rfind("bad.yaml:" + std::to_string(line) + ":", 0), 0u) << message;
-  EXPECT_NE(message.find(words), std::string::npos) << message;
+  test::expectMessageAt(parseError(yaml), "bad.yaml", line, words);
 }
 
 /// Edges used by other than exactly two triangles (0 for a closed manifold mesh).
