@@ -87,9 +87,13 @@ TEST(SphProbes, TheSceneKeyWritesARowPerFrame) {
     EXPECT_NEAR(std::stod(rows[r][0]), 0.002 * double(r), 1e-12);  // time
     EXPECT_EQ(std::stoul(rows[r][1]), scene.particles.size());     // particles
     EXPECT_NEAR(std::stod(rows[r][7]), 0.002 * double(r), 2e-4);   // centre_x drifts at 1 m/s
-    if (r > 0) EXPECT_NEAR(std::stod(rows[r][22]), 1000, 1);       // density at the centre (measured 1000.0)
-    EXPECT_EQ(rows[r][24], "nan");                                 // no fluid at (4, 4)
-    if (r == 0) EXPECT_EQ(rows[r][22], "nan");  // before the first step the particles have no density
+    if (r > 0) {
+      EXPECT_NEAR(std::stod(rows[r][22]), 1000, 1);  // density at the centre (measured 1000.0)
+    }
+    EXPECT_EQ(rows[r][24], "nan");  // no fluid at (4, 4)
+    if (r == 0) {
+      EXPECT_EQ(rows[r][22], "nan");  // before the first step the particles have no density
+    }
   }
   if (!HasFailure()) std::filesystem::remove_all(dir);
 }
