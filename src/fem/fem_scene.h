@@ -62,9 +62,11 @@ struct FemSceneOutput {
   VtuEncoding encoding = VtuEncoding::kAppendedRaw;
 };
 
-/// What a run computes (key analysis): the implicit warped dynamics over the frames, or the linear static
-/// equilibrium K U = F of the rest mesh with the held regions and loads (one solve; output frames 0 and 1).
-enum class FemAnalysis { kDynamic, kStatic };
+/// What a run computes (key analysis): the implicit warped dynamics over the frames, the linear static
+/// equilibrium K U = F of the rest mesh with the held regions and loads (one solve; output frames 0 and 1),
+/// or its natural modes. kModal: the lowest `modes` natural frequencies and mode shapes (fem_modal.h; output
+/// frames 1..modes the shapes, scaled to a tenth of the mesh's diagonal).
+enum class FemAnalysis { kDynamic, kStatic, kModal };
 
 /// Key held: the nodes whose rest positions lie in the box [lo, hi] (closed, with a tolerance of 1e-9 of the
 /// mesh's diagonal) hold the listed components at `displacement` (a roller or a symmetry plane holds one).
@@ -100,7 +102,8 @@ struct FemScene {
   std::vector<FemSceneCut> cuts;  ///< sorted by time
   FemSceneOutput output;
   FemAnalysis analysis = FemAnalysis::kDynamic;
-  std::vector<FemHeldRegion> held;  ///< analysis: static only (so far)
+  std::vector<FemHeldRegion> held;  ///< analysis: static or modal (so far)
+  int modes = 6;                    ///< analysis: modal
   std::vector<FemLoad> loads;       ///< analysis: static only (so far)
   /// analysis: static: a body force per unit mass (e.g. gravity), f_i = m_i a on the lumped masses (9.21).
   Vec3 body_acceleration = Vec3::Zero();

@@ -48,24 +48,31 @@ class SceneReader {
   void read(const YAML::Node& root) {
     src_.allowKeys(root,
                    {"name", "mesh", "placement", "material", "dynamics", "ground", "frames", "cuts", "output",
-                    "analysis", "held", "loads", "body_acceleration"},
+                    "analysis", "held", "loads", "body_acceleration", "modes"},
                    "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
     if (const YAML::Node a = root["analysis"])
-      scene_.analysis = src_.choice<FemAnalysis>(
-          a, "analysis", {{"dynamic", FemAnalysis::kDynamic}, {"static", FemAnalysis::kStatic}});
+      scene_.analysis = src_.choice<FemAnalysis>(a, "analysis",
+                                                 {{"dynamic", FemAnalysis::kDynamic},
+                                                  {"static", FemAnalysis::kStatic},
+                                                  {"modal", FemAnalysis::kModal}});
     const bool dynamic = scene_.analysis == FemAnalysis::kDynamic;
+    const bool modal = scene_.analysis == FemAnalysis::kModal;
     for (const char* key : {"held", "loads", "body_acceleration"})
       if (root[key] && dynamic)
-        src_.fail(root[key],
-                  std::string(key) + ": only with analysis: static (dynamic runs do not take them yet)");
+        src_.fail(root[key], std::string(key) +
+                                 ": only with analysis: static or modal (dynamic runs do not take them yet)");
+    for (const char* key : {"loads", "body_acceleration"})
+      if (root[key] && modal) src_.fail(root[key], std::string(key) + ": not with analysis: modal");
+    if (root["modes"] && !modal) src_.fail(root["modes"], "modes: only with analysis: modal");
+    if (root["modes"]) scene_.modes = int(src_.integer(root["modes"], "modes", 1, 1000));
     for (const char* key : {"ground", "cuts"})
-      if (root[key] && !dynamic) src_.fail(root[key], std::string(key) + ": not with analysis: static");
+      if (root[key] && !dynamic) src_.fail(root[key], std::string(key) + ": only with analysis: dynamic");
     readMaterial(src_.require(root, "material", "scene"));
     if (dynamic || root["dynamics"]) readDynamics(src_.require(root, "dynamics", "scene"));
     if (root["ground"]) readGround(root["ground"]);
     if (dynamic || root["frames"]) readFrames(src_.require(root, "frames", "scene"));
-    if (!dynamic) scene_.frame_count = 1;  // frame 0: the rest state, frame 1: the equilibrium
+    if (!dynamic) scene_.frame_count = modal ? scene_.modes : 1;  // static: the rest state, the equilibrium
     if (root["cuts"]) readCuts(root["cuts"]);
     if (root["output"]) readOutput(root["output"]);
     const YAML::Node mesh = src_.require(root, "mesh", "scene");
@@ -77,7 +84,13 @@ class SceneReader {
     if (root["held"]) readHeld(root["held"]);
     if (root["loads"]) readLoads(root["loads"]);
     if (!dynamic && scene_.held.empty())
-      src_.fail(root, "analysis: static needs 'held' regions (else the body is free to move rigidly)");
+      src_.fail(root, std::string("analysis: ") + (modal ? "modal" : "static") +
+                          " needs 'held' regions (else the body is free to move rigidly)");
+    if (modal)
+      for (size_t r = 0; r < scene_.held.size(); ++r)
+        if (scene_.held[r].displacement != Vec3::Zero())
+          src_.fail(root["held"][r],
+                    "held[" + std::to_string(r) + "].displacement: not with analysis: modal");
   }
 
  private:

@@ -1,11 +1,13 @@
 #include "relaxed_connectivity/fem/fem_scene_run.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
 
+#include "relaxed_connectivity/fem/fem_modal.h"
 #include "relaxed_connectivity/fem/fem_static.h"
 #include "relaxed_connectivity/io/pvd_io.h"
 
@@ -51,42 +53,27 @@ std::string staticJson(const FemRunStats& s) {
   return j + "]";
 }
 
-/// analysis: static: one solve, the rest state and the equilibrium as frames 0 and 1.
-FemRunStats runFemStatic(const FemScene& scene, const FemRunOptions& options) {
-  FemRunStats stats;
-  stats.scene = scene.name;
-  stats.static_analysis = true;
-  stats.frame_count = 1;
-  stats.nodes_start = stats.nodes = scene.mesh->numNodes();
-  stats.elements_start = stats.elements = scene.mesh->numElements();
-  stats.bodies = 1;
-  FemStaticResult result;
-  try {
-    result = solveFemStatic(scene);
-  } catch (const std::exception& e) {
-    stats.error = e.what();
-    return stats;
-  }
-  stats.frames = 1;
-  stats.max_displacement = result.max_displacement;
-  stats.held_reactions = result.held_reactions;
-  stats.load_displacements = result.load_displacements;
-  stats.times.solve = stats.wall_seconds = result.seconds;
-  const bool write =
-      !options.out_dir.empty() && scene.output.every > 0 && (scene.output.vtu || scene.output.obj);
-  if (!write) return stats;
+/// ,"analysis":"modal","frequencies":[..]
+std::string modalJson(const FemRunStats& s) {
+  std::string j = ",\"analysis\":\"modal\",\"frequencies\":[";
+  for (size_t k = 0; k < s.frequencies.size(); ++k) j += (k ? "," : "") + formatNumber(s.frequencies[k]);
+  return j + "]";
+}
+
+/// The frames of a one-solve analysis (frame k: the node positions frames[k]) as VTU / OBJ files with a PVD
+/// index (time = frame number), as the scene's output asks.
+void writeSolveFrames(const FemScene& scene, const FemRunOptions& options,
+                      const std::vector<Eigen::VectorXd>& frames, FemRunStats& stats) {
+  if (options.out_dir.empty() || scene.output.every <= 0 || !(scene.output.vtu || scene.output.obj)) return;
   const Clock::time_point start = Clock::now();
-  std::filesystem::create_directories(options.out_dir);
-  const int n = scene.mesh->numNodes();
-  Eigen::VectorXd rest(3 * n), velocities = Eigen::VectorXd::Zero(3 * n);
-  for (int i = 0; i < n; ++i) rest.segment<3>(3 * i) = scene.mesh->node(i);
-  const Eigen::VectorXd deformed = rest + result.displacements;
+  const std::filesystem::path dir(options.out_dir);
+  std::filesystem::create_directories(dir);
+  const Eigen::VectorXd velocities = Eigen::VectorXd::Zero(3 * scene.mesh->numNodes());
   std::vector<PvdEntry> pvd;
-  for (int frame = 0; frame <= 1; ++frame) {
-    const std::vector<FemBodyState> states = {
-        {scene.mesh.get(), frame == 0 ? &rest : &deformed, &velocities}};
-    const std::string number = frame == 0 ? "0000" : "0001";
-    const std::filesystem::path dir(options.out_dir);
+  for (size_t frame = 0; frame < frames.size(); ++frame) {
+    const std::vector<FemBodyState> states = {{scene.mesh.get(), &frames[frame], &velocities}};
+    char number[32];
+    std::snprintf(number, sizeof(number), "%04zu", frame);
     if (scene.output.vtu) {
       const std::string file = scene.name + "_" + number + ".vtu";
       writeFemVtu((dir / file).string(), states, scene.output.encoding);
@@ -100,11 +87,81 @@ FemRunStats runFemStatic(const FemScene& scene, const FemRunOptions& options) {
     }
   }
   if (!pvd.empty()) {
-    const std::string pvd_path = (std::filesystem::path(options.out_dir) / (scene.name + ".pvd")).string();
+    const std::string pvd_path = (dir / (scene.name + ".pvd")).string();
     writePvd(pvd_path, pvd);
     stats.files.push_back(pvd_path);
   }
   stats.times.output = secondsSince(start);
+}
+
+/// The statistics of a one-solve analysis before it runs: the scene, its single body and its frame count.
+FemRunStats oneSolveStats(const FemScene& scene, int frame_count) {
+  FemRunStats stats;
+  stats.scene = scene.name;
+  stats.frame_count = frame_count;
+  stats.nodes_start = stats.nodes = scene.mesh->numNodes();
+  stats.elements_start = stats.elements = scene.mesh->numElements();
+  stats.bodies = 1;
+  return stats;
+}
+
+/// *result = solve(); an exception becomes the run's error (then false).
+template <class Result, class Solve>
+bool tryToSolve(FemRunStats* stats, Result* result, Solve&& solve) {
+  try {
+    *result = solve();
+    return true;
+  } catch (const std::exception& e) {
+    stats->error = e.what();
+    return false;
+  }
+}
+
+/// analysis: static: one solve, the rest state and the equilibrium as frames 0 and 1.
+FemRunStats runFemStatic(const FemScene& scene, const FemRunOptions& options) {
+  FemRunStats stats = oneSolveStats(scene, 1);
+  stats.static_analysis = true;
+  FemStaticResult result;
+  if (!tryToSolve(&stats, &result, [&] { return solveFemStatic(scene); })) return stats;
+  stats.frames = 1;
+  stats.max_displacement = result.max_displacement;
+  stats.held_reactions = result.held_reactions;
+  stats.load_displacements = result.load_displacements;
+  stats.times.solve = stats.wall_seconds = result.seconds;
+  const int n = scene.mesh->numNodes();
+  Eigen::VectorXd rest(3 * n);
+  for (int i = 0; i < n; ++i) rest.segment<3>(3 * i) = scene.mesh->node(i);
+  writeSolveFrames(scene, options, {rest, rest + result.displacements}, stats);
+  return stats;
+}
+
+/// analysis: modal: the rest state (frame 0) and the mode shapes (frames 1..modes, each scaled to a tenth of
+/// the mesh's diagonal).
+FemRunStats runFemModal(const FemScene& scene, const FemRunOptions& options) {
+  FemRunStats stats = oneSolveStats(scene, scene.modes);
+  stats.modal_analysis = true;
+  FemModalResult result;
+  if (!tryToSolve(&stats, &result, [&] { return solveFemModal(scene); })) return stats;
+  stats.frames = scene.modes;
+  stats.frequencies.assign(result.frequencies.data(), result.frequencies.data() + result.frequencies.size());
+  stats.times.solve = stats.wall_seconds = result.seconds;
+  const int n = scene.mesh->numNodes();
+  Eigen::VectorXd rest(3 * n);
+  Vec3 lo = scene.mesh->node(0), hi = lo;
+  for (int i = 0; i < n; ++i) {
+    rest.segment<3>(3 * i) = scene.mesh->node(i);
+    lo = lo.cwiseMin(scene.mesh->node(i));
+    hi = hi.cwiseMax(scene.mesh->node(i));
+  }
+  const double amplitude = 0.1 * (hi - lo).norm();
+  std::vector<Eigen::VectorXd> frames = {rest};
+  for (int m = 0; m < scene.modes; ++m) {
+    const Eigen::VectorXd mode = result.modes.col(m);
+    double largest = 0;
+    for (int i = 0; i < n; ++i) largest = std::max(largest, mode.segment<3>(3 * i).norm());
+    frames.push_back(largest > 0 ? Eigen::VectorXd(rest + (amplitude / largest) * mode) : rest);
+  }
+  writeSolveFrames(scene, options, frames, stats);
   return stats;
 }
 
@@ -112,6 +169,7 @@ FemRunStats runFemStatic(const FemScene& scene, const FemRunOptions& options) {
 
 FemRunStats runFemScene(const FemScene& scene, const FemRunOptions& options) {
   if (scene.analysis == FemAnalysis::kStatic) return runFemStatic(scene, options);
+  if (scene.analysis == FemAnalysis::kModal) return runFemModal(scene, options);
   FemRunStats stats;
   stats.scene = scene.name;
   stats.frame_count = scene.frame_count;
@@ -228,6 +286,7 @@ std::string femRunStatsJson(const FemRunStats& s) {
     << ",\"min_ground_distance\":" << formatNumber(s.min_ground_distance)
     << ",\"kinetic_energy\":" << formatNumber(s.kinetic_energy)
     << (s.static_analysis ? staticJson(s) : std::string())
+    << (s.modal_analysis ? modalJson(s) : std::string())
     << ",\"error\":" << (s.error.empty() ? std::string("null") : jsonString(s.error))
     << ",\"files\":" << s.files.size() << "}";
   return j.str();

@@ -48,6 +48,9 @@ struct FemRunStats {
   bool static_analysis = false;
   double max_displacement = 0.0;
   std::vector<Vec3> held_reactions, load_displacements;
+  /// analysis: modal (fem_modal.h): the natural frequencies [Hz], ascending.
+  bool modal_analysis = false;
+  std::vector<double> frequencies;
   std::string error;  ///< empty: completed; else why the run stopped
   std::vector<std::string> files;
 };

@@ -92,7 +92,7 @@ TEST(FemStaticScene, BadKeysAreNamed) {
       "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1], cells: [1, 1, 1]}\n";
   expectErrorAt(
       head + "dynamics: {time_step: 0.01}\nframes: {count: 1}\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0]}]\n", 5,
-      "only with analysis: static");
+      "only with analysis: static or modal");
   expectErrorAt(head + "analysis: static\n", 1, "needs 'held' regions");
   expectErrorAt(head + "analysis: static\nheld: [{lo: [5, 5, 5], hi: [6, 6, 6]}]\n", 4, "holds no node");
   expectErrorAt(head + "analysis: static\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0], components: xw}]\n", 4,
@@ -104,7 +104,7 @@ TEST(FemStaticScene, BadKeysAreNamed) {
   expectErrorAt(head + "analysis: quasi\n", 3, "unknown 'quasi'");
   expectErrorAt(
       head + "analysis: static\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0]}]\nground: {normal: [0, 0, 1]}\n", 5,
-      "not with analysis: static");
+      "only with analysis: dynamic");
   // Held regions that leave a rigid motion free: the run reports it.
   const FemRunStats free_run = runFemScene(parseFemScene(
       head + "analysis: static\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0], components: z}]\n", "free.yaml", "."));
