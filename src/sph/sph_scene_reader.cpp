@@ -292,41 +292,9 @@ void SceneReader::readFluid(const YAML::Node& node, const std::string& where) {
       src_.fail(node[key], where + "." + key + ": only with shape: mesh");
   const size_t first = scene_.particles.size();
   Vec3 centre;
-  if (shape == Shape::kBox) {
-    for (const char* key : {"center", "radius"})
-      if (node[key]) src_.fail(node[key], where + "." + key + ": only with shape: sphere");
-    const Box box = readBox(src_, node, where, dimension_);
-    const double dx = blockSpacing(node, where);
-    addBox(node, where, box, dx, SphParticleKind::kFluid, Vec3::Zero());
-    centre = 0.5 * (box.lo + box.hi);
-  } else if (shape == Shape::kMesh) {  // the lattice points inside the closed mesh (winding number > 1/2)
-    for (const char* key : {"lo", "hi", "center", "radius"})
-      if (node[key])
-        src_.fail(node[key], where + "." + key + ": not with shape: mesh (mesh, scale, translation)");
-    Vec3 half;
-    const TriangleMesh mesh = readSolidMesh(node, where, Eigen::Matrix3d::Identity(), &centre, &half);
-    const double dx = blockSpacing(node, where);
-    reserveLattice(node, where, centre - half, centre + half, dx, 0);
-    SphParticles box;
-    try {
-      addLatticeBox(box, -half, half, dx, massFor(dx), dimension_, SphParticleKind::kFluid);
-    } catch (const std::invalid_argument& e) {
-      src_.fail(node, where + ": " + e.what());
-    }
-    const FastWindingNumber winding(mesh);
-    for (size_t i = 0; i < box.size(); ++i)
-      if (std::abs(winding(box.positions[i])) > 0.5)
-        scene_.particles.add(centre + box.positions[i], Vec3::Zero(), box.masses[i], SphParticleKind::kFluid);
-    if (scene_.particles.size() == first)
-      src_.fail(node["mesh"], where + ".mesh: holds no lattice point of spacing " + std::to_string(dx) +
-                                  " (mesh too small for the spacing, or not closed?)");
-  } else {  // the lattice points of the bounding box within the radius (a disc in 2D)
-    for (const char* key : {"lo", "hi"})
-      if (node[key]) src_.fail(node[key], where + "." + key + ": not with shape: sphere (center and radius)");
-    centre = src_.vec(src_.require(node, "center", where), where + ".center", dimension_, true);
-    const double radius = src_.positive(src_.require(node, "radius", where), where + ".radius");
-    const double dx = blockSpacing(node, where);
-    const Vec3 half = dimension_ == 3 ? Vec3::Constant(radius) : Vec3(radius, radius, 0);
+  double dx = 0;  // read after the shape, whose errors come first
+  // The cell-centred lattice points of the box centre +- half that `inside` keeps, as fluid particles.
+  auto addInside = [&](const Vec3& half, const YAML::Node& at, const std::string& what, auto&& inside) {
     reserveLattice(node, where, centre - half, centre + half, dx, 0);
     SphParticles box;
     try {
@@ -335,15 +303,42 @@ void SceneReader::readFluid(const YAML::Node& node, const std::string& where) {
       src_.fail(node, where + ": " + e.what());
     }
     for (size_t i = 0; i < box.size(); ++i)
-      if ((box.positions[i] - centre).norm() <= radius)
+      if (inside(box.positions[i]))
         scene_.particles.add(box.positions[i], Vec3::Zero(), box.masses[i], SphParticleKind::kFluid);
-    if (scene_.particles.size() == first) src_.fail(node, where + ": the sphere holds no lattice point");
+    if (scene_.particles.size() == first)
+      src_.fail(at, where + ": the " + what + " holds no lattice point of spacing " + std::to_string(dx));
+  };
+  if (shape == Shape::kBox) {
+    for (const char* key : {"center", "radius"})
+      if (node[key]) src_.fail(node[key], where + "." + key + ": only with shape: sphere");
+    const Box box = readBox(src_, node, where, dimension_);
+    dx = blockSpacing(node, where);
+    addBox(node, where, box, dx, SphParticleKind::kFluid, Vec3::Zero());
+    centre = 0.5 * (box.lo + box.hi);
+  } else if (shape == Shape::kMesh) {  // the lattice points inside the closed mesh (winding number > 1/2)
+    for (const char* key : {"lo", "hi", "center", "radius"})
+      if (node[key])
+        src_.fail(node[key], where + "." + key + ": not with shape: mesh (mesh, scale, translation)");
+    Vec3 half;
+    const TriangleMesh mesh = readSolidMesh(node, where, Eigen::Matrix3d::Identity(), &centre, &half);
+    dx = blockSpacing(node, where);
+    const FastWindingNumber winding(mesh);  // (the mesh is centred on the origin)
+    addInside(half, node["mesh"], "mesh (too small for the spacing, or not closed?)",
+              [&](const Vec3& x) { return std::abs(winding(x - centre)) > 0.5; });
+  } else {  // the lattice points of the bounding box within the radius (a disc in 2D)
+    for (const char* key : {"lo", "hi"})
+      if (node[key]) src_.fail(node[key], where + "." + key + ": not with shape: sphere (center and radius)");
+    centre = src_.vec(src_.require(node, "center", where), where + ".center", dimension_, true);
+    const double radius = src_.positive(src_.require(node, "radius", where), where + ".radius");
+    dx = blockSpacing(node, where);
+    addInside(dimension_ == 3 ? Vec3::Constant(radius) : Vec3(radius, radius, 0), node, "sphere",
+              [&](const Vec3& x) { return (x - centre).norm() <= radius; });
   }
   readVelocityField(node["velocity"], where + ".velocity", centre, first);
   readBlockTemperature(node, where, first);
   // Too few neighbours: in 3D, fluid below h = 2.5 dx pairs up under compression (the poly6 gradient vanishes
   // at r -> 0) and its pressures read low; in 2D, below h = 2 dx the kernel sums are too coarse.
-  const double ratio = scene_.config.smoothing_length / blockSpacing(node, where);
+  const double ratio = scene_.config.smoothing_length / dx;
   if (dimension_ == 3 && ratio < 2.5 - 1e-9)
     warn(node, where + ": h = " + shortNumber(ratio) + " x its spacing (about " +
                    std::to_string(long(std::lround(4.0 / 3.0 * M_PI * ratio * ratio * ratio - 1))) +

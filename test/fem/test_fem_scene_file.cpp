@@ -38,14 +38,6 @@ std::vector<std::string> shippedScenes() {
   return paths;
 }
 
-std::string parseError(const std::string& yaml) {
-  return femSceneParseError(yaml);
-}
-
-void expectErrorAt(const std::string& yaml, int line, const std::string& words) {
-  expectFemSceneErrorAt(yaml, line, words);
-}
-
 const char* kMinimal =
     "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1], cells: [2, 1, 1]}\n"
     "material: {youngs_modulus: 50, poisson_ratio: 0.3}\n"
@@ -155,25 +147,25 @@ TEST(FemSceneFile, StatsJsonNamesEveryPhase) {
 }
 
 TEST(FemSceneFile, BadFilesNameFileAndLine) {
-  expectErrorAt("mesh: [1, 2\n", 2, "YAML syntax");
+  expectFemSceneErrorAt("mesh: [1, 2\n", 2, "YAML syntax");
   std::string yaml = kMinimal;
-  expectErrorAt(yaml + "colour: red\n", 6, "unknown key 'colour'");
-  expectErrorAt(
+  expectFemSceneErrorAt(yaml + "colour: red\n", 6, "unknown key 'colour'");
+  expectFemSceneErrorAt(
       "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1]}\n"
       "material: {youngs_modulus: -5, poisson_ratio: 0.3}\n",
       2, "youngs_modulus must be positive");
-  expectErrorAt(
+  expectFemSceneErrorAt(
       "material: {youngs_modulus: 5, poisson_ratio: 0.5}\n"
       "dynamics: {time_step: 0.01}\n",
       1, "poisson_ratio must be in (-1, 0.5)");
-  expectErrorAt(
+  expectFemSceneErrorAt(
       "material: {youngs_modulus: 5, poisson_ratio: 0.3}\n"
       "dynamics: {time_step: 0.01}\n"
       "frames: {count: 1}\n"
       "mesh:\n"
       "  type: sphere\n",
       5, "unknown 'sphere'");
-  expectErrorAt(
+  expectFemSceneErrorAt(
       "material: {youngs_modulus: 5, poisson_ratio: 0.3}\n"
       "dynamics: {time_step: 0.01}\n"
       "frames: {count: 1}\n"
@@ -181,18 +173,18 @@ TEST(FemSceneFile, BadFilesNameFileAndLine) {
       "  type: convex_hull\n"
       "  points: [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]\n",
       5, "mesh: ");  // coplanar points: the hull's own message
-  expectErrorAt(yaml + "cuts:\n  - {time: 0.1, point: [0.5, 0, 0], normal: [0, 0, 0]}\n", 7,
-                "normal must be non-zero");
-  expectErrorAt(yaml +
-                    "cuts:\n  - time: 0.1\n    point: [0.5, 0, 0]\n    normal: [1, 0, 0]\n"
-                    "    region: [[0.5, 0, 0], [0.6, 1, 0], [0.5, 0, 1]]\n",
-                10, "does not lie in the cut plane");
-  expectErrorAt(yaml + "output: {encoding: binary}\n", 6, "unknown 'binary'");
-  expectErrorAt(
+  expectFemSceneErrorAt(yaml + "cuts:\n  - {time: 0.1, point: [0.5, 0, 0], normal: [0, 0, 0]}\n", 7,
+                        "normal must be non-zero");
+  expectFemSceneErrorAt(yaml +
+                            "cuts:\n  - time: 0.1\n    point: [0.5, 0, 0]\n    normal: [1, 0, 0]\n"
+                            "    region: [[0.5, 0, 0], [0.6, 1, 0], [0.5, 0, 1]]\n",
+                        10, "does not lie in the cut plane");
+  expectFemSceneErrorAt(yaml + "output: {encoding: binary}\n", 6, "unknown 'binary'");
+  expectFemSceneErrorAt(
       "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1]}\n"
       "material: {youngs_modulus: 5, poisson_ratio: 0.3, face_sample_blend: 1.5}\n",
       2, "material.face_sample_blend must be in (0, 1]");
-  const std::string missing = parseError("mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1]}\n");
+  const std::string missing = femSceneParseError("mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1]}\n");
   EXPECT_NE(missing.find("missing 'material'"), std::string::npos) << missing;
   EXPECT_THROW(loadFemScene("/nonexistent/scene.yaml"), FemSceneError);
 }
@@ -228,7 +220,7 @@ TEST(FemSceneFile, CholmodPcgKeysReachTheSolverOptions) {
   EXPECT_EQ(defaults.dynamics.pcg_extension_iterations, 3);
   EXPECT_EQ(defaults.dynamics.pcg_contact_updates, 64);
   yaml.replace(yaml.find("contact_updates: 7"), 18, "contact_updates: -1");
-  expectErrorAt(yaml, 3, "dynamics.solver.contact_updates");
+  expectFemSceneErrorAt(yaml, 3, "dynamics.solver.contact_updates");
 }
 
 TEST(FemSceneFile, RandomElementSplitsGiveOneElementPerPlane) {

@@ -15,10 +15,6 @@
 namespace rc {
 namespace {
 
-void expectErrorAt(const std::string& yaml, int line, const std::string& words) {
-  expectFemSceneErrorAt(yaml, line, words);
-}
-
 const char* kRollers =
     "name: rollers\n"
     "analysis: static\n"
@@ -90,19 +86,20 @@ TEST(FemStaticScene, BadKeysAreNamed) {
   const std::string head =
       "material: {youngs_modulus: 1000, poisson_ratio: 0.3}\n"
       "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1], cells: [1, 1, 1]}\n";
-  expectErrorAt(
+  expectFemSceneErrorAt(
       head + "dynamics: {time_step: 0.01}\nframes: {count: 1}\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0]}]\n", 5,
       "only with analysis: static or modal");
-  expectErrorAt(head + "analysis: static\n", 1, "needs 'held' regions");
-  expectErrorAt(head + "analysis: static\nheld: [{lo: [5, 5, 5], hi: [6, 6, 6]}]\n", 4, "holds no node");
-  expectErrorAt(head + "analysis: static\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0], components: xw}]\n", 4,
-                "letters of xyz");
-  expectErrorAt(head +
-                    "analysis: static\nheld:\n  - {lo: [0, 0, 0], hi: [1, 1, 0]}\n"
-                    "  - {lo: [0, 0, 0], hi: [1, 0, 1], components: y}\n",
-                6, "already holds y");
-  expectErrorAt(head + "analysis: quasi\n", 3, "unknown 'quasi'");
-  expectErrorAt(
+  expectFemSceneErrorAt(head + "analysis: static\n", 1, "needs 'held' regions");
+  expectFemSceneErrorAt(head + "analysis: static\nheld: [{lo: [5, 5, 5], hi: [6, 6, 6]}]\n", 4,
+                        "holds no node");
+  expectFemSceneErrorAt(head + "analysis: static\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0], components: xw}]\n",
+                        4, "letters of xyz");
+  expectFemSceneErrorAt(head +
+                            "analysis: static\nheld:\n  - {lo: [0, 0, 0], hi: [1, 1, 0]}\n"
+                            "  - {lo: [0, 0, 0], hi: [1, 0, 1], components: y}\n",
+                        6, "already holds y");
+  expectFemSceneErrorAt(head + "analysis: quasi\n", 3, "unknown 'quasi'");
+  expectFemSceneErrorAt(
       head + "analysis: static\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0]}]\nground: {normal: [0, 0, 1]}\n", 5,
       "only with analysis: dynamic");
   // Held regions that leave a rigid motion free: the run reports it.
