@@ -482,7 +482,8 @@ bool PaintModel::save(File::Request& req, File::Response& res) {
                     std::to_string(surface_->childCount()) + " children) to " + req.path);
 }
 
-bool PaintModel::loadFrom(const std::string& path, const LoadProgress& progress, std::string* message) {
+bool PaintModel::loadFrom(const std::string& path, const LoadProgress& progress, std::string* message,
+                          size_t* active_surfels) {
   std::unique_ptr<PaintSurface> loaded;
   try {
     loaded = loadPaintedSurface(path, progress);  // outside the lock: painting goes on meanwhile
@@ -493,6 +494,7 @@ bool PaintModel::loadFrom(const std::string& path, const LoadProgress& progress,
   }
   std::lock_guard<std::mutex> lock(model_mutex_);
   installSurface(std::move(loaded), "loaded from " + path);
+  if (active_surfels) *active_surfels = surface_->activeCount();
   *message = "load: " + std::to_string(surface_->activeCount()) + " active surfels from " + path;
   return true;
 }
@@ -505,6 +507,7 @@ bool PaintModel::load(File::Request& req, File::Response& res) {
 
 void PaintModel::loadState(const relaxed_connectivity::LoadPaintedStateGoalConstPtr& goal) {
   std::string message;
+  size_t active_surfels = 0;
   const bool ok = loadFrom(
       goal->path,
       [&](double fraction, const std::string& stage) {
@@ -513,14 +516,11 @@ void PaintModel::loadState(const relaxed_connectivity::LoadPaintedStateGoalConst
         feedback.stage = stage;
         load_action_->publishFeedback(feedback);
       },
-      &message);
+      &message, &active_surfels);
   relaxed_connectivity::LoadPaintedStateResult result;
   result.success = ok;
   result.message = message;
-  {
-    std::lock_guard<std::mutex> lock(model_mutex_);
-    if (ok && surface_) result.active_surfels = uint32_t(surface_->activeCount());
-  }
+  result.active_surfels = uint32_t(active_surfels);
   if (ok) {
     ROS_INFO_STREAM("paint_model: " << message);
     load_action_->setSucceeded(result, message);

@@ -116,8 +116,10 @@ class PaintModel {
   bool setPaint(File::Request& req, File::Response& res);
   bool setBrush(File::Request& req, File::Response& res);
   void loadState(const relaxed_connectivity::LoadPaintedStateGoalConstPtr& goal);
-  /// Loads a saved state (outside the model lock) and installs it; returns the message for the caller.
-  bool loadFrom(const std::string& path, const LoadProgress& progress, std::string* message);
+  /// Loads a saved state (outside the model lock) and installs it; returns the message for the caller and in
+  /// *active_surfels the count as installed (the main loop's downsampling may change it right after).
+  bool loadFrom(const std::string& path, const LoadProgress& progress, std::string* message,
+                size_t* active_surfels = nullptr);
 
   /// Installs a new object (model_mutex_ held): a fresh journal, dryer and downsampler; publishes it whole.
   void installSurface(std::unique_ptr<PaintSurface> surface, const std::string& what);
