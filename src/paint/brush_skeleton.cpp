@@ -103,6 +103,18 @@ BrushSkeleton::BrushSkeleton(const BrushPreset& preset) : preset_(preset), mass_
       if (k + 1 < a.size()) add(node(a[k]), node(b[k + 1])), add(node(b[k]), node(a[k + 1]));
     }
   }
+  // The implicit step's envelope: the rows of an active mass start at the lowest-numbered active mass a
+  // spring ties it to (chains are numbered one after another, so a flat brush's rows reach back at most 4
+  // masses).
+  std::vector<int> first_node(static_cast<size_t>(activeCount()));
+  for (int a = 0; a < activeCount(); ++a) first_node[size_t(a)] = a;
+  for (const BrushSpring& s : springs_) {
+    const int a = s.a - handle_count_, b = s.b - handle_count_;
+    if (a < 0 || b < 0) continue;
+    int& first = first_node[size_t(std::max(a, b))];
+    first = std::min(first, std::min(a, b));
+  }
+  system_.setPattern(first_node);
   reset(Eigen::Isometry3d::Identity());
 }
 
@@ -194,26 +206,35 @@ void BrushSkeleton::stepImplicitEuler(double h, const Eigen::Isometry3d& world_T
   const int n = activeCount();
   // Per spring: the block B = h c e e^T + h^2 K with K = k (1 - g) e e^T + k g I (g = max(0, 1 - l0/l), the
   // geometric part dropped for compressed springs so that the system stays positive definite). B adds to
-  // the diagonal blocks of its active ends and is subtracted from the off-diagonal block between them.
-  diagonal_.assign(n, Eigen::Matrix3d::Identity() * mass_);
-  coupling_.clear();
+  // the diagonal blocks of its active ends and is subtracted from the off-diagonal block between them: the
+  // lower triangle of M - h C - h^2 K within its envelope, which is all the factorisation reads.
+  system_.setZero();
+  for (int a = 0; a < n; ++a) system_.block(a, a).diagonal().setConstant(mass_);
   rhs_.resize(3 * n);
   for (int a = 0; a < n; ++a) rhs_.segment<3>(3 * a) = h * mass_ * preset_.gravity;
+  // The springs' inverse lengths first: independent square roots and divisions pipeline, where one per
+  // spring inside the assembly would wait on each other.
+  inverse_length_.resize(springs_.size());
+  for (size_t k = 0; k < springs_.size(); ++k) {
+    const double l = (x_[springs_[k].b] - x_[springs_[k].a]).norm();
+    inverse_length_[k] = l > 0 ? 1.0 / l : 0.0;
+  }
   const double h2 = h * h;
-  for (const BrushSpring& s : springs_) {
-    const Vec3 d = x_[s.b] - x_[s.a];
-    const double l = d.norm();
-    if (l <= 0) continue;
-    const Vec3 e = d / l;
+  for (size_t k = 0; k < springs_.size(); ++k) {
+    const BrushSpring& s = springs_[k];
+    const double inverse = inverse_length_[k];
+    if (inverse == 0) continue;
+    const Vec3 e = (x_[s.b] - x_[s.a]) * inverse;
+    const double l = 1.0 / inverse;
     const Vec3 f = (s.stiffness * (l - s.rest_length) + s.damping * e.dot(v_[s.b] - v_[s.a])) * e;  // on a
-    const double g = std::max(0.0, 1.0 - s.rest_length / l);
+    const double g = std::max(0.0, 1.0 - s.rest_length * inverse);
     const double along = h * s.damping + h2 * s.stiffness * (1.0 - g), across = h2 * s.stiffness * g;
     Eigen::Matrix3d block = along * (e * e.transpose());
     block.diagonal().array() += across;
     const int a = s.a - handle_count_, b = s.b - handle_count_;
-    if (a >= 0) diagonal_[a] += block, rhs_.segment<3>(3 * a) += h * f;
-    if (b >= 0) diagonal_[b] += block, rhs_.segment<3>(3 * b) -= h * f;
-    if (a >= 0 && b >= 0) coupling_.push_back({std::max(a, b), std::min(a, b), block});
+    if (a >= 0) system_.block(a, a) += block, rhs_.segment<3>(3 * a) += h * f;
+    if (b >= 0) system_.block(b, b) += block, rhs_.segment<3>(3 * b) -= h * f;
+    if (a >= 0 && b >= 0) system_.block(std::max(a, b), std::min(a, b)) -= block;
   }
   // Contact planes: f = k_c (n . (p - x)) n, df/dx = -k_c n n^T.
   const double contact = kContactStiffness * preset_.spring_stiffness;
@@ -221,31 +242,16 @@ void BrushSkeleton::stepImplicitEuler(double h, const Eigen::Isometry3d& world_T
     const ContactPlane& c = planes_[a];
     if (!c.active) continue;
     const double depth = c.normal.dot(c.point - x_[handle_count_ + a]);
-    diagonal_[a] += h2 * contact * (c.normal * c.normal.transpose());
+    system_.block(a, a) += h2 * contact * (c.normal * c.normal.transpose());
     rhs_.segment<3>(3 * a) += h * contact * depth * c.normal;
   }
-  // The lower triangle of M - h C - h^2 K (the factorisation reads no more).
-  system_.setZero(3 * n, 3 * n);
-  for (int a = 0; a < n; ++a) system_.block<3, 3>(3 * a, 3 * a) = diagonal_[a];
-  for (const Coupling& c : coupling_) system_.block<3, 3>(3 * c.row, 3 * c.col) -= c.block;
-  // Cholesky in place, column by column (unblocked: at 9-100 unknowns Eigen's blocked LLT spends more time
-  // in its block machinery than in arithmetic), then the two triangular solves.
-  const int m = 3 * n;
-  for (int j = 0; j < m; ++j) {
-    auto below = system_.col(j).tail(m - j);
-    if (j > 0) below.noalias() -= system_.block(j, 0, m - j, j) * system_.row(j).head(j).transpose();
-    const double pivot = below(0);
-    if (!(pivot > 0) || !std::isfinite(pivot)) {
-      std::ostringstream why;
-      why << "brush skeleton unstable at step " << steps_ + 1
-          << ": the implicit Euler system is not positive definite (non-finite spring state)";
-      throw BrushInstability(why.str());
-    }
-    below /= std::sqrt(pivot);
+  if (!system_.factor()) {
+    std::ostringstream why;
+    why << "brush skeleton unstable at step " << steps_ + 1
+        << ": the implicit Euler system is not positive definite (non-finite spring state)";
+    throw BrushInstability(why.str());
   }
-  const auto factor = system_.triangularView<Eigen::Lower>();
-  factor.solveInPlace(rhs_);
-  factor.adjoint().solveInPlace(rhs_);
+  system_.solveInPlace(rhs_.data());
   for (int a = 0; a < n; ++a) {
     const int i = handle_count_ + a;
     v_[i] += rhs_.segment<3>(3 * a);

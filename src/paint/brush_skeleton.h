@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "relaxed_connectivity/core/block_envelope_cholesky.h"
 #include "relaxed_connectivity/paint/brush_preset.h"
 
 namespace rc {
@@ -87,14 +88,10 @@ class BrushSkeleton {
   std::vector<Vec3> x_, x_prev_, v_;
   std::vector<Vec3> force_;  // scratch of step()
   std::vector<ContactPlane> planes_;
-  // Scratch of stepImplicitEuler(): M - h C - h^2 K over the active masses, assembled from 3x3 blocks.
-  struct Coupling {
-    int row, col;  // active masses, row > col
-    Eigen::Matrix3d block;
-  };
-  std::vector<Eigen::Matrix3d> diagonal_;
-  std::vector<Coupling> coupling_;
-  Eigen::MatrixXd system_;
+  // Scratch of stepImplicitEuler(): M - h C - h^2 K over the active masses in 3x3 blocks; its envelope: each
+  // active mass's row starts at its lowest-numbered spring partner.
+  BlockEnvelopeCholesky system_;
+  std::vector<double> inverse_length_;  // per spring
   Eigen::VectorXd rhs_;
   Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
   double last_dt_ = 0;
