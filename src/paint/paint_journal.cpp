@@ -56,6 +56,8 @@ bool PaintJournal::endStroke() {
   open_ = false;
   // Originals whose state ended where it began (e.g. paint set back unchanged) need no delta.
   Stroke stroke;
+  stroke.before.reserve(current_.before.size());
+  stroke.after.reserve(current_.before.size());
   for (Snapshot& before : current_.before) {
     Snapshot after = snapshot(before.original);
     if (after.enabled == before.enabled && after.paint == before.paint && after.children == before.children)
@@ -67,6 +69,10 @@ bool PaintJournal::endStroke() {
   bytes_ -= current_.bytes;
   current_ = Stroke();
   if (stroke.before.empty()) return false;
+  // The arrays hold what bytesOf() counts: without this, the room reserved for every touched original (or
+  // push_back's doubling) stayed allocated, up to twice the counted bytes, uncounted by ~journal_bytes.
+  stroke.before.shrink_to_fit();
+  stroke.after.shrink_to_fit();
   for (const Stroke& s : undone_) bytes_ -= s.bytes;
   undone_.clear();
   bytes_ += stroke.bytes;

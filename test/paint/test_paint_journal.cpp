@@ -4,6 +4,10 @@
 #include "relaxed_connectivity/paint/paint_journal.h"
 
 #include <gtest/gtest.h>
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+#include <malloc.h>
+#define RC_HAVE_MALLINFO2 1
+#endif
 
 #include "paint_test_surfaces.h"
 #include "relaxed_connectivity/paint/paint_dryer.h"
@@ -122,6 +126,26 @@ TEST(PaintJournal, KeepsWithinItsMemoryBoundByForgettingTheOldestStrokes) {
   EXPECT_GE(bounded.undoCount(), 1u);
   EXPECT_LT(bounded.undoCount(), 4u);
   EXPECT_THROW(PaintJournal(q.surface), std::logic_error);  // already observed
+}
+
+TEST(PaintJournal, ReportsTheHeapItHolds) {
+  // bytes() is what the session's ~journal_bytes bounds and paint_stats reports (the soak subtracts it from
+  // the node's memory): it must count the heap the journal holds, allocator headers and array room included.
+#ifndef RC_HAVE_MALLINFO2
+  GTEST_SKIP() << "needs glibc's mallinfo2 (glibc >= 2.33)";
+#else
+  Painter p;
+  PaintJournal journal(p.surface);
+  for (double y : {-0.01, 0.0, 0.01, 0.02}) p.stroke(journal, -0.008, y);
+  const size_t reported = journal.bytes();
+  ASSERT_GT(reported, 100000u);
+  const size_t in_use_before = mallinfo2().uordblks + mallinfo2().hblkhd;
+  journal.clear();  // frees exactly what the journal holds
+  const size_t in_use_after = mallinfo2().uordblks + mallinfo2().hblkhd;
+  ASSERT_GT(in_use_before, in_use_after);
+  const double held = double(in_use_before - in_use_after);
+  EXPECT_NEAR(double(reported) / held, 1.0, 0.1) << "reported " << reported << " bytes, held " << held;
+#endif
 }
 
 }  // namespace

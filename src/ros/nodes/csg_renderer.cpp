@@ -2,9 +2,11 @@
 // src/ros/csg_renderer.h).
 #include <ros/ros.h>
 
+#include "relaxed_connectivity/core/heap_retention.h"
 #include "relaxed_connectivity/ros/csg_renderer.h"
 
 int main(int argc, char** argv) {
+  rc::fixMallocMmapThreshold();  // freed message buffers go back to the system
   ros::init(argc, argv, "csg_renderer");
   ros::NodeHandle nh, private_nh("~");
   try {

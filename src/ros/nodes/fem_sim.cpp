@@ -2,9 +2,11 @@
 // (see src/ros/fem_simulator.h).
 #include <ros/ros.h>
 
+#include "relaxed_connectivity/core/heap_retention.h"
 #include "relaxed_connectivity/ros/fem_simulator.h"
 
 int main(int argc, char** argv) {
+  rc::fixMallocMmapThreshold();  // freed message buffers go back to the system
   ros::init(argc, argv, "fem_sim");
   ros::NodeHandle nh, private_nh("~");
   try {

@@ -2,9 +2,11 @@
 // src/ros/haptic_driver.h).
 #include <ros/ros.h>
 
+#include "relaxed_connectivity/core/heap_retention.h"
 #include "relaxed_connectivity/ros/haptic_driver.h"
 
 int main(int argc, char** argv) {
+  rc::fixMallocMmapThreshold();  // freed message buffers go back to the system
   ros::init(argc, argv, "haptic_driver");
   ros::NodeHandle nh, private_nh("~");
   try {

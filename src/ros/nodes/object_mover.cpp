@@ -1,9 +1,11 @@
 // object_mover node: a pose topic in, the painted object's tf frame out (see src/ros/object_mover.h).
 #include <ros/ros.h>
 
+#include "relaxed_connectivity/core/heap_retention.h"
 #include "relaxed_connectivity/ros/object_mover.h"
 
 int main(int argc, char** argv) {
+  rc::fixMallocMmapThreshold();  // freed message buffers go back to the system
   ros::init(argc, argv, "object_mover");
   ros::NodeHandle nh, private_nh("~");
   try {

@@ -2,9 +2,11 @@
 // src/ros/paint_renderer.h).
 #include <ros/ros.h>
 
+#include "relaxed_connectivity/core/heap_retention.h"
 #include "relaxed_connectivity/ros/paint_renderer.h"
 
 int main(int argc, char** argv) {
+  rc::fixMallocMmapThreshold();  // freed message buffers go back to the system
   ros::init(argc, argv, "paint_renderer");
   ros::NodeHandle nh, private_nh("~");
   try {

@@ -2,9 +2,11 @@
 // forces on nodes by service (see src/ros/shell_simulator.h).
 #include <ros/ros.h>
 
+#include "relaxed_connectivity/core/heap_retention.h"
 #include "relaxed_connectivity/ros/shell_simulator.h"
 
 int main(int argc, char** argv) {
+  rc::fixMallocMmapThreshold();  // freed message buffers go back to the system
   ros::init(argc, argv, "shell_sim");
   ros::NodeHandle nh, private_nh("~");
   try {

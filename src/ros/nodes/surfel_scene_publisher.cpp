@@ -2,9 +2,11 @@
 // src/ros/surfel_scene_publisher.h).
 #include <ros/ros.h>
 
+#include "relaxed_connectivity/core/heap_retention.h"
 #include "relaxed_connectivity/ros/surfel_scene_publisher.h"
 
 int main(int argc, char** argv) {
+  rc::fixMallocMmapThreshold();  // freed message buffers go back to the system
   ros::init(argc, argv, "surfel_scene_publisher");
   ros::NodeHandle nh, private_nh("~");
   try {
