@@ -61,6 +61,12 @@ void SphFluidConfig::validate() const {
   require(gamma >= 1.0 && std::isfinite(gamma), "gamma", "must be finite and >= 1, got " + num(gamma));
   require(negative_pressure_scale >= 0.0 && negative_pressure_scale <= 1.0, "negative_pressure_scale",
           "(zeta) must be in [0, 1], got " + num(negative_pressure_scale));
+  require(tensile_correction >= 0.0 && tensile_correction <= 1.0, "tensile_correction",
+          "(epsilon) must be in [0, 1] (0 = off), got " + num(tensile_correction));
+  require(tensile_correction == 0.0 || (tensile_spacing > 0.0 && tensile_spacing < smoothing_length),
+          "tensile_spacing",
+          "must be the initial particle spacing, in (0, smoothing_length), with tensile_correction; got " +
+              num(tensile_spacing));
   require(viscosity >= 0.0 && std::isfinite(viscosity), "viscosity",
           "must be finite and >= 0, got " + num(viscosity));
   require(xsph >= 0.0 && xsph <= 1.0, "xsph", "(xi) must be in [0, 1], got " + num(xsph));
@@ -177,6 +183,7 @@ void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
   s_rho_.resize(n);
   s_press_.resize(n);
   s_press_term_.resize(n);
+  if (config_.tensile_correction > 0.0) s_tension_.resize(n);
   s_kind_.resize(n);
   row_begin_.resize(n);
   row_count_.resize(n);
@@ -399,6 +406,8 @@ void SphFluidSolver::densityPass(int t) {
     if (s_kind_[s] != SphParticleKind::kFluid) p = std::max(p, 0.0);  // walls never pull
     s_press_[s] = p;
     s_press_term_[s] = p / (rho * rho);
+    if (config_.tensile_correction > 0.0)  // Monaghan 2000: R_i for particles under tension
+      s_tension_[s] = p < 0.0 ? config_.tensile_correction * -s_press_term_[s] : 0.0;
   }
 }
 
@@ -432,6 +441,7 @@ void SphFluidSolver::boundaryPressurePass(int t) {
     s_rho_[s] = rho;
     s_press_[s] = p;
     s_press_term_[s] = p / (rho * rho);
+    if (config_.tensile_correction > 0.0) s_tension_[s] = 0.0;  // p >= 0
   }
 }
 
@@ -439,16 +449,24 @@ void SphFluidSolver::boundaryPressurePass(int t) {
 // correction (8.19), of the sorted fluid particles [first, last). Pair terms are computed so that the term of
 // (i, j) is exactly the negative of the term of (j, i).
 void SphFluidSolver::forcePass(int t) {
-  const bool poly6_pressure = config_.pressure_kernel == SphPressureKernel::kPoly6;
-  // Without viscosity its terms are zero (adding them changes no sum), so they are left out.
-  if (config_.viscosity != 0.0) {
-    poly6_pressure ? forcePassOf<true, true>(t) : forcePassOf<false, true>(t);
+  const bool poly6 = config_.pressure_kernel == SphPressureKernel::kPoly6;
+  // Without viscosity or the tensile correction their terms are zero (adding them changes no sum), so they
+  // are left out.
+  const bool viscous = config_.viscosity != 0.0, tensile = config_.tensile_correction > 0.0;
+  if (tensile) {
+    if (viscous)
+      poly6 ? forcePassOf<true, true, true>(t) : forcePassOf<false, true, true>(t);
+    else
+      poly6 ? forcePassOf<true, false, true>(t) : forcePassOf<false, false, true>(t);
   } else {
-    poly6_pressure ? forcePassOf<true, false>(t) : forcePassOf<false, false>(t);
+    if (viscous)
+      poly6 ? forcePassOf<true, true, false>(t) : forcePassOf<false, true, false>(t);
+    else
+      poly6 ? forcePassOf<true, false, false>(t) : forcePassOf<false, false, false>(t);
   }
 }
 
-template <bool kPoly6Pressure, bool kViscosity>
+template <bool kPoly6Pressure, bool kViscosity, bool kTensile>
 void SphFluidSolver::forcePassOf(int t) {
   const size_t first = thread_first_[t], last = thread_first_[t + 1];
   const uint32_t* list = thread_lists_[t].data();
@@ -463,6 +481,10 @@ void SphFluidSolver::forcePassOf(int t) {
   const double* mass = s_mass_.data();
   const double* rho = s_rho_.data();
   const double* press_term = s_press_term_.data();
+  const double* tension = kTensile ? s_tension_.data() : nullptr;
+  // f = W(r) / W(Delta p) = (q / q_p)^3 for poly6, q = 1 - r^2/h^2; f^4 = (q / q_p)^12.
+  const double inv_q_spacing =
+      kTensile ? 1.0 / (1.0 - config_.tensile_spacing * config_.tensile_spacing / h2) : 0.0;
   const SphParticleKind* kind = s_kind_.data();
   for (size_t s = first; s < last; ++s) {
     if (kind[s] != SphParticleKind::kFluid) {
@@ -481,12 +503,21 @@ void SphFluidSolver::forcePassOf(int t) {
       const double mm = mi * mass[j];
       const double q = 1.0 - d2 / h2;
       // -grad_i of pressure: -m_i m_j (p_i/rho_i^2 + p_j/rho_j^2) grad W^(r_ij)   (8.17)
+      const double pressure = pti + press_term[j];
+      if (kTensile) {
+        // + (R_i + R_j) f^4 (Monaghan 2000), along the spiky gradient whatever the pressure kernel: poly6's
+        // vanishes as r -> 0 and would let a pair that came close stay paired.
+        const double a = q * inv_q_spacing, a2 = a * a, a4 = a2 * a2;  // a = (W(r) / W(Delta p))^(1/3)
+        const double d = std::sqrt(d2), u = 1.0 - d * inv_h;
+        if (d > 0.0)
+          force -= ((tension[s] + tension[j]) * (a4 * a4 * a4) * mm * (spiky_grad * u * u / d)) * r;
+      }
       if (kPoly6Pressure) {
-        force -= ((pti + press_term[j]) * mm * (poly6_grad * q * q)) * r;  // grad W = poly6_grad q^2 r
+        force -= (pressure * mm * (poly6_grad * q * q)) * r;  // grad W = poly6_grad q^2 r
       } else {
         const double d = std::sqrt(d2);
         const double u = 1.0 - d * inv_h;
-        if (d > 0.0) force -= ((pti + press_term[j]) * mm * (spiky_grad * u * u / d)) * r;
+        if (d > 0.0) force -= (pressure * mm * (spiky_grad * u * u / d)) * r;
       }
       const Vec3 dv = vel[j] - vi;
       if (kViscosity) {

@@ -32,12 +32,18 @@ enum class SphPressureKernel { kSpiky, kPoly6 };
 enum class SphBoundaryPressure { kSummation, kExtrapolated };
 
 struct SphFluidConfig {
-  int dimension = 3;                                                        ///< 2 (x-y plane, z = 0) or 3
-  double smoothing_length = 0.1;                                            ///< h, kernel support radius
-  double rest_density = 1000.0;                                             ///< rho_0 (8.15)
-  double stiffness = 2.0e5;                                                 ///< K (8.15), pressure units
-  double gamma = 1.0;                                                       ///< Gamma (8.15), >= 1
-  double negative_pressure_scale = 0.01;                                    ///< zeta (8.16), in [0, 1]
+  int dimension = 3;                      ///< 2 (x-y plane, z = 0) or 3
+  double smoothing_length = 0.1;          ///< h, kernel support radius
+  double rest_density = 1000.0;           ///< rho_0 (8.15)
+  double stiffness = 2.0e5;               ///< K (8.15), pressure units
+  double gamma = 1.0;                     ///< Gamma (8.15), >= 1
+  double negative_pressure_scale = 0.01;  ///< zeta (8.16), in [0, 1]
+  /// Tensile-instability correction (Monaghan 2000, J. Comput. Phys. 159, eq. 4.4): a pair of particles under
+  /// negative pressure is pushed apart by (R_i + R_j) f^4 with R_i = epsilon |p_i| / rho_i^2 and
+  /// f = W(r) / W(tensile_spacing) (poly6), a short-range repulsion that keeps particles under tension from
+  /// pairing up (clumping) while the fluid pulls. epsilon: 0 = off (no cost), 0.2 is Monaghan's value.
+  double tensile_correction = 0.0;
+  double tensile_spacing = 0.0;  ///< the initial particle spacing Delta p, in (0, h); needed when on
   SphPressureKernel pressure_kernel = SphPressureKernel::kPoly6;            ///< poly6: conservative
   SphBoundaryPressure boundary_pressure = SphBoundaryPressure::kSummation;  ///< summation: conservative
   double viscosity = 0.0;                ///< mu (8.18), shear viscosity, >= 0
@@ -180,7 +186,7 @@ class SphFluidSolver {
   void boundaryPressurePass(int t);
   void forcePass(int t);
   /// forcePass for one pressure kernel, with or without viscosity (without it no distance is needed).
-  template <bool kPoly6Pressure, bool kViscosity>
+  template <bool kPoly6Pressure, bool kViscosity, bool kTensile>
   void forcePassOf(int t);
   void addTermForces(const std::vector<Vec3>& velocities);
   /// SphForceTerm::beginStep(dt) of every force term.
@@ -218,6 +224,7 @@ class SphFluidSolver {
   SphSortedGrid grid_;
   std::vector<Vec3> s_pos_, s_vel_, s_acc_, s_xsph_;
   std::vector<double> s_mass_, s_rho_, s_press_, s_press_term_;
+  std::vector<double> s_tension_;  // R_i of the tensile correction (0 unless p_i < 0)
   std::vector<SphParticleKind> s_kind_;
   std::vector<uint32_t> row_begin_, row_count_;  // neighbour rows in the owning thread's buffer
   std::vector<std::vector<uint32_t>> thread_lists_;

@@ -136,6 +136,7 @@ void SceneReader::readSolver(const YAML::Node& node) {
                   "speed_of_sound",
                   "gamma",
                   "negative_pressure_scale",
+                  "tensile_correction",
                   "pressure_kernel",
                   "boundary_pressure",
                   "viscosity",
@@ -183,6 +184,14 @@ void SceneReader::readSolver(const YAML::Node& node) {
   if (field("negative_pressure_scale", "negative_pressure_scale"))
     c.negative_pressure_scale =
         src_.number(node["negative_pressure_scale"], "solver.negative_pressure_scale");
+  if (const YAML::Node t = field("tensile_correction", "tensile_correction")) {
+    c.tensile_correction = src_.number(t, "solver.tensile_correction");
+    field_nodes_["tensile_spacing"] = t;
+    if (c.tensile_correction > 0) {  // f = W(r) / W(Delta p) with the scene's particle spacing
+      if (spacing_ <= 0) src_.fail(t, "solver.tensile_correction needs the scene's 'spacing'");
+      c.tensile_spacing = spacing_;
+    }
+  }
   if (const YAML::Node k = field("pressure_kernel", "pressure_kernel")) {
     c.pressure_kernel = src_.choice<SphPressureKernel>(
         k, "solver.pressure_kernel",

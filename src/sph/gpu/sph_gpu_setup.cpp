@@ -41,6 +41,8 @@ SphGpuSystem<R> makeSphGpuSystem(const SphFluidConfig& config, const std::vector
   require(config.fixed_dt > 0.0, "SphFluidConfig.fixed_dt must be > 0 (the GPU path has no adaptive step)");
   require(config.boundary_pressure == SphBoundaryPressure::kSummation,
           "SphFluidConfig.boundary_pressure must be kSummation on the GPU path");
+  require(config.tensile_correction == 0.0,
+          "SphFluidConfig.tensile_correction is not supported on the GPU path (0 = off)");
   require(grid.margin_h >= 0.0 && std::isfinite(grid.margin_h), "SphGpuGridOptions.margin_h must be >= 0");
   const size_t n = particles.size();
   require(n > 0, "SphParticles are empty");
