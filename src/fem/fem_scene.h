@@ -13,6 +13,7 @@
 
 #include "relaxed_connectivity/fem/fem_mesh_source.h"
 #include "relaxed_connectivity/fem/fem_output.h"
+#include "relaxed_connectivity/fem/fem_probes.h"
 #include "relaxed_connectivity/fem/plane_cut.h"
 #include "relaxed_connectivity/fem/polyhedral_mesh.h"
 #include "relaxed_connectivity/fem/warped_dynamics.h"
@@ -105,6 +106,9 @@ struct FemScene {
   std::vector<FemHeldRegion> held;  ///< analysis: static or modal (so far)
   int modes = 6;                    ///< analysis: modal
   std::vector<FemLoad> loads;       ///< analysis: static only (so far)
+  /// analysis: dynamic: <name>_probes.csv in the output folder (fem_probes.h), a row at the start and per
+  /// frame.
+  std::vector<FemProbe> probes;
   /// analysis: static: a body force per unit mass (e.g. gravity), f_i = m_i a on the lumped masses (9.21).
   Vec3 body_acceleration = Vec3::Zero();
   double frameTime() const { return steps_per_frame * dynamics.time_step; }

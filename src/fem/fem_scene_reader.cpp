@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -48,7 +49,7 @@ class SceneReader {
   void read(const YAML::Node& root) {
     src_.allowKeys(root,
                    {"name", "mesh", "placement", "material", "dynamics", "ground", "frames", "cuts", "output",
-                    "analysis", "held", "loads", "body_acceleration", "modes"},
+                    "analysis", "held", "loads", "body_acceleration", "modes", "probes"},
                    "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
     if (const YAML::Node a = root["analysis"])
@@ -65,6 +66,9 @@ class SceneReader {
     for (const char* key : {"loads", "body_acceleration"})
       if (root[key] && modal) src_.fail(root[key], std::string(key) + ": not with analysis: modal");
     if (root["modes"] && !modal) src_.fail(root["modes"], "modes: only with analysis: modal");
+    if (root["probes"] && !dynamic)
+      src_.fail(root["probes"],
+                "probes: only with analysis: dynamic (static and modal runs report in their JSON)");
     if (root["modes"]) scene_.modes = int(src_.integer(root["modes"], "modes", 1, 1000));
     for (const char* key : {"ground", "cuts"})
       if (root[key] && !dynamic) src_.fail(root[key], std::string(key) + ": only with analysis: dynamic");
@@ -83,6 +87,7 @@ class SceneReader {
       scene_.body_acceleration = src_.vec3(root["body_acceleration"], "body_acceleration");
     if (root["held"]) readHeld(root["held"]);
     if (root["loads"]) readLoads(root["loads"]);
+    if (root["probes"]) readProbes(root["probes"]);
     if (!dynamic && scene_.held.empty())
       src_.fail(root, std::string("analysis: ") + (modal ? "modal" : "static") +
                           " needs 'held' regions (else the body is free to move rigidly)");
@@ -173,12 +178,7 @@ class SceneReader {
   std::vector<int> nodesInBox(const YAML::Node& node, const std::string& where, Vec3* lo, Vec3* hi) const {
     src_.box(node, where, lo, hi);
     const PolyhedralMesh& mesh = *scene_.mesh;
-    Vec3 mesh_lo = mesh.node(0), mesh_hi = mesh.node(0);
-    for (int i = 0; i < mesh.numNodes(); ++i) {
-      mesh_lo = mesh_lo.cwiseMin(mesh.node(i));
-      mesh_hi = mesh_hi.cwiseMax(mesh.node(i));
-    }
-    const double tolerance = 1e-9 * (mesh_hi - mesh_lo).norm();
+    const double tolerance = femBoxTolerance(mesh);
     std::vector<int> nodes;
     for (int i = 0; i < mesh.numNodes(); ++i)
       if (((mesh.node(i) - *lo).array() >= -tolerance).all() &&
@@ -233,6 +233,27 @@ class SceneReader {
                         load.force = src_.vec3(src_.require(entry, "force", where), where + ".force");
                         scene_.loads.push_back(std::move(load));
                       });
+  }
+
+  void readProbes(const YAML::Node& node) {
+    src_.forEachEntry(
+        node, "probes", "{name, lo, hi}", [&](const YAML::Node& entry, const std::string& where) {
+          src_.allowKeys(entry, {"name", "lo", "hi"}, where);
+          FemProbe probe;
+          const YAML::Node name = src_.require(entry, "name", where);
+          probe.name = src_.string(name, where + ".name");
+          const bool word =
+              !probe.name.empty() && std::all_of(probe.name.begin(), probe.name.end(), [](char c) {
+                return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+              });
+          if (!word)
+            src_.fail(name,
+                      where + ".name: '" + probe.name + "' (letters, digits and _: a CSV column prefix)");
+          for (const FemProbe& other : scene_.probes)
+            if (other.name == probe.name) src_.fail(name, where + ".name: '" + probe.name + "' is taken");
+          nodesInBox(entry, where, &probe.lo, &probe.hi);  // fails for a box without nodes
+          scene_.probes.push_back(std::move(probe));
+        });
   }
 
   void readGround(const YAML::Node& node) {

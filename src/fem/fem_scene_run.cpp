@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "relaxed_connectivity/fem/fem_modal.h"
@@ -205,6 +206,26 @@ FemRunStats runFemScene(const FemScene& scene, const FemRunOptions& options) {
   };
   if (write) std::filesystem::create_directories(options.out_dir);
   output(0);
+  // Probes: a CSV row at the start and after every frame.
+  std::ofstream probes;
+  const double probe_tolerance = femBoxTolerance(*scene.mesh);
+  auto probe = [&] {
+    if (!probes.is_open()) return;
+    std::vector<const WarpedDynamics*> bodies;
+    for (int b = 0; b < sim.numBodies(); ++b) bodies.push_back(&sim.body(b));
+    std::vector<FemRegionMeasures> regions;
+    for (const FemProbe& p : scene.probes) regions.push_back(measureFemRegion(bodies, p, probe_tolerance));
+    writeFemProbeRow(probes, sim.time(), measureFemBodies(bodies), regions);
+  };
+  if (!scene.probes.empty() && !options.out_dir.empty()) {
+    std::filesystem::create_directories(options.out_dir);
+    const std::string path = (std::filesystem::path(options.out_dir) / (scene.name + "_probes.csv")).string();
+    probes.open(path);
+    if (!probes) throw std::runtime_error("runFemScene: cannot write " + path);
+    writeFemProbeHeader(probes, scene.probes);
+    stats.files.push_back(path);
+  }
+  probe();
 
   for (int frame = 1; frame <= scene.frame_count; ++frame) {
     const Clock::time_point start = Clock::now();
@@ -231,6 +252,7 @@ FemRunStats runFemScene(const FemScene& scene, const FemRunOptions& options) {
       options.on_frame(r);
     }
     output(frame);
+    probe();
   }
 
   stats.nodes = sim.numNodes();

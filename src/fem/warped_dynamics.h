@@ -103,6 +103,8 @@ class WarpedDynamics {
   const Eigen::VectorXd& restPositions() const { return rest_; }
   const Eigen::VectorXd& positions() const { return positions_; }
   const Eigen::VectorXd& velocities() const { return velocities_; }
+  /// The lumped masses (9.21) per degree of freedom (node i's mass at 3 i, 3 i + 1 and 3 i + 2).
+  const Eigen::VectorXd& lumpedMasses() const { return masses3_; }
   void setPositions(const Eigen::VectorXd& positions);
   void setVelocities(const Eigen::VectorXd& velocities);
   /// Nodal forces applied in addition to gravity (m_i g).

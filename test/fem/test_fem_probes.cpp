@@ -1,0 +1,98 @@
+// Probes of dynamic FEM scenes (key probes): a free-falling block's mass-weighted mean displacement follows
+// the implicit Euler free fall exactly (internal forces cancel: the centre of mass falls by g h^2 n (n + 1) /
+// 2 after n steps), its momentum is M g t, a face probe holds the face's nodes; one CSV row at the start and
+// per frame; bad keys named with their line.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "fem_scene_test_support.h"
+#include "relaxed_connectivity/fem/fem_scene_reader.h"
+#include "relaxed_connectivity/fem/fem_scene_run.h"
+
+namespace rc {
+namespace {
+
+const std::string kFalling =
+    "name: falling\n"
+    "material: {youngs_modulus: 500, poisson_ratio: 0.3, density: 2}\n"
+    "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 0.5, 0.5], cells: [4, 2, 2]}\n"
+    "dynamics: {time_step: 0.01, gravity: [0, 0, -9.81], solver: {type: ldlt}}\n"
+    "frames: {count: 5, steps_per_frame: 4}\n"
+    "output: {vtu: false}\n"
+    "probes:\n"
+    "  - {name: all, lo: [0, 0, 0], hi: [1, 0.5, 0.5]}\n"
+    "  - {name: end_face, lo: [1, 0, 0], hi: [1, 0.5, 0.5]}\n";
+
+std::vector<std::vector<std::string>> readCsv(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> row;
+    std::stringstream s(line);
+    for (std::string cell; std::getline(s, cell, ',');) row.push_back(cell);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+TEST(FemProbes, AFallingBlocksMeanDisplacementIsTheDiscreteFreeFall) {
+  const FemScene scene = parseFemScene(kFalling, "falling.yaml", ".");
+  ASSERT_EQ(scene.probes.size(), 2u);
+  const std::string dir = ::testing::TempDir() + "fem_probes";
+  std::filesystem::remove_all(dir);
+  FemRunOptions options;
+  options.out_dir = dir;
+  const FemRunStats stats = runFemScene(scene, options);
+  ASSERT_TRUE(stats.error.empty()) << stats.error;
+  const auto rows = readCsv(dir + "/falling_probes.csv");
+  ASSERT_EQ(rows.size(), 1u + 6u);  // header, the start, 5 frames
+  const std::vector<std::string>& header = rows[0];
+  ASSERT_EQ(header.size(), 7u + 2u * 6u);
+  const auto column = [&](const std::string& name) {
+    for (size_t c = 0; c < header.size(); ++c)
+      if (header[c] == name) return c;
+    ADD_FAILURE() << "no column " << name;
+    return size_t(0);
+  };
+  const double h = 0.01, g = 9.81, mass = 2 * 0.25;
+  for (size_t r = 1; r < rows.size(); ++r) {
+    const double t = std::stod(rows[r][column("time")]);
+    const double n = std::round(t / h);
+    EXPECT_NEAR(t, 0.04 * double(r - 1), 1e-12);
+    EXPECT_NEAR(std::stod(rows[r][column("all_uz")]), -g * h * h * n * (n + 1) / 2, 1e-12) << "t " << t;
+    EXPECT_NEAR(std::stod(rows[r][column("all_ux")]), 0.0, 1e-12);
+    EXPECT_NEAR(std::stod(rows[r][column("momentum_z")]), -mass * g * t, 1e-9);
+    EXPECT_NEAR(std::stod(rows[r][column("all_mass")]), mass, 1e-12);
+    EXPECT_EQ(rows[r][column("all_nodes")], "45");                   // 5 x 3 x 3
+    EXPECT_EQ(rows[r][column("end_face_nodes")], "9");               // the x = 1 face
+    EXPECT_LT(std::stod(rows[r][column("elastic_energy")]), 1e-20);  // falls undeformed
+  }
+  EXPECT_NE(std::find(stats.files.begin(), stats.files.end(), dir + "/falling_probes.csv"),
+            stats.files.end());
+}
+
+TEST(FemProbes, BadProbesAreNamedWithTheirLine) {
+  const std::string head = kFalling.substr(0, kFalling.find("probes:"));  // 6 lines
+  expectFemSceneErrorAt(head + "probes:\n  - {name: a, lo: [5, 5, 5], hi: [6, 6, 6]}\n", 8, "holds no node");
+  expectFemSceneErrorAt(head + "probes:\n  - {name: a b, lo: [0, 0, 0], hi: [1, 1, 1]}\n", 8,
+                        "letters, digits");
+  expectFemSceneErrorAt(head +
+                            "probes:\n  - {name: a, lo: [0, 0, 0], hi: [1, 1, 1]}\n  - {name: a, lo: [0, 0, "
+                            "0], hi: [1, 1, 1]}\n",
+                        9, "is taken");
+  expectFemSceneErrorAt(head + "probes:\n  - {lo: [0, 0, 0], hi: [1, 1, 1]}\n", 8, "name");
+  expectFemSceneErrorAt(
+      "analysis: static\nmaterial: {youngs_modulus: 1, poisson_ratio: 0}\n"
+      "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1], cells: [1, 1, 1]}\n"
+      "held:\n  - {lo: [0, 0, 0], hi: [0, 1, 1]}\nprobes:\n  - {name: a, lo: [0, 0, 0], hi: [1, 1, 1]}\n",
+      7, "only with analysis: dynamic");
+}
+
+}  // namespace
+}  // namespace rc
