@@ -7,10 +7,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "../csv_test_support.h"
 #include "fem_scene_test_support.h"
 #include "relaxed_connectivity/fem/fem_scene_reader.h"
 #include "relaxed_connectivity/fem/fem_scene_run.h"
@@ -29,18 +29,6 @@ const std::string kFalling =
     "  - {name: all, lo: [0, 0, 0], hi: [1, 0.5, 0.5]}\n"
     "  - {name: end_face, lo: [1, 0, 0], hi: [1, 0.5, 0.5]}\n";
 
-std::vector<std::vector<std::string>> readCsv(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::vector<std::string>> rows;
-  for (std::string line; std::getline(in, line);) {
-    std::vector<std::string> row;
-    std::stringstream s(line);
-    for (std::string cell; std::getline(s, cell, ',');) row.push_back(cell);
-    rows.push_back(row);
-  }
-  return rows;
-}
-
 TEST(FemProbes, AFallingBlocksMeanDisplacementIsTheDiscreteFreeFall) {
   const FemScene scene = parseFemScene(kFalling, "falling.yaml", ".");
   ASSERT_EQ(scene.probes.size(), 2u);
@@ -50,7 +38,8 @@ TEST(FemProbes, AFallingBlocksMeanDisplacementIsTheDiscreteFreeFall) {
   options.out_dir = dir;
   const FemRunStats stats = runFemScene(scene, options);
   ASSERT_TRUE(stats.error.empty()) << stats.error;
-  const auto rows = readCsv(dir + "/falling_probes.csv");
+  std::ifstream csv(dir + "/falling_probes.csv");
+  const auto rows = test::readCsvRows(csv);
   ASSERT_EQ(rows.size(), 1u + 6u);  // header, the start, 5 frames
   const std::vector<std::string>& header = rows[0];
   ASSERT_EQ(header.size(), 7u + 2u * 6u);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../csv_test_support.h"
 #include "relaxed_connectivity/sph/sph_lattice.h"
 #include "relaxed_connectivity/sph/sph_probes.h"
 #include "relaxed_connectivity/sph/sph_scene_builders.h"
@@ -74,13 +75,7 @@ TEST(SphProbes, TheSceneKeyWritesARowPerFrame) {
   std::getline(in, header);
   EXPECT_EQ(header.rfind("time,particles,mass,kinetic_energy,momentum_x", 0), 0u) << header;
   EXPECT_NE(header.find(",density_1,pressure_1"), std::string::npos) << header;
-  std::vector<std::vector<std::string>> rows;
-  for (std::string line; std::getline(in, line);) {
-    std::vector<std::string> cells;
-    std::stringstream s(line);
-    for (std::string cell; std::getline(s, cell, ',');) cells.push_back(cell);
-    rows.push_back(cells);
-  }
+  const std::vector<std::vector<std::string>> rows = test::readCsvRows(in);
   ASSERT_EQ(rows.size(), 4u);  // frame 0 and three frames
   for (size_t r = 0; r < rows.size(); ++r) {
     ASSERT_EQ(rows[r].size(), 22u + 4u);
