@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/ros/fem_simulator.h"
 
+#include <relaxed_connectivity/FemProbes.h>
 #include <relaxed_connectivity/FemStats.h>
 #include <tf2_eigen/tf2_eigen.h>
 
@@ -11,6 +12,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "relaxed_connectivity/fem/fem_probes.h"
 #include "relaxed_connectivity/fem/fem_scene_reader.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 #include "relaxed_connectivity/ros/simulation_loop.h"
@@ -90,6 +92,7 @@ FemSimulator::FemSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   surface_pub_ = private_nh_.advertise<visualization_msgs::Marker>("surface", 1);
   nodes_pub_ = private_nh_.advertise<sensor_msgs::PointCloud2>("nodes", 1);
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::FemStats>("stats", 1);
+  probes_pub_ = private_nh_.advertise<relaxed_connectivity::FemProbes>("probes", 10);
   scene_ = std::make_unique<FemScene>(loadFemScene(params_.scene));
   simulation_ = std::make_unique<FemSimulation>(*scene_);
   loop_.setRunning(params_.autostart);
@@ -189,6 +192,35 @@ void FemSimulator::publish() {
   stats.topology_ms = 1e3 * simulation_->phaseTimes().topology;
   stats.error = loop_.error();
   stats_pub_.publish(stats);
+  if (!scene_->probes.empty()) publishProbes(stats.header);
+}
+
+void FemSimulator::publishProbes(const std_msgs::Header& header) {
+  // The scene's probes (its key probes), as rc_fem writes them per frame.
+  std::vector<const WarpedDynamics*> bodies;
+  for (int b = 0; b < simulation_->numBodies(); ++b) bodies.push_back(&simulation_->body(b));
+  const FemBodiesMeasures all = measureFemBodies(bodies);
+  relaxed_connectivity::FemProbes probes;
+  probes.header = header;
+  probes.scene = scene_->name;
+  probes.time = simulation_->time();
+  probes.kinetic_energy = all.kinetic_energy;
+  probes.elastic_energy = all.elastic_energy;
+  probes.gravity_potential_energy = all.gravity_potential_energy;
+  probes.momentum.x = all.momentum.x(), probes.momentum.y = all.momentum.y(),
+  probes.momentum.z = all.momentum.z();
+  const double tolerance = femBoxTolerance(*scene_->mesh);
+  for (const FemProbe& probe : scene_->probes) {
+    const FemRegionMeasures m = measureFemRegion(bodies, probe, tolerance);
+    probes.names.push_back(probe.name);
+    probes.nodes.push_back(uint32_t(m.nodes));
+    probes.masses.push_back(m.mass);
+    geometry_msgs::Vector3 u;
+    u.x = m.mean_displacement.x(), u.y = m.mean_displacement.y(), u.z = m.mean_displacement.z();
+    probes.mean_displacements.push_back(u);
+    probes.max_displacements.push_back(m.max_displacement);
+  }
+  probes_pub_.publish(probes);
 }
 
 std::vector<Vec3> FemSimulator::polygonInSceneFrame(const relaxed_connectivity::FemCut::Request& request) {

@@ -4,7 +4,8 @@
 // Publishes   ~surface (visualization_msgs/Marker, TRIANGLE_LIST of the boundary triangles of all bodies at
 //             their current positions, coloured by body), ~nodes (sensor_msgs/PointCloud2: x y z,
 //             velocity[3], displacement[3] (float32), body (uint32)), ~stats (relaxed_connectivity/FemStats),
-//             all in frame_id (the scene's frame)
+//             all in frame_id (the scene's frame); ~probes (relaxed_connectivity/FemProbes) with each frame
+//             when the scene has probes (its key probes, as rc_fem writes them)
 // Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N | reset; reset
 // restores the
 //             scene file's mesh at t = 0, paused), ~cut (relaxed_connectivity/FemCut: a convex planar polygon
@@ -72,6 +73,8 @@ class FemSimulator {
   /// resets to t = 0, paused, and returns the error (empty: none).
   std::string advance(double duration, uint64_t steps);
   void publish();
+  /// The scene's probes on ~probes (relaxed_connectivity/FemProbes), with each frame.
+  void publishProbes(const std_msgs::Header& header);
   void resetSimulation();
   bool cutCallback(relaxed_connectivity::FemCut::Request& request,
                    relaxed_connectivity::FemCut::Response& response);
@@ -87,7 +90,7 @@ class FemSimulator {
   std::unique_ptr<FemSimulation> simulation_;
   int interactive_cuts_ = 0;
   double step_ms_ = 0.0;
-  ros::Publisher surface_pub_, nodes_pub_, stats_pub_;
+  ros::Publisher surface_pub_, nodes_pub_, stats_pub_, probes_pub_;
   ros::ServiceServer cut_srv_;
 };
 
