@@ -3,7 +3,7 @@
 
 Usage: /usr/bin/python3 scripts/session_summary.py OUTPUT.txt [PAINT_STATS.csv]
        (stop it with SIGINT; the summary is written then; PAINT_STATS.csv: the paint model's memory-relevant stats
-       per message: unix time, active surfels, children, undo journal bytes)
+       per message: unix time, active surfels, children, undo journal bytes, heap in use and freed but held)
 Topics: paint_stats (relaxed_connectivity/PaintStats), paint_renderer/stats (PaintRenderStats), haptic/stats
 (HapticLoopStats). Rates are over the periods in which something happened (painting events, rendered frames);
 latencies are the largest per-period percentiles and the renderer's own over the whole session (device pose stamp
@@ -98,9 +98,10 @@ def main():
     s.write(sys.argv[1])
     if len(sys.argv) > 2:
         with open(sys.argv[2], "w") as f:
-            f.write("unix_time,active_surfels,children,journal_bytes\n")
+            f.write("unix_time,active_surfels,children,journal_bytes,heap_in_use_bytes,heap_free_bytes\n")
             for m in s.paint:
-                f.write("%.3f,%d,%d,%d\n" % (m.header.stamp.to_sec(), m.active_surfels, m.children, m.journal_bytes))
+                f.write("%.3f,%d,%d,%d,%d,%d\n" % (m.header.stamp.to_sec(), m.active_surfels, m.children,
+                                                  m.journal_bytes, m.heap_in_use_bytes, m.heap_free_bytes))
     rospy.signal_shutdown("done")
 
 

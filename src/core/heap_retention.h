@@ -17,4 +17,12 @@ namespace rc {
 /// setting (not glibc).
 bool fixMallocMmapThreshold(size_t bytes = 4 << 20);
 
+/// The process's heap as malloc sees it (all arenas): bytes handed out (mapped blocks included) and bytes
+/// freed but kept in the arenas (which RSS counts where touched). Zeros where the C library cannot say (not
+/// glibc 2.33+). Walks the free lists: call it at a stats rate, not per event.
+struct HeapUsage {
+  size_t in_use = 0, free_held = 0;
+};
+HeapUsage heapUsage();
+
 }  // namespace rc

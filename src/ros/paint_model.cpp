@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "relaxed_connectivity/core/heap_retention.h"
 #include "relaxed_connectivity/io/cloud_io.h"
 #include "relaxed_connectivity/paint/brush_preset_reader.h"
 #include "relaxed_connectivity/paint/paint_type_reader.h"
@@ -413,6 +414,9 @@ void PaintModel::publishStats(const ros::WallTime& now) {
     s.redo_strokes = uint32_t(journal_->redoCount());
     s.journal_bytes = journal_->bytes();
   }
+  const HeapUsage heap = heapUsage();
+  s.heap_in_use_bytes = heap.in_use;
+  s.heap_free_bytes = heap.free_held;
   const double per_tick = ticks_ > 0 ? 1e3 / double(ticks_) : 0.0;
   s.brush_ms = brush_s_ * per_tick;
   s.transfer_ms = transfer_s_ * per_tick;

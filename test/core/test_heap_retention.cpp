@@ -31,5 +31,20 @@ TEST(HeapRetention, BlocksAboveTheFixedThresholdStayMappedAfterLargerOnesWereFre
 #endif
 }
 
+TEST(HeapRetention, HeapUsageCountsWhatIsHandedOutAndFreed) {
+#ifndef RC_HAVE_MALLINFO2
+  GTEST_SKIP() << "needs glibc 2.33+ (mallinfo2)";
+#else
+  const HeapUsage before = heapUsage();
+  void* block = std::malloc(1 << 16);  // below the mmap threshold: from an arena
+  ASSERT_NE(block, nullptr);
+  const HeapUsage holding = heapUsage();
+  EXPECT_GE(holding.in_use, before.in_use + (1 << 16));
+  EXPECT_LE(holding.in_use, before.in_use + (1 << 16) + 64);
+  std::free(block);
+  EXPECT_EQ(heapUsage().in_use, before.in_use);
+#endif
+}
+
 }  // namespace
 }  // namespace rc
