@@ -209,6 +209,9 @@ void PaintSurface::removeChild(size_t original, size_t k) {
   notify(original);
   list.erase(list.begin() + long(k));
   --child_count_;
+  // Resampling removes and adds children all session long: a list keeps at most twice its children's room
+  // (plus a few), not the most it ever held.
+  if (list.capacity() > 2 * list.size() + 4) list.shrink_to_fit();
 }
 
 void PaintSurface::clearChildren(size_t original) {

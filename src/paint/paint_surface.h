@@ -92,7 +92,8 @@ class PaintSurface {
   PaintColour baseColour(size_t original) const;
   /// The indices of the originals within `radius` of x (enabled or not), into `out` (cleared first).
   void originalsWithin(const Vec3& x, double radius, std::vector<uint32_t>& out) const;
-  /// Removes child `k` of `original` (a child deleted by resampling, 5.5); the original stays disabled.
+  /// Removes child `k` of `original` (a child deleted by resampling, 5.5); the original stays disabled. The
+  /// list's room is trimmed when it exceeds twice its children (plus 4).
   void removeChild(size_t original, size_t k);
   /// Appends a child to its father (the closest original, or `father` when given) and disables the father.
   /// Returns the father.

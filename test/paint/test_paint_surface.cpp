@@ -74,6 +74,19 @@ TEST(PaintSurface, ExplicitFatherAndEnableFlagsCount) {
   EXPECT_EQ(s.activeCount(), s.originalCount());
 }
 
+TEST(PaintSurface, AChildListKeepsNoMoreThanTwiceItsChildrensRoom) {
+  // Resampling adds and removes children at the same originals all session long (issue 20's soak).
+  PaintSurface s(paint_test::planeCloud(0.002, 0.001));
+  ChildSurfel c;
+  c.normal = Vec3::UnitZ();
+  for (int i = 0; i < 64; ++i) s.addChild(0, c);
+  EXPECT_GE(s.children(0).capacity(), 64u);
+  for (int i = 0; i < 60; ++i) s.removeChild(0, s.children(0).size() - 1);
+  EXPECT_EQ(s.children(0).size(), 4u);
+  EXPECT_LE(s.children(0).capacity(), 2u * 4u + 4u);
+  EXPECT_EQ(s.childCount(), 4u);
+}
+
 /// A sphere and a flat plane (a zero-thickness bounding box) to query, each with its surface and a kd-tree
 /// over the same points as the reference.
 struct QueriedSurface {
