@@ -94,6 +94,7 @@ FemSimulator::FemSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::FemStats>("stats", 1);
   probes_pub_ = private_nh_.advertise<relaxed_connectivity::FemProbes>("probes", 10);
   scene_ = std::make_unique<FemScene>(loadFemScene(params_.scene));
+  probe_tolerance_ = femBoxTolerance(*scene_->mesh);
   simulation_ = std::make_unique<FemSimulation>(*scene_);
   loop_.setRunning(params_.autostart);
   ROS_INFO_STREAM("fem_sim: loaded " << params_.scene << ": " << simulation_->numElements() << " elements, "
@@ -209,9 +210,8 @@ void FemSimulator::publishProbes(const std_msgs::Header& header) {
   probes.gravity_potential_energy = all.gravity_potential_energy;
   probes.momentum.x = all.momentum.x(), probes.momentum.y = all.momentum.y(),
   probes.momentum.z = all.momentum.z();
-  const double tolerance = femBoxTolerance(*scene_->mesh);
   for (const FemProbe& probe : scene_->probes) {
-    const FemRegionMeasures m = measureFemRegion(bodies, probe, tolerance);
+    const FemRegionMeasures m = measureFemRegion(bodies, probe, probe_tolerance_);
     probes.names.push_back(probe.name);
     probes.nodes.push_back(uint32_t(m.nodes));
     probes.masses.push_back(m.mass);

@@ -88,6 +88,7 @@ class FemSimulator {
   SimulationLoop loop_;  // timer, ~command, running, error, the mutex guarding the simulation
   std::unique_ptr<FemScene> scene_;
   std::unique_ptr<FemSimulation> simulation_;
+  double probe_tolerance_ = 0.0;  // of the scene's probe boxes (femBoxTolerance of its rest mesh)
   int interactive_cuts_ = 0;
   double step_ms_ = 0.0;
   ros::Publisher surface_pub_, nodes_pub_, stats_pub_, probes_pub_;
