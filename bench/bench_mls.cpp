@@ -27,6 +27,7 @@
 #include "relaxed_connectivity/surface/analytic_shapes.h"
 #include "relaxed_connectivity/surface/mls_surface.h"
 #include "relaxed_connectivity/surface/normal_estimation.h"
+#include "relaxed_connectivity/surface/radius_estimation.h"
 
 #ifdef RC_HAVE_PCL
 #include <pcl/point_types.h>
@@ -200,7 +201,8 @@ struct RcMethod {
   Normals normals;
   bool gaussian;  // PCL's weight exp(-d^2/r^2) clipped at r; else Wendland C2 with support r
   int max_iterations = 1;
-  bool inputs = true;  // projectInputs, else projectBatch (a kd-tree query per point)
+  bool inputs = true;         // projectInputs, else projectBatch (a kd-tree query per point)
+  int refinement_passes = 0;  // MlsConfig::normal_refinement_passes (estimated normals only)
 };
 
 MlsConfig configOf(const RcMethod& m, double radius, double tolerance, bool require_convergence) {
@@ -211,6 +213,7 @@ MlsConfig configOf(const RcMethod& m, double radius, double tolerance, bool requ
   config.weight =
       m.gaussian ? WeightFunction::clippedGaussian(radius, 1.0) : WeightFunction::wendland(radius);
   config.estimate_normals = m.normals == Normals::kEstimated;
+  config.normal_refinement_passes = m.refinement_passes;
   config.max_iterations = m.max_iterations;
   config.require_convergence = require_convergence;
   config.tolerance = tolerance;
@@ -287,19 +290,11 @@ void roundToFloat(std::vector<Vec3>& pts) {
   for (Vec3& p : pts) p = p.cast<float>().cast<double>();
 }
 
-/// Mean sample spacing of a cloud without a known area: the 6th-neighbour radius r6 of a uniform density
-/// rho satisfies pi r6^2 rho = 6, and h = 1 / sqrt(rho) (= sqrt(area / n) for the analytic samples).
-double measuredSpacing(const std::vector<Vec3>& pts) {
-  KdTree tree(pts);
-  std::vector<Neighbor> rows;
-  tree.knnBatch(pts, 7, rows);
-  double sum = 0;
-  for (size_t i = 0; i < pts.size(); ++i) sum += std::sqrt(rows[i * 7 + 6].sq_dist);
-  return sum / static_cast<double>(pts.size()) * std::sqrt(M_PI / 6.0);
-}
-
 const RcMethod kApssEstG{"rc apss est-normals G", MlsFit::kSphere, Normals::kEstimated, true};
 const RcMethod kApssEstW{"rc apss est-normals W", MlsFit::kSphere, Normals::kEstimated, false};
+const RcMethod kApssRefG{"rc apss refined-normals G", MlsFit::kSphere, Normals::kEstimated, true, 1, true, 1};
+const RcMethod kApssRefW{
+    "rc apss refined-normals W", MlsFit::kSphere, Normals::kEstimated, false, 1, true, 1};
 const RcMethod kPlaneG{"rc plane G", MlsFit::kPlane, Normals::kNone, true};
 const RcMethod kPlaneW{"rc plane W", MlsFit::kPlane, Normals::kNone, false};
 const RcMethod kPolyG{"rc polynomial2 G", MlsFit::kPolynomial, Normals::kNone, true};
@@ -338,7 +333,7 @@ bool loadReal(const std::string& name, const std::string& file, double noise_fac
   auto mesh = std::make_shared<TriangleMesh>(readMesh(file, options));
   set->name = name;
   set->cloud.positions = mesh->vertices.positions;
-  set->h = measuredSpacing(set->cloud.positions);
+  set->h = sampleSpacing(set->cloud.positions);
   if (noise_factor > 0) {
     std::mt19937_64 rng(23);
     std::normal_distribution<double> gauss(0.0, noise_factor * set->h);
@@ -538,7 +533,8 @@ int main(int argc, char** argv) {
     std::printf("%-12s %-30s %3s %10s %6s %10s %10s %10s %10s %10s %7s %7s\n", "data", "method", "thr",
                 "points/s", "spread", "mesh rms", "mesh max", "roughness", "drift rms", "drift max",
                 "invalid", "x PCL2");
-    const std::vector<RcMethod> table_c = {kApssEstG, kApssEstW, kPlaneG, kPlaneW, kPolyG};
+    const std::vector<RcMethod> table_c = {kApssEstG, kApssEstW, kApssRefG, kApssRefW,
+                                           kPlaneG,   kPlaneW,   kPolyG};
     std::vector<const Dataset*> sets;
     for (const Dataset& set : scans) sets.push_back(&set);
     for (const Dataset& set : meshes) sets.push_back(&set);

@@ -209,6 +209,9 @@ MlsSurface::MlsSurface(const SurfelCloud& cloud, const MlsConfig& config) : clou
   if (!(config.weight.scale > 0) || !std::isfinite(config.weight.scale))
     throw std::invalid_argument("MlsSurface: weight scale (support radius) must be positive and finite");
   if (config.max_iterations < 1) throw std::invalid_argument("MlsSurface: max_iterations must be >= 1");
+  if (config.normal_refinement_passes < 0 || config.normal_refinement_passes > 8)
+    throw std::invalid_argument("MlsSurface: normal_refinement_passes must be 0..8 (got " +
+                                std::to_string(config.normal_refinement_passes) + ")");
   if (cloud.size() >= std::numeric_limits<uint32_t>::max())
     throw std::invalid_argument("MlsSurface: too many points (" + std::to_string(cloud.size()) + ")");
   static std::atomic<uint64_t> next_id{1};
@@ -237,10 +240,15 @@ void MlsSurface::estimateNormalsOnce(const NeighborLists* lists, const std::vect
     if (!lists) {
       estimatePlaneNormals(cloud_.positions, tree(), config_.weight, support_, config_.min_neighbors,
                            normals_);
+      for (int pass = 0; pass < config_.normal_refinement_passes; ++pass)
+        refineNormalsBySpheres(cloud_.positions, tree(), config_.weight, support_, config_.min_neighbors,
+                               normals_);
       return;
     }
     std::vector<Vec3> local;
     estimatePlaneNormals(*positions, *lists, config_.weight, support_, config_.min_neighbors, local);
+    for (int pass = 0; pass < config_.normal_refinement_passes; ++pass)
+      refineNormalsBySpheres(*positions, *lists, config_.weight, support_, config_.min_neighbors, local);
     normals_.resize(local.size());
     for (size_t k = 0; k < local.size(); ++k) normals_[(*order)[k]] = local[k];
   });

@@ -48,6 +48,9 @@ struct MlsConfig {
   /// lists), each neighbourhood orienting them like the normal of the sample nearest the evaluation point.
   /// Output normals are then unoriented.
   bool estimate_normals = false;
+  /// With estimate_normals: passes of refineNormalsBySpheres after the plane normals (0: plane normals only).
+  /// One pass costs about one projection step and smooths the plane normals' noise (bench_mls, table (c)).
+  int normal_refinement_passes = 0;
 };
 
 struct MlsProjection {

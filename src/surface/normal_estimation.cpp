@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <queue>
 #include <stdexcept>
@@ -133,27 +134,99 @@ void estimateNormals(SurfelCloud& cloud, const NormalEstimationConfig& config) {
 
 namespace {
 
-/// The plane normal (3.5) at every sample from the candidates `candidates(i, samples)` gathers.
-template <class Gather>
-void planeNormals(size_t n, size_t min_neighbors, std::vector<Vec3>& normals, Gather&& gather) {
-  const size_t min_n = std::max<size_t>(min_neighbors, 3);
-  normals.assign(n, Vec3::Zero());
-#pragma omp parallel
+/// Candidates of sample i from prebuilt neighbour lists (the sample itself included).
+struct ListCandidates {
+  const NeighborLists& lists;
+  size_t gather(const std::vector<Vec3>& positions, const Vec3* normals, uint32_t i, MlsLocalSamples& s,
+                double support, const WeightFunction& weight) {
+    return s.gather(positions.data(), normals, lists.begin(i), lists.count(i), i, positions[i], support,
+                    weight,
+                    /*orient_normals=*/normals != nullptr);
+  }
+};
+
+/// Candidates of sample i from a kd-tree radius query (each thread its own copy: the buffers).
+struct TreeCandidates {
+  const KdTree& tree;
+  std::vector<Neighbor> hits;
+  std::vector<uint32_t> ids;
+  size_t gather(const std::vector<Vec3>& positions, const Vec3* normals, uint32_t i, MlsLocalSamples& s,
+                double support, const WeightFunction& weight) {
+    if (!positions[i].allFinite()) return 0;
+    tree.radius(positions[i], support, hits);
+    ids.resize(hits.size());
+    for (size_t k = 0; k < hits.size(); ++k) ids[k] = hits[k].index;
+    return s.gather(positions.data(), normals, ids.data(), ids.size(), MlsLocalSamples::kNoExtra,
+                    positions[i], support, weight, /*orient_normals=*/normals != nullptr);
+  }
+};
+
+/// fit(i, samples) for every sample i, in parallel, on the samples of positive weight around x_i (with
+/// `normals` when given, oriented per neighbourhood) when there are at least min_n of them.
+template <class Candidates, class Fit>
+void forEachNeighbourhood(const std::vector<Vec3>& positions, const Vec3* normals, Candidates candidates,
+                          double support, const WeightFunction& weight, size_t min_n, Fit&& fit) {
+#pragma omp parallel firstprivate(candidates)
   {
     MlsLocalSamples samples;
-    std::vector<Neighbor> hits;
-    std::vector<uint32_t> ids;
 #pragma omp for schedule(dynamic, 256)
-    for (long k = 0; k < static_cast<long>(n); ++k) {
+    for (long k = 0; k < static_cast<long>(positions.size()); ++k) {
       const uint32_t i = static_cast<uint32_t>(k);
-      if (gather(i, samples, hits, ids) < min_n) continue;
-      Vec3 mean, normal;
-      if (fitLocalPlane(samples, &mean, &normal)) normals[i] = normal;
+      if (candidates.gather(positions, normals, i, samples, support, weight) >= min_n) fit(i, samples);
     }
   }
 }
 
+/// The plane normal (3.5) at every sample.
+template <class Candidates>
+void planeNormals(const std::vector<Vec3>& positions, Candidates candidates, const WeightFunction& weight,
+                  double support, size_t min_neighbors, std::vector<Vec3>& normals) {
+  normals.assign(positions.size(), Vec3::Zero());
+  forEachNeighbourhood(positions, nullptr, candidates, support, weight, std::max<size_t>(min_neighbors, 3),
+                       [&](uint32_t i, const MlsLocalSamples& samples) {
+                         Vec3 mean, normal;
+                         if (fitLocalPlane(samples, &mean, &normal)) normals[i] = normal;
+                       });
+}
+
+/// One refinement pass: at every sample the oriented sphere fit (APSS) over its neighbours with the current
+/// normals, oriented per neighbourhood; the new normal is the sphere's gradient at the sample (u_l, the
+/// sample being the local origin), signed like the old one: the neighbours' normals averaged as the fit
+/// weighs them, with the curvature the positions give.
+template <class Candidates>
+void sphereRefinement(const std::vector<Vec3>& positions, Candidates candidates, const WeightFunction& weight,
+                      double support, size_t min_neighbors, std::vector<Vec3>& normals) {
+  std::vector<Vec3> refined(normals);
+  forEachNeighbourhood(positions, normals.data(), candidates, support, weight,
+                       std::max<size_t>(min_neighbors, 4), [&](uint32_t i, const MlsLocalSamples& samples) {
+                         LocalSphere sphere;
+                         if (normals[i].isZero() || !fitLocalSphereWithNormals(samples, &sphere)) return;
+                         const double length = sphere.ul.norm();
+                         if (!(length > 0) || !std::isfinite(length)) return;
+                         const Vec3 normal = sphere.ul / length;
+                         refined[i] = normal.dot(normals[i]) < 0 ? Vec3(-normal) : normal;
+                       });
+  normals.swap(refined);
+}
+
 }  // namespace
+
+void refineNormalsBySpheres(const std::vector<Vec3>& positions, const NeighborLists& lists,
+                            const WeightFunction& weight, double support, size_t min_neighbors,
+                            std::vector<Vec3>& normals) {
+  if (lists.numPoints() != positions.size() || lists.radius() < support || normals.size() != positions.size())
+    throw std::invalid_argument(
+        "refineNormalsBySpheres: the lists or the normals do not cover the points at the support radius");
+  sphereRefinement(positions, ListCandidates{lists}, weight, support, min_neighbors, normals);
+}
+
+void refineNormalsBySpheres(const std::vector<Vec3>& positions, const KdTree& tree,
+                            const WeightFunction& weight, double support, size_t min_neighbors,
+                            std::vector<Vec3>& normals) {
+  if (tree.size() != positions.size() || normals.size() != positions.size())
+    throw std::invalid_argument("refineNormalsBySpheres: the tree or the normals do not hold the points");
+  sphereRefinement(positions, TreeCandidates{tree, {}, {}}, weight, support, min_neighbors, normals);
+}
 
 void estimatePlaneNormals(const std::vector<Vec3>& positions, const NeighborLists& lists,
                           const WeightFunction& weight, double support, size_t min_neighbors,
@@ -161,11 +234,7 @@ void estimatePlaneNormals(const std::vector<Vec3>& positions, const NeighborList
   if (lists.numPoints() != positions.size() || lists.radius() < support)
     throw std::invalid_argument(
         "estimatePlaneNormals: the lists do not cover the points at the support radius");
-  planeNormals(positions.size(), min_neighbors, normals,
-               [&](uint32_t i, MlsLocalSamples& s, std::vector<Neighbor>&, std::vector<uint32_t>&) {
-                 return s.gather(positions.data(), nullptr, lists.begin(i), lists.count(i), i, positions[i],
-                                 support, weight);
-               });
+  planeNormals(positions, ListCandidates{lists}, weight, support, min_neighbors, normals);
 }
 
 void estimatePlaneNormals(const std::vector<Vec3>& positions, const KdTree& tree,
@@ -173,15 +242,7 @@ void estimatePlaneNormals(const std::vector<Vec3>& positions, const KdTree& tree
                           std::vector<Vec3>& normals) {
   if (tree.size() != positions.size())
     throw std::invalid_argument("estimatePlaneNormals: the tree does not hold the points");
-  planeNormals(positions.size(), min_neighbors, normals,
-               [&](uint32_t i, MlsLocalSamples& s, std::vector<Neighbor>& hits, std::vector<uint32_t>& ids) {
-                 if (!positions[i].allFinite()) return size_t(0);
-                 tree.radius(positions[i], support, hits);
-                 ids.resize(hits.size());
-                 for (size_t k = 0; k < hits.size(); ++k) ids[k] = hits[k].index;
-                 return s.gather(positions.data(), nullptr, ids.data(), ids.size(), MlsLocalSamples::kNoExtra,
-                                 positions[i], support, weight);
-               });
+  planeNormals(positions, TreeCandidates{tree, {}, {}}, weight, support, min_neighbors, normals);
 }
 
 size_t orientNormalsConsistently(SurfelCloud& cloud, int k) {

@@ -38,6 +38,19 @@ void estimatePlaneNormals(const std::vector<Vec3>& positions, const KdTree& tree
                           const WeightFunction& weight, double support, size_t min_neighbors,
                           std::vector<Vec3>& normals);
 
+/// Refines unoriented sample normals (e.g. estimatePlaneNormals') by one pass of oriented sphere fits (APSS):
+/// the normal of sample i becomes the gradient at x_i of the sphere fitted to the samples within `support`
+/// with the current normals (oriented per neighbourhood), signed like the current one. It smooths the noise
+/// of normals estimated from noisy points (the fit averages the neighbours' normals) and keeps the curvature
+/// the positions give. Zero normals stay zero; a failed fit keeps the current normal. Multi-threaded
+/// (OpenMP).
+void refineNormalsBySpheres(const std::vector<Vec3>& positions, const NeighborLists& lists,
+                            const WeightFunction& weight, double support, size_t min_neighbors,
+                            std::vector<Vec3>& normals);
+void refineNormalsBySpheres(const std::vector<Vec3>& positions, const KdTree& tree,
+                            const WeightFunction& weight, double support, size_t min_neighbors,
+                            std::vector<Vec3>& normals);
+
 /// Flips normals so that neighbouring normals agree (MST propagation); returns the number flipped.
 size_t orientNormalsConsistently(SurfelCloud& cloud, int k = 16);
 

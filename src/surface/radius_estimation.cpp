@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include "relaxed_connectivity/core/kd_tree.h"
 
@@ -83,6 +84,18 @@ void estimateRadii(SurfelCloud& cloud, const RadiusEstimationConfig& config) {
       cloud.radii[i] = r;
     }
   }
+}
+
+double sampleSpacing(const std::vector<Vec3>& positions) {
+  if (positions.size() < 7)
+    throw std::invalid_argument("sampleSpacing: " + std::to_string(positions.size()) +
+                                " points (at least 7 needed)");
+  KdTree tree(positions);
+  std::vector<Neighbor> rows;
+  tree.knnBatch(positions, 7, rows);
+  double sum = 0;
+  for (size_t i = 0; i < positions.size(); ++i) sum += std::sqrt(rows[i * 7 + 6].sq_dist);
+  return sum / static_cast<double>(positions.size()) * std::sqrt(M_PI / 6.0);
 }
 
 }  // namespace rc

@@ -15,4 +15,9 @@ struct RadiusEstimationConfig {
 /// surfel's tangent plane, cover the gaps between neighbours (3.3).
 void estimateRadii(SurfelCloud& cloud, const RadiusEstimationConfig& config);
 
+/// Mean sample spacing h of a surface sample of unknown area: from the mean 6th-neighbour distance r6 of a
+/// uniform density rho, pi r6^2 rho = 6 and h = 1 / sqrt(rho) (= sqrt(area / n) on a uniform sample). The
+/// unit MLS support radii are given in (3 h is PCL's usual search radius). Throws for fewer than 7 points.
+double sampleSpacing(const std::vector<Vec3>& positions);
+
 }  // namespace rc

@@ -6,6 +6,7 @@
 //   rc_surface sample   IN OUT            resample the MLS surface with a given number of points
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <random>
 
@@ -83,34 +84,57 @@ size_t projectWithProgress(const rc::MlsSurface& mls, const std::vector<Vec3>& x
 struct MlsOptions {
   std::string fit = "plane";
   std::string weight = "wendland";
-  double support = 0;  // 0: 3 x spacing
+  double support = 0;  // 0: 3 x spacing (Gaussians: sigma = 1 x spacing)
+  double clip = 3.0;
   int degree = 2;
   int iterations = 20;
   bool hermite = false;
   bool strict = false;
+  std::string normals = "auto";
 
   void add(CLI::App* app) {
     app->add_option("--fit", fit, "MLS fit: plane | polynomial | sphere")->capture_default_str();
     app->add_option("--weight", weight, "weight: wendland | gaussian | clipped_gaussian")
         ->capture_default_str();
-    app->add_option("--support", support, "support radius (Gaussians: sigma); 0 = 3 x sample spacing");
+    app->add_option("--support", support,
+                    "support radius (Gaussians: sigma); 0 = 3 x sample spacing (Gaussians: 1 x spacing)");
+    app->add_option("--clip", clip, "clipped_gaussian: cut-off in units of sigma (PCL's weight: 1.414)")
+        ->capture_default_str();
     app->add_option("--degree", degree, "polynomial degree for --fit polynomial")->capture_default_str();
     app->add_option("--iterations", iterations, "projection iterations")->capture_default_str();
     app->add_flag("--hermite", hermite, "normals from input normals (3.8)");
     app->add_flag("--strict", strict, "drop points whose projection did not converge within --iterations");
+    app->add_option("--normals", normals,
+                    "sample normals of the sphere fit and --hermite: auto (the file's, else refined), input, "
+                    "estimated (plane fits over the support), refined (+ one pass of sphere fits), none "
+                    "(points-only sphere fit)")
+        ->check(CLI::IsMember({"auto", "input", "estimated", "refined", "none"}))
+        ->capture_default_str();
   }
+  /// The normals the surface uses: "none" drops the file's (the points-only sphere fit).
+  bool dropsNormals() const { return normals == "none"; }
   rc::MlsConfig config(const SurfelCloud& cloud) const {
     rc::MlsConfig c;
     c.fit = rc::parseMlsFit(fit);
-    const double r = support > 0 ? support : 3.0 * estimateSpacing(cloud);
-    c.weight.kind = rc::parseWeightKind(weight);
-    c.weight.scale = r;
+    const rc::WeightKind kind = rc::parseWeightKind(weight);
+    const double r =
+        support > 0 ? support : (kind == rc::WeightKind::kWendlandC2 ? 3.0 : 1.0) * estimateSpacing(cloud);
+    if (!(clip > 0) || !std::isfinite(clip)) throw std::invalid_argument("--clip must be a positive number");
+    c.weight = rc::WeightFunction{kind, r, kind == rc::WeightKind::kClippedGaussian ? clip : 0.0};
     c.polynomial_degree = degree;
     c.max_iterations = iterations;
     c.require_convergence = strict;
     c.normal_source = hermite ? rc::MlsNormalSource::kHermite : rc::MlsNormalSource::kCovariance;
-    std::fprintf(stderr, "MLS: fit %s, weight %s, support %.6g, up to %d iterations\n", fit.c_str(),
-                 weight.c_str(), r, iterations);
+    std::string source = normals;
+    if (source == "input" && !cloud.hasNormals())
+      throw std::invalid_argument("--normals input: the file has no normals");
+    if (source == "auto") source = cloud.hasNormals() ? "input" : "refined";
+    c.estimate_normals = source == "estimated" || source == "refined";
+    c.normal_refinement_passes = source == "refined" ? 1 : 0;
+    const bool uses_normals = c.fit == rc::MlsFit::kSphere || hermite;
+    std::fprintf(stderr, "MLS: fit %s, weight %s, %s %.6g, up to %d iterations%s%s\n", fit.c_str(),
+                 weight.c_str(), kind == rc::WeightKind::kWendlandC2 ? "support" : "sigma", r, iterations,
+                 uses_normals ? ", normals: " : "", uses_normals ? source.c_str() : "");
     return c;
   }
 };
@@ -149,7 +173,13 @@ void printInfo(const SurfelCloud& c) {
 /// Runs smooth / project / sample: the MLS projection of a set of points. Without `xs`, the cloud's own
 /// points are projected (smooth), through the batched neighbour-list path.
 SurfelCloud runProjection(const SurfelCloud& c, const MlsOptions& opts, const std::vector<Vec3>* xs_or_null) {
-  const rc::MlsSurface surface(c, opts.config(c));
+  SurfelCloud positions_only;
+  if (opts.dropsNormals() && c.hasNormals()) {
+    positions_only.positions = c.positions;
+    positions_only.frame_id = c.frame_id;
+  }
+  const SurfelCloud& source = positions_only.empty() ? c : positions_only;
+  const rc::MlsSurface surface(source, opts.config(source));
   const bool own_points = xs_or_null == nullptr;
   const std::vector<Vec3>& xs = own_points ? c.positions : *xs_or_null;
   std::vector<rc::MlsProjection> proj;

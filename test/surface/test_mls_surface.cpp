@@ -463,6 +463,12 @@ TEST(MlsSurface, BadInputIsInvalidNotACrash) {
   degree.polynomial_degree = 4;
   EXPECT_THROW(MlsSurface(cloud, degree), std::invalid_argument);
   EXPECT_THROW(MlsSurface(cloud, makeConfig(MlsFit::kPlane, -1)), std::invalid_argument);
+  MlsConfig passes = makeConfig(MlsFit::kSphere, 0.2);
+  passes.estimate_normals = true;
+  for (int bad : {-1, 9}) {
+    passes.normal_refinement_passes = bad;
+    EXPECT_THROW(MlsSurface(no_normals, passes), std::invalid_argument) << bad;
+  }
 }
 
 TEST(MlsSurface, IterationCapAndConvergenceFlag) {

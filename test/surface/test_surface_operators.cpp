@@ -272,6 +272,68 @@ TEST(NormalEstimation, PlaneNormalsFromListsAndTree) {
   EXPECT_TRUE(normals[3].isZero());  // a non-finite sample gets no normal (and no crash)
 }
 
+TEST(NormalEstimation, SphereRefinementSmoothsNoisyPlaneNormals) {
+  // Noisy random samples of a torus (0.3 h): the plane normals (3.5) carry the noise of their few neighbours;
+  // a pass of sphere fits averages them as the fit weighs them (the gradient fitted to the normals) and keeps
+  // the curvature the positions give. On clean samples it changes them little (measured: mean 0.0181 ->
+  // 0.0178 rad, Wendland). Lists and tree give the same normals; isolated samples keep a zero normal; signs
+  // are kept.
+  const AnalyticTorus torus(Vec3::Zero(), 1.0, 0.4);
+  const double h = torus.spacing(10000), support = 3 * h;
+  SurfelCloud cloud = torus.sample(10000, {SamplingPattern::kUniformRandom, 0.3 * h, 12});
+  cloud.positions.push_back(Vec3(5, 5, 5));
+  auto angles = [&](const std::vector<Vec3>& normals, double* max_angle) {
+    double sum = 0;
+    *max_angle = 0;
+    for (size_t i = 0; i + 1 < cloud.size(); ++i) {
+      const double a = std::acos(std::min(1.0, std::abs(normals[i].dot(cloud.normals[i]))));
+      sum += a, *max_angle = std::max(*max_angle, a);
+    }
+    return sum / static_cast<double>(cloud.size() - 1);
+  };
+  for (const WeightFunction& weight :
+       {WeightFunction::wendland(support), WeightFunction::clippedGaussian(support, 1.0)}) {
+    NeighborLists lists;
+    lists.build(cloud.positions, support);
+    KdTree tree(cloud.positions);
+    std::vector<Vec3> plane, from_lists, from_tree;
+    estimatePlaneNormals(cloud.positions, lists, weight, support, 4, plane);
+    from_lists = from_tree = plane;
+    refineNormalsBySpheres(cloud.positions, lists, weight, support, 4, from_lists);
+    refineNormalsBySpheres(cloud.positions, tree, weight, support, 4, from_tree);
+    double max_plane = 0, max_refined = 0, max_diff = 0;
+    const double mean_plane = angles(plane, &max_plane), mean_refined = angles(from_lists, &max_refined);
+    size_t sign_changes = 0;
+    for (size_t i = 0; i + 1 < cloud.size(); ++i) {
+      max_diff = std::max(max_diff, (from_lists[i] - from_tree[i]).norm());
+      sign_changes += from_lists[i].dot(plane[i]) < 0;
+    }
+    std::printf("%s: mean / max angle to the exact normals, plane %.4f / %.4f, refined %.4f / %.4f\n",
+                weightKindName(weight.kind), mean_plane, max_plane, mean_refined, max_refined);
+    EXPECT_LT(max_diff, 1e-12);
+    EXPECT_EQ(sign_changes, 0u);
+    EXPECT_TRUE(from_lists.back().isZero());
+    // Measured: mean 0.154 -> 0.108 rad (W), 0.064 -> 0.044 (G); max 1.54 -> 1.36, 0.38 -> 0.18.
+    EXPECT_LT(mean_refined, 0.75 * mean_plane);
+    EXPECT_LT(max_refined, max_plane);
+    std::vector<Vec3> short_list(3);
+    EXPECT_THROW(refineNormalsBySpheres(cloud.positions, tree, weight, support, 4, short_list),
+                 std::invalid_argument);
+    EXPECT_THROW(refineNormalsBySpheres(cloud.positions, lists, weight, 1.1 * support, 4, from_lists),
+                 std::invalid_argument);
+  }
+}
+
+TEST(RadiusEstimation, SampleSpacingOfUniformSamples) {
+  // On a uniform random sample, sqrt(area / n) to within the 6th neighbour's sampling error.
+  const AnalyticSphere sphere(Vec3::Zero(), 2.0);
+  const SurfelCloud cloud = sphere.sample(20000, {SamplingPattern::kUniformRandom, 0.0, 5});
+  const double h = sphere.spacing(cloud.size()), measured = sampleSpacing(cloud.positions);
+  std::printf("sample spacing %.5f, sqrt(area / n) %.5f\n", measured, h);
+  EXPECT_NEAR(measured, h, 0.05 * h);
+  EXPECT_THROW(sampleSpacing(std::vector<Vec3>(6, Vec3::Zero())), std::invalid_argument);
+}
+
 TEST(MlsLocalSamples, GaussianWeightsAndLocalOrientation) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> uni(-1, 1);
