@@ -59,6 +59,10 @@ void SphFluidConfig::validate() const {
           "tensile_spacing",
           "must be the initial particle spacing, in (0, smoothing_length), with tensile_correction; got " +
               num(tensile_spacing));
+  require(density_reinit_interval >= 0, "density_reinit_interval",
+          "must be >= 0 (steps; 0 = never), got " + std::to_string(density_reinit_interval));
+  require(density_reinit_interval == 0 || density == SphDensityMethod::kContinuity, "density_reinit_interval",
+          "re-initialises continuity densities: set density to continuity (or the interval to 0)");
   require(viscosity >= 0.0 && std::isfinite(viscosity), "viscosity",
           "must be finite and >= 0, got " + num(viscosity));
   require(xsph >= 0.0 && xsph <= 1.0, "xsph", "(xi) must be in [0, 1], got " + num(xsph));

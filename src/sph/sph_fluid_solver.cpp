@@ -119,6 +119,13 @@ void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
   s_press_.resize(n);
   s_press_term_.resize(n);
   if (config_.tensile_correction > 0.0) s_tension_.resize(n);
+  const bool continuity = config_.density == SphDensityMethod::kContinuity;
+  if (continuity) {
+    s_rho_given_.resize(n);
+    s_rho_rate_.resize(n);
+    s_vel_rate_.resize(n);
+    density_rates_.resize(n, 0.0);  // particles only ever get appended
+  }
   s_kind_.resize(n);
   row_begin_.resize(n);
   row_count_.resize(n);
@@ -138,6 +145,13 @@ void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
       s_kind_[s] = particles_.kinds[i];
       s_vel_[s] = s_kind_[s] == SphParticleKind::kStaticBoundary ? Vec3::Zero() : velocities[i];
       s_mass_[s] = particles_.masses[i];
+      if (continuity) {  // a particle without a density yet (new) starts at rest
+        double& rho = particles_.densities[i];
+        if (!(rho > 0.0)) rho = config_.rest_density;
+        s_rho_given_[s] = rho;
+        s_vel_rate_[s] =
+            s_kind_[s] == SphParticleKind::kStaticBoundary ? Vec3::Zero() : particles_.velocities[i];
+      }
     }
 #pragma omp barrier
     densityPass(t);
@@ -155,6 +169,7 @@ void SphFluidSolver::computeForces(const std::vector<Vec3>& velocities) {
       accelerations_[i] = s_acc_[s];
       particles_.forces[i] = s_mass_[s] * s_acc_[s];
       xsph_[i] = s_xsph_[s];
+      if (continuity) density_rates_[i] = s_rho_rate_[s];
     }
   }
   // The force terms run on as many threads as this computation: where the whole step is small enough to run
@@ -212,6 +227,32 @@ void SphFluidSolver::addTermForces(const std::vector<Vec3>& velocities) {
 }
 
 // Density (8.4) and pressure (8.15)-(8.16) of the sorted particles [first, last); records the neighbour rows.
+double SphFluidSolver::continuityRate(size_t s, const uint32_t* row, size_t count,
+                                      bool poly6_gradient) const {
+  // drho_i/dt = sum_j m_j (v_i - v_j) . grad W_ij (Monaghan 1992, 3.8) with the pressure force's gradient:
+  // the rate of the compression energy is then minus the power of the pressure forces.
+  const Vec3 xi = s_pos_[s], vi = s_vel_rate_[s];
+  const double h2 = kernels_.h2, inv_h = kernels_.inv_h;
+  const double poly6_grad = -6.0 * kernels_.poly6_coeff / h2,
+               spiky_grad = -3.0 * kernels_.spiky_coeff * inv_h;
+  double rate = 0.0;
+  for (size_t e = 0; e < count; ++e) {
+    const uint32_t j = row[e];
+    const Vec3 r = xi - s_pos_[j];
+    const double d2 = r.squaredNorm();
+    double g;  // grad W = g r
+    if (poly6_gradient) {
+      const double q = 1.0 - d2 / h2;
+      g = poly6_grad * q * q;
+    } else {
+      const double d = std::sqrt(d2), u = 1.0 - d * inv_h;
+      g = d > 0.0 ? spiky_grad * u * u / d : 0.0;
+    }
+    rate += s_mass_[j] * g * (vi - s_vel_rate_[j]).dot(r);
+  }
+  return rate;
+}
+
 void SphFluidSolver::densityPass(int t) {
   const size_t first = thread_first_[t], last = thread_first_[t + 1];
   std::vector<uint32_t>& list = thread_lists_[t];
@@ -224,6 +265,8 @@ void SphFluidSolver::densityPass(int t) {
   uint32_t current_cell = std::numeric_limits<uint32_t>::max();
   const Vec3* pos = s_pos_.data();
   const double* mass = s_mass_.data();
+  const double* given = config_.density == SphDensityMethod::kContinuity ? s_rho_given_.data() : nullptr;
+  const bool poly6_gradient = config_.pressure_kernel == SphPressureKernel::kPoly6;
   for (size_t s = first; s < last; ++s) {
     const uint32_t c = grid_.cellOfSorted(s);
     if (c != current_cell) {
@@ -332,7 +375,14 @@ void SphFluidSolver::densityPass(int t) {
     }
     double sum = 0.0;                                                 // sum_j m_j (1 - d^2/h^2)^3
     for (size_t e = 0; e < found; ++e) sum += mass[out[e]] * d2s[e];  // in neighbour order, as always
-    const double rho = kernels_.poly6_coeff * (mass[s] + sum);        // (8.4), self term included
+    double rho = kernels_.poly6_coeff * (mass[s] + sum);              // (8.4), self term included
+    if (given && s_kind_[s] == SphParticleKind::kFluid) {
+      const double rate = continuityRate(s, out, found, poly6_gradient);
+      s_rho_rate_[s] = rate;
+      rho = given[s] + continuity_dt_ * rate;
+    } else if (given) {
+      s_rho_rate_[s] = 0.0;
+    }
     row_begin_[s] = static_cast<uint32_t>(used);
     row_count_[s] = static_cast<uint32_t>(found);
     used += found;
@@ -384,20 +434,22 @@ void SphFluidSolver::boundaryPressurePass(int t) {
 // correction (8.19), of the sorted fluid particles [first, last). Pair terms are computed so that the term of
 // (i, j) is exactly the negative of the term of (j, i).
 void SphFluidSolver::forcePass(int t) {
-  const bool poly6 = config_.pressure_kernel == SphPressureKernel::kPoly6;
   // Without viscosity or the tensile correction their terms are zero (adding them changes no sum), so they
-  // are left out.
-  const bool viscous = config_.viscosity != 0.0, tensile = config_.tensile_correction > 0.0;
-  if (tensile) {
-    if (viscous)
-      poly6 ? forcePassOf<true, true, true>(t) : forcePassOf<false, true, true>(t);
-    else
-      poly6 ? forcePassOf<true, false, true>(t) : forcePassOf<false, false, true>(t);
+  // are compiled out.
+  const bool flags[3] = {config_.pressure_kernel == SphPressureKernel::kPoly6, config_.viscosity != 0.0,
+                         config_.tensile_correction > 0.0};
+  forcePassWith<>(t, flags);
+}
+
+template <bool... kFlags>
+void SphFluidSolver::forcePassWith(int t, const bool* flags) {
+  if constexpr (sizeof...(kFlags) == 3) {
+    forcePassOf<kFlags...>(t);
   } else {
-    if (viscous)
-      poly6 ? forcePassOf<true, true, false>(t) : forcePassOf<false, true, false>(t);
+    if (flags[sizeof...(kFlags)])
+      forcePassWith<kFlags..., true>(t, flags);
     else
-      poly6 ? forcePassOf<true, false, false>(t) : forcePassOf<false, false, false>(t);
+      forcePassWith<kFlags..., false>(t, flags);
   }
 }
 
@@ -607,15 +659,21 @@ const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
     predicted_[i] = p.velocities[i] + 0.5 * dt * accelerations_[i];
     gravity_work += p.masses[i] * config_.gravity.dot(p.positions[i] - old);
   }
+
   stats_.unstable = false;
   stats_.instability.clear();
   bool finite = true;
   for (size_t i = 0; i < n && finite; ++i) finite = p.positions[i].allFinite() && predicted_[i].allFinite();
   if (finite) {
     announceStep(dt);
+    continuity_dt_ = dt;  // continuity densities: rho += dt D(x', v'), as x += dt v'
     computeForces(predicted_);
+    continuity_dt_ = 0.0;
     for (size_t i = 0; i < n; ++i)  // final kick
       if (p.kinds[i] == SphParticleKind::kFluid) p.velocities[i] += 0.5 * dt * accelerations_[i];
+    if (config_.density == SphDensityMethod::kContinuity && config_.density_reinit_interval > 0 &&
+        (step_count_ + 1) % uint64_t(config_.density_reinit_interval) == 0)
+      reinitializeDensities();
   }
   time_ += dt;
   ++step_count_;
@@ -664,6 +722,33 @@ const SphStepStats& SphFluidSolver::advanceOneStep(double requested_dt) {
     if (config_.throw_on_instability) throw SphInstabilityError(step_count_, stats_.instability);
   }
   return stats_;
+}
+
+void SphFluidSolver::reinitializeDensities() {
+  SphParticles& p = particles_;
+  const std::vector<uint32_t>& order = grid_.order();
+  const size_t n = p.size();
+  for (size_t s = 0; s < n; ++s) s_rho_given_[s] = p.densities[order[s]];  // this step's, sorted
+  const double w0 = kernels_.poly6(0.0);
+  const int threads = int(thread_first_.size()) - 1;
+#pragma omp parallel for schedule(static) num_threads(threads)
+  for (int t = 0; t < threads; ++t) {
+    const uint32_t* list = thread_lists_[t].data();
+    for (size_t s = thread_first_[t]; s < thread_first_[t + 1]; ++s) {
+      if (s_kind_[s] != SphParticleKind::kFluid) continue;
+      double mass_sum = s_mass_[s] * w0, volume_sum = s_mass_[s] / s_rho_given_[s] * w0;
+      const uint32_t* row = list + row_begin_[s];
+      for (uint32_t e = 0; e < row_count_[s]; ++e) {
+        const uint32_t j = row[e];
+        const double w = kernels_.poly6((s_pos_[s] - s_pos_[j]).squaredNorm());
+        mass_sum += s_mass_[j] * w;
+        volume_sum += s_mass_[j] / s_rho_given_[j] * w;
+      }
+      const uint32_t i = order[s];
+      p.densities[i] = mass_sum / volume_sum;
+      p.pressures[i] = pressureOf(p.densities[i]);
+    }
+  }
 }
 
 void SphFluidSolver::announceStep(double dt) {

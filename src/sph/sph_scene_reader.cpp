@@ -139,6 +139,8 @@ void SceneReader::readSolver(const YAML::Node& node) {
                   "tensile_correction",
                   "pressure_kernel",
                   "boundary_pressure",
+                  "density",
+                  "density_reinit_interval",
                   "viscosity",
                   "xsph",
                   "gravity",
@@ -192,17 +194,24 @@ void SceneReader::readSolver(const YAML::Node& node) {
       c.tensile_spacing = spacing_;
     }
   }
-  if (const YAML::Node k = field("pressure_kernel", "pressure_kernel")) {
+  const YAML::Node kernel = field("pressure_kernel", "pressure_kernel");
+  if (kernel)
     c.pressure_kernel = src_.choice<SphPressureKernel>(
-        k, "solver.pressure_kernel",
+        kernel, "solver.pressure_kernel",
         {{"spiky", SphPressureKernel::kSpiky}, {"poly6", SphPressureKernel::kPoly6}});
-    if (c.pressure_kernel == SphPressureKernel::kSpiky)
-      warn(
-          k,
-          "solver.pressure_kernel spiky is not the gradient of the summation density's energy and pumps "
-          "energy into the fluid (docs/sph_choices.md: +28 % in a 2D dam break in 0.25 s, +454 % in inviscid "
-          "sloshing in 0.5 s); poly6, the default, conserves it");
-  }
+  if (const YAML::Node d = field("density", "density"))
+    c.density = src_.choice<SphDensityMethod>(
+        d, "solver.density",
+        {{"summation", SphDensityMethod::kSummation}, {"continuity", SphDensityMethod::kContinuity}});
+  if (const YAML::Node r = field("density_reinit_interval", "density_reinit_interval"))
+    c.density_reinit_interval = int(src_.integer(r, "solver.density_reinit_interval", 0, 1000000));
+  if (kernel && c.pressure_kernel == SphPressureKernel::kSpiky)
+    warn(kernel, c.density == SphDensityMethod::kSummation
+                     ? "solver.pressure_kernel spiky is not the gradient of the summation density's energy and "
+                       "pumps energy into the fluid (docs/sph_choices.md: +28 % in a 2D dam break in 0.25 s, "
+                       "+454 % in inviscid sloshing in 0.5 s); poly6, the default, conserves it"
+                     : "solver.pressure_kernel spiky with continuity densities gains energy at the adaptive step "
+                       "(docs/sph_choices.md: +7.7 % in a free 2D blob in 0.2 s, poly6 -1.1 %)");
   if (const YAML::Node b = field("boundary_pressure", "boundary_pressure"))
     c.boundary_pressure =
         src_.choice<SphBoundaryPressure>(b, "solver.boundary_pressure",

@@ -43,6 +43,8 @@ SphGpuSystem<R> makeSphGpuSystem(const SphFluidConfig& config, const std::vector
           "SphFluidConfig.boundary_pressure must be kSummation on the GPU path");
   require(config.tensile_correction == 0.0,
           "SphFluidConfig.tensile_correction is not supported on the GPU path (0 = off)");
+  require(config.density == SphDensityMethod::kSummation,
+          "SphFluidConfig.density must be kSummation on the GPU path (continuity densities are CPU only)");
   require(grid.margin_h >= 0.0 && std::isfinite(grid.margin_h), "SphGpuGridOptions.margin_h must be >= 0");
   const size_t n = particles.size();
   require(n > 0, "SphParticles are empty");
