@@ -195,7 +195,7 @@ class SceneReader {
                         FemHeldRegion region;
                         region.nodes = nodesInBox(entry, where, &region.lo, &region.hi);
                         if (const YAML::Node c = entry["components"])
-                          region.components = components(c, where);
+                          region.components = src_.components(c, where + ".components");
                         if (entry["displacement"])
                           region.displacement = src_.vec3(entry["displacement"], where + ".displacement");
                         for (const FemHeldRegion& other : scene_.held)
@@ -210,20 +210,6 @@ class SceneReader {
                       });
   }
 
-  /// Key components: letters of xyz, each at most once.
-  std::array<bool, 3> components(const YAML::Node& node, const std::string& where) const {
-    const std::string names = src_.string(node, where + ".components");
-    std::array<bool, 3> held = {false, false, false};
-    if (names.empty()) src_.fail(node, where + ".components: empty (letters of xyz)");
-    for (char k : names) {
-      if (k < 'x' || k > 'z')
-        src_.fail(node, where + ".components: '" + names + "' (letters of xyz, e.g. xz)");
-      if (held[size_t(k - 'x')]) src_.fail(node, where + ".components: '" + names + "' repeats " + k);
-      held[size_t(k - 'x')] = true;
-    }
-    return held;
-  }
-
   void readLoads(const YAML::Node& node) {
     src_.forEachEntry(node, "loads", "{lo, hi, force}",
                       [&](const YAML::Node& entry, const std::string& where) {
@@ -236,24 +222,18 @@ class SceneReader {
   }
 
   void readProbes(const YAML::Node& node) {
-    src_.forEachEntry(
-        node, "probes", "{name, lo, hi}", [&](const YAML::Node& entry, const std::string& where) {
-          src_.allowKeys(entry, {"name", "lo", "hi"}, where);
-          FemProbe probe;
-          const YAML::Node name = src_.require(entry, "name", where);
-          probe.name = src_.string(name, where + ".name");
-          const bool word =
-              !probe.name.empty() && std::all_of(probe.name.begin(), probe.name.end(), [](char c) {
-                return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
-              });
-          if (!word)
-            src_.fail(name,
-                      where + ".name: '" + probe.name + "' (letters, digits and _: a CSV column prefix)");
-          for (const FemProbe& other : scene_.probes)
-            if (other.name == probe.name) src_.fail(name, where + ".name: '" + probe.name + "' is taken");
-          nodesInBox(entry, where, &probe.lo, &probe.hi);  // fails for a box without nodes
-          scene_.probes.push_back(std::move(probe));
-        });
+    src_.forEachEntry(node, "probes", "{name, lo, hi}",
+                      [&](const YAML::Node& entry, const std::string& where) {
+                        src_.allowKeys(entry, {"name", "lo", "hi"}, where);
+                        FemProbe probe;
+                        const YAML::Node name = src_.require(entry, "name", where);
+                        probe.name = src_.word(name, where + ".name");
+                        for (const FemProbe& other : scene_.probes)
+                          if (other.name == probe.name)
+                            src_.fail(name, where + ".name: '" + probe.name + "' is taken");
+                        nodesInBox(entry, where, &probe.lo, &probe.hi);  // fails for a box without nodes
+                        scene_.probes.push_back(std::move(probe));
+                      });
   }
 
   void readGround(const YAML::Node& node) {

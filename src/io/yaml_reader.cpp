@@ -1,5 +1,7 @@
 #include "relaxed_connectivity/io/yaml_reader.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -43,6 +45,27 @@ void YamlReader::box(const YAML::Node& map, const std::string& where, Vec3* lo, 
   *lo = vec3(require(map, "lo", where), where + ".lo");
   *hi = vec3(require(map, "hi", where), where + ".hi");
   if (!(lo->array() <= hi->array()).all()) fail(map["hi"], where + ": hi must not be below lo");
+}
+
+std::array<bool, 3> YamlReader::components(const YAML::Node& node, const std::string& what) const {
+  const std::string names = string(node, what);
+  std::array<bool, 3> named = {false, false, false};
+  if (names.empty()) fail(node, what + ": empty (letters of xyz)");
+  for (char k : names) {
+    if (k < 'x' || k > 'z') fail(node, what + ": '" + names + "' (letters of xyz, e.g. xz)");
+    if (named[size_t(k - 'x')]) fail(node, what + ": '" + names + "' repeats " + k);
+    named[size_t(k - 'x')] = true;
+  }
+  return named;
+}
+
+std::string YamlReader::word(const YAML::Node& node, const std::string& what) const {
+  const std::string name = string(node, what);
+  const bool is_word = !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
+  if (!is_word) fail(node, what + ": '" + name + "' (letters, digits and _: a CSV column prefix)");
+  return name;
 }
 
 void YamlReader::fail(const YAML::Node& node, const std::string& problem) const {

@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <initializer_list>
 #include <set>
 #include <string>
@@ -45,6 +46,10 @@ class YamlReader {
   Vec3 vec3(const YAML::Node& node, const std::string& what) const;
   /// The closed box {lo: [..], hi: [..]} of a map (keys required; fails where hi lies below lo).
   void box(const YAML::Node& map, const std::string& where, Vec3* lo, Vec3* hi) const;
+  /// Components named by letters of xyz, each at most once (e.g. "xz"): which of x, y, z are named.
+  std::array<bool, 3> components(const YAML::Node& node, const std::string& what) const;
+  /// A name made of letters, digits and _ (a CSV column prefix, a topic word).
+  std::string word(const YAML::Node& node, const std::string& what) const;
   /// Calls read(entry, "<what>[k]") for every entry of the list `node`; fails with "<what>: expected a list
   /// of <items>" for anything else.
   template <class Read>

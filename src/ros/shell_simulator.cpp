@@ -100,6 +100,11 @@ ShellSimulator::ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   fibers_pub_ = private_nh_.advertise<visualization_msgs::Marker>("fibers", 1);
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::ShellStats>("stats", 1);
   scene_ = loadShellScene(params_.scene);
+  if (scene_.analysis != ShellAnalysis::kDynamic)
+    throw std::invalid_argument(
+        params_.scene +
+        ": analysis static and modal run with rc_shell (its JSON and frames); shell_sim "
+        "runs dynamic scenes");
   if (params_.node_count > 0) {
     scene_.nodes.spacing = 0.0;
     scene_.nodes.target_count = size_t(params_.node_count);

@@ -6,6 +6,7 @@
 // schema is documented at the top of config/shell/fig7_4_mask.yaml.
 #pragma once
 
+#include <array>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "relaxed_connectivity/shell/shell_material.h"
 #include "relaxed_connectivity/shell/shell_nodes.h"
 #include "relaxed_connectivity/shell/shell_solver.h"
+#include "relaxed_connectivity/shell/shell_static.h"
 
 namespace rc {
 
@@ -61,6 +63,29 @@ struct ShellSceneAnisotropy {
   double stretch_ratio = 1.0, bend_ratio = 1.0;
 };
 
+/// What a run computes (key analysis): the explicit dynamics over the frames; the static equilibrium under
+/// the loads and gravity with the held regions (shell_static.h; output frames 0 and 1); or the lowest `modes`
+/// natural modes about the rest shape (shell_modal.h; output frames 1..modes the shapes, scaled to a tenth of
+/// the shell's diagonal).
+enum class ShellAnalysis { kDynamic, kStatic, kModal };
+
+/// Key held (static and modal): the nodes whose rest positions lie in [lo, hi] hold the listed components at
+/// their rest position plus `displacement`.
+struct ShellSceneHeld {
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  std::array<bool, 3> components = {true, true, true};
+  Vec3 displacement = Vec3::Zero();
+};
+
+/// Key loads (static): on the nodes in [lo, hi], or on the node nearest `point`, a total `force` spread by
+/// the nodes' rest areas and / or a `traction` per unit rest area.
+struct ShellSceneLoad {
+  bool at_point = false;
+  Vec3 point = Vec3::Zero();
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  Vec3 force = Vec3::Zero(), traction = Vec3::Zero();
+};
+
 /// Files written while a scene runs, at frame 0 and every `every`-th frame: <name>_surfels_NNNN.ply (the
 /// dense surfels skinned to the nodes) and <name>_cracks_NNNN.ply (crack discontinuity surfels, when any).
 struct ShellSceneOutput {
@@ -92,6 +117,11 @@ struct ShellScene {
   double frame_time = 0.0;    ///< else: step until this much simulated time per frame has passed
   size_t skinning_nodes = 8;  ///< ShellSkinningOptions::node_count
   ShellSceneOutput output;
+  ShellAnalysis analysis = ShellAnalysis::kDynamic;
+  std::vector<ShellSceneHeld> held;   ///< static and modal
+  std::vector<ShellSceneLoad> loads;  ///< static
+  ShellStaticOptions static_options;  ///< key static: {load_steps, max_iterations, tolerance}
+  int modes = 6;                      ///< modal
 };
 
 }  // namespace rc

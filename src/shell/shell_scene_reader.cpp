@@ -74,11 +74,11 @@ class SceneReader {
   SceneReader(const YamlReader& src, ShellScene* scene) : src_(src), scene_(*scene) {}
 
   void read(const YAML::Node& root) {
-    src_.allowKeys(
-        root,
-        {"name", "source", "placement", "velocity", "nodes", "material", "plasticity", "fracture",
-         "anisotropy", "weak_point", "dynamics", "ground", "pins", "balloon", "frames", "skinning", "output"},
-        "scene");
+    src_.allowKeys(root, {"name",       "source",   "placement",  "velocity",   "nodes",    "material",
+                          "plasticity", "fracture", "anisotropy", "weak_point", "dynamics", "ground",
+                          "pins",       "balloon",  "frames",     "skinning",   "output",   "analysis",
+                          "held",       "loads",    "static",     "modes"},
+                   "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
     readSource(src_.require(root, "source", "scene"));
     if (root["placement"]) readPlacement(root["placement"]);
@@ -93,13 +93,16 @@ class SceneReader {
     if (root["ground"]) readGround(root["ground"]);
     if (root["pins"]) readPins(root["pins"]);
     if (root["balloon"]) readBalloon(root["balloon"]);
-    readFrames(src_.require(root, "frames", "scene"));
+    const bool dynamic =
+        !root["analysis"] || (root["analysis"].IsScalar() && root["analysis"].Scalar() == "dynamic");
+    if (root["frames"] || dynamic) readFrames(src_.require(root, "frames", "scene"));
     if (root["skinning"]) {
       src_.allowKeys(root["skinning"], {"nodes"}, "skinning");
       scene_.skinning_nodes =
           size_t(src_.integer(src_.require(root["skinning"], "nodes", "skinning"), "skinning.nodes", 2, 32));
     }
     if (root["output"]) readOutput(root["output"]);
+    readAnalysis(root);
   }
 
  private:
@@ -403,6 +406,89 @@ class SceneReader {
       scene_.steps_per_frame =
           int(src_.integer(node["steps_per_frame"], "frames.steps_per_frame", 1, 100000000));
     if (node["time"]) scene_.frame_time = src_.positive(node["time"], "frames.time");
+  }
+
+  void readAnalysis(const YAML::Node& root) {
+    if (const YAML::Node a = root["analysis"])
+      scene_.analysis = src_.choice<ShellAnalysis>(a, "analysis",
+                                                   {{"dynamic", ShellAnalysis::kDynamic},
+                                                    {"static", ShellAnalysis::kStatic},
+                                                    {"modal", ShellAnalysis::kModal}});
+    const bool is_static = scene_.analysis == ShellAnalysis::kStatic;
+    const bool is_modal = scene_.analysis == ShellAnalysis::kModal;
+    if (root["held"] && !is_static && !is_modal)
+      src_.fail(root["held"], "held: for analysis static or modal (dynamic runs hold nodes with pins)");
+    if (root["loads"] && !is_static) src_.fail(root["loads"], "loads: for analysis static");
+    if (root["static"] && !is_static) src_.fail(root["static"], "static: for analysis static");
+    if (root["modes"] && !is_modal) src_.fail(root["modes"], "modes: for analysis modal");
+    if (root["held"]) readHeld(root["held"]);
+    if (root["loads"]) readLoads(root["loads"]);
+    if (is_static && scene_.held.empty())
+      src_.fail(root, "analysis static: give held regions (a free shell has no equilibrium under loads)");
+    if (is_static && scene_.loads.empty() && scene_.solver.gravity.squaredNorm() == 0) {
+      bool displaced = false;
+      for (const ShellSceneHeld& h : scene_.held) displaced = displaced || h.displacement.squaredNorm() > 0;
+      if (!displaced)
+        src_.fail(root, "analysis static: nothing loads the shell (loads, gravity or a held displacement)");
+    }
+    if (const YAML::Node s = root["static"]) {
+      src_.allowKeys(s, {"load_steps", "max_iterations", "tolerance"}, "static");
+      ShellStaticOptions& o = scene_.static_options;
+      if (s["load_steps"]) o.load_steps = int(src_.integer(s["load_steps"], "static.load_steps", 1, 100000));
+      if (s["max_iterations"])
+        o.max_iterations = int(src_.integer(s["max_iterations"], "static.max_iterations", 1, 10000));
+      if (s["tolerance"]) o.tolerance = src_.positive(s["tolerance"], "static.tolerance");
+    }
+    if (root["modes"]) scene_.modes = int(src_.integer(root["modes"], "modes", 1, 1000));
+  }
+
+  /// Fails unless the box holds a surfel of the source (the nodes are chosen among them when the run starts).
+  void requireSurfelIn(const YAML::Node& entry, const std::string& where, const Vec3& lo,
+                       const Vec3& hi) const {
+    for (const Vec3& p : scene_.surfels.positions)
+      if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) return;
+    src_.fail(entry, where + ": the box holds no surfel of the source");
+  }
+
+  void readHeld(const YAML::Node& node) {
+    src_.forEachEntry(node, "held", "regions {lo, hi, components, displacement}",
+                      [&](const YAML::Node& entry, const std::string& where) {
+                        src_.allowKeys(entry, {"lo", "hi", "components", "displacement"}, where);
+                        ShellSceneHeld held;
+                        src_.box(entry, where, &held.lo, &held.hi);
+                        requireSurfelIn(entry, where, held.lo, held.hi);
+                        if (const YAML::Node c = entry["components"])
+                          held.components = src_.components(c, where + ".components");
+                        if (entry["displacement"])
+                          held.displacement = src_.vec3(entry["displacement"], where + ".displacement");
+                        scene_.held.push_back(held);
+                      });
+  }
+
+  void readLoads(const YAML::Node& node) {
+    src_.forEachEntry(node, "loads", "{lo, hi | point, force and / or traction}",
+                      [&](const YAML::Node& entry, const std::string& where) {
+                        src_.allowKeys(entry, {"lo", "hi", "point", "force", "traction"}, where);
+                        ShellSceneLoad load;
+                        if (entry["point"]) {
+                          if (entry["lo"] || entry["hi"])
+                            src_.fail(entry["point"], where + ": give point or lo / hi, not both");
+                          load.at_point = true;
+                          load.point = src_.vec3(entry["point"], where + ".point");
+                          if (entry["traction"])
+                            src_.fail(entry["traction"],
+                                      where + ".traction: a point load has no area (give force)");
+                        } else {
+                          src_.box(entry, where, &load.lo, &load.hi);
+                          requireSurfelIn(entry, where, load.lo, load.hi);
+                        }
+                        if (!entry["force"] && !entry["traction"])
+                          src_.fail(entry, where + ": give force and / or traction");
+                        if (entry["force"]) load.force = src_.vec3(entry["force"], where + ".force");
+                        if (entry["traction"])
+                          load.traction = src_.vec3(entry["traction"], where + ".traction");
+                        scene_.loads.push_back(load);
+                      });
   }
 
   void readOutput(const YAML::Node& node) {

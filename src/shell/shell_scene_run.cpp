@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/shell/shell_scene_analysis.h"
 
 namespace rc {
 
@@ -33,6 +34,82 @@ size_t writeFrame(const ShellSimulation& sim, const std::string& dir, int frame)
   return files;
 }
 
+/// analysis dynamic: the frames, an instability ending the run.
+void runFrames(ShellSimulation& sim, bool write, const ShellRunOptions& options, ShellRunStats* stats) {
+  const ShellScene& scene = sim.scene();
+  try {
+    for (int f = 1; f <= scene.frame_count; ++f) {
+      const ShellFrameReport r = sim.advanceFrame();
+      stats->forces_ms += r.forces_ms;
+      stats->material_ms += r.material_ms;
+      stats->surface_ms += r.surface_ms;
+      stats->frames = f;
+      if (write && f % scene.output.every == 0) {
+        stats->files += writeFrame(sim, options.out_dir, f);
+        if (options.on_written_frame) options.on_written_frame(sim, f);
+      }
+      if (options.on_frame) options.on_frame(r);
+    }
+  } catch (const ShellInstabilityError& e) {
+    stats->instability = e.what();
+  }
+  if (stats->frames > 0) {
+    stats->forces_ms /= stats->frames;
+    stats->material_ms /= stats->frames;
+    stats->surface_ms /= stats->frames;
+  }
+}
+
+/// analysis static (frame 1: the equilibrium) or modal (frames 1..modes: the shapes, scaled to a tenth of the
+/// shell's diagonal).
+void runAnalysis(ShellSimulation& sim, const ShellRunOptions& options, ShellRunStats* stats) {
+  const ShellScene& scene = sim.scene();
+  const ShellNodes& nodes = sim.solver().nodes();
+  if (scene.analysis == ShellAnalysis::kStatic) {
+    const ShellStaticResult r = solveShellSceneStatic(sim);
+    stats->analysis = "static";
+    stats->static_iterations = r.iterations;
+    stats->static_residual = r.residual;
+    stats->max_displacement = r.max_displacement;
+    stats->held_reactions = r.held_reactions;
+    stats->load_displacements = r.load_displacements;
+    stats->hessian_colors = r.hessian_colors;
+    stats->analysis_seconds = r.seconds;
+    stats->frames = 1;
+    if (options.write_files) {
+      stats->files += writeFrame(sim, options.out_dir, 1);
+      if (options.on_written_frame) options.on_written_frame(sim, 1);
+    }
+    return;
+  }
+  const ShellModalResult r = solveShellSceneModal(sim);
+  stats->analysis = "modal";
+  stats->frequencies.assign(r.frequencies.data(), r.frequencies.data() + r.frequencies.size());
+  stats->rigid_modes = r.rigid_modes;
+  stats->hessian_colors = r.hessian_colors;
+  stats->analysis_seconds = r.seconds;
+  Vec3 lo = nodes.rest_positions[0], hi = lo;
+  for (const Vec3& p : nodes.rest_positions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  std::vector<Vec3> x(nodes.size());
+  for (int m = 0; m < int(r.frequencies.size()); ++m) {
+    double largest = 0.0;
+    for (size_t i = 0; i < nodes.size(); ++i)
+      largest = std::max(largest, r.modes.col(m).segment<3>(3 * i).norm());
+    const double scale = largest > 0.0 ? 0.1 * (hi - lo).norm() / largest : 0.0;
+    for (size_t i = 0; i < nodes.size(); ++i)
+      x[i] = nodes.rest_positions[i] + scale * r.modes.col(m).segment<3>(3 * i);
+    sim.mutableSolver().setPositions(x);
+    sim.animateSurface();
+    stats->frames = m + 1;
+    if (options.write_files) {
+      stats->files += writeFrame(sim, options.out_dir, m + 1);
+      if (options.on_written_frame) options.on_written_frame(sim, m + 1);
+    }
+  }
+  sim.mutableSolver().setPositions(nodes.rest_positions);
+  sim.animateSurface();
+}
+
 }  // namespace
 
 ShellRunStats runShellScene(const ShellScene& scene, const ShellRunOptions& options) {
@@ -56,26 +133,10 @@ ShellRunStats runShellScene(const ShellScene& scene, const ShellRunOptions& opti
     stats.files += writeFrame(sim, options.out_dir, 0);
     if (options.on_written_frame) options.on_written_frame(sim, 0);
   }
-  try {
-    for (int f = 1; f <= scene.frame_count; ++f) {
-      const ShellFrameReport r = sim.advanceFrame();
-      stats.forces_ms += r.forces_ms;
-      stats.material_ms += r.material_ms;
-      stats.surface_ms += r.surface_ms;
-      stats.frames = f;
-      if (write && f % scene.output.every == 0) {
-        stats.files += writeFrame(sim, options.out_dir, f);
-        if (options.on_written_frame) options.on_written_frame(sim, f);
-      }
-      if (options.on_frame) options.on_frame(r);
-    }
-  } catch (const ShellInstabilityError& e) {
-    stats.instability = e.what();
-  }
-  if (stats.frames > 0) {
-    stats.forces_ms /= stats.frames;
-    stats.material_ms /= stats.frames;
-    stats.surface_ms /= stats.frames;
+  if (scene.analysis != ShellAnalysis::kDynamic) {
+    runAnalysis(sim, write ? options : ShellRunOptions{options.out_dir, false, {}, {}}, &stats);
+  } else {
+    runFrames(sim, write, options, &stats);
   }
   stats.fibers = sim.fiberCount();
   stats.cracks = sim.crackCount();
@@ -121,8 +182,39 @@ std::string shellRunStatsJson(const ShellRunStats& s) {
                   m.max_factor);
     balance = b;
   }
+  auto vectors = [](const std::vector<Vec3>& v) {
+    std::string out = "[";
+    char item[96];
+    for (size_t k = 0; k < v.size(); ++k) {
+      std::snprintf(item, sizeof item, "%s[%.9g, %.9g, %.9g]", k ? ", " : "", v[k].x(), v[k].y(), v[k].z());
+      out += item;
+    }
+    return out + "]";
+  };
+  std::string analysis = ", \"analysis\": \"" + s.analysis + "\"";
+  char numbers[256];
+  if (s.analysis == "static") {
+    std::snprintf(numbers, sizeof numbers,
+                  ", \"static\": {\"iterations\": %d, \"residual\": %.3g, \"max_displacement\": %.9g, "
+                  "\"hessian_colors\": %zu, \"seconds\": %.3f, \"held_reactions\": ",
+                  s.static_iterations, s.static_residual, s.max_displacement, s.hessian_colors,
+                  s.analysis_seconds);
+    analysis += numbers + vectors(s.held_reactions) +
+                ", \"load_displacements\": " + vectors(s.load_displacements) + "}";
+  } else if (s.analysis == "modal") {
+    std::snprintf(numbers, sizeof numbers,
+                  ", \"modal\": {\"rigid_modes\": %d, \"hessian_colors\": %zu, \"seconds\": %.3f, "
+                  "\"frequencies\": [",
+                  s.rigid_modes, s.hessian_colors, s.analysis_seconds);
+    analysis += numbers;
+    for (size_t k = 0; k < s.frequencies.size(); ++k) {
+      std::snprintf(numbers, sizeof numbers, "%s%.9g", k ? ", " : "", s.frequencies[k]);
+      analysis += numbers;
+    }
+    analysis += "]}";
+  }
   return std::string(buf) + (s.instability.empty() ? "null" : "\"" + instability + "\"") + tail + balance +
-         "}";
+         analysis + "}";
 }
 
 }  // namespace rc

@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "relaxed_connectivity/shell/shell_simulation.h"
 
@@ -34,6 +35,14 @@ struct ShellRunStats {
   size_t files = 0;
   std::string instability;      ///< the ShellInstabilityError message, if the run stopped on one
   ShellSamplingStats sampling;  ///< anisotropy of the node sampling (ShellNodes::sampling)
+  // analysis static / modal (shell_scene_analysis.h)
+  std::string analysis = "dynamic";
+  int static_iterations = 0;
+  double static_residual = 0.0, max_displacement = 0.0, analysis_seconds = 0.0;
+  std::vector<Vec3> held_reactions, load_displacements;  ///< static, per region / load
+  std::vector<double> frequencies;                       ///< modal [Hz]
+  int rigid_modes = 0;                                   ///< modal
+  size_t hessian_colors = 0;
 };
 
 /// Builds the simulation, runs all frames, writes the outputs. An instability ends the run and is reported
