@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/ros/shell_simulator.h"
 
+#include <relaxed_connectivity/ShellProbes.h>
 #include <relaxed_connectivity/ShellStats.h>
 #include <sensor_msgs/PointCloud2.h>
 
@@ -9,6 +10,8 @@
 
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 #include "relaxed_connectivity/ros/simulation_loop.h"
+#include "relaxed_connectivity/shell/shell_probes.h"
+#include "relaxed_connectivity/shell/shell_scene_analysis.h"
 #include "relaxed_connectivity/shell/shell_scene_reader.h"
 
 namespace rc {
@@ -99,6 +102,7 @@ ShellSimulator::ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   nodes_pub_ = private_nh_.advertise<visualization_msgs::Marker>("nodes", 1);
   fibers_pub_ = private_nh_.advertise<visualization_msgs::Marker>("fibers", 1);
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::ShellStats>("stats", 1);
+  probes_pub_ = private_nh_.advertise<relaxed_connectivity::ShellProbes>("probes", 10);
   scene_ = loadShellScene(params_.scene);
   if (scene_.analysis != ShellAnalysis::kDynamic)
     throw std::invalid_argument(
@@ -111,6 +115,10 @@ ShellSimulator::ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   }
   scene_.output.every = 0;
   simulation_ = std::make_unique<ShellSimulation>(scene_);
+  for (size_t k = 0; k < scene_.probes.size(); ++k)  // throws naming a box without nodes
+    probe_nodes_.push_back(shellNodesInBox(simulation_->solver().nodes(), scene_.probes[k].lo,
+                                           scene_.probes[k].hi,
+                                           params_.scene + ": probes[" + std::to_string(k) + "]"));
   const ShellFibers& fibers = simulation_->solver().fibers();
   double length = 0.0;
   for (const Fiber& f : fibers.fibers) length += f.rest_length;
@@ -235,6 +243,39 @@ void ShellSimulator::publish() {
   stats.surface_ms = last_frame_.surface_ms;
   stats.error = loop_.error();
   stats_pub_.publish(stats);
+  if (!probe_nodes_.empty()) publishProbes(stats.header);
+}
+
+void ShellSimulator::publishProbes(const std_msgs::Header& header) {
+  // The scene's probes (its key probes), as rc_shell writes them per frame.
+  const ShellSolver& solver = simulation_->solver();
+  const ShellMeasures all = measureShell(solver);
+  relaxed_connectivity::ShellProbes probes;
+  probes.header = header;
+  probes.scene = scene_.name;
+  probes.time = solver.time();
+  probes.mass = all.mass;
+  probes.kinetic_energy = all.kinetic_energy;
+  probes.membrane_energy = all.membrane_energy;
+  probes.bending_energy = all.bending_energy;
+  probes.gravity_potential_energy = all.gravity_potential_energy;
+  probes.momentum.x = all.momentum.x(), probes.momentum.y = all.momentum.y(),
+  probes.momentum.z = all.momentum.z();
+  auto vector3 = [](const Vec3& v) {
+    geometry_msgs::Vector3 m;
+    m.x = v.x(), m.y = v.y(), m.z = v.z();
+    return m;
+  };
+  for (size_t k = 0; k < probe_nodes_.size(); ++k) {
+    const ShellRegionMeasures m = measureShellRegion(solver, probe_nodes_[k]);
+    probes.names.push_back(scene_.probes[k].name);
+    probes.nodes.push_back(uint32_t(m.nodes));
+    probes.masses.push_back(m.mass);
+    probes.mean_displacements.push_back(vector3(m.mean_displacement));
+    probes.max_displacements.push_back(m.max_displacement);
+    probes.reactions.push_back(vector3(m.reaction));
+  }
+  probes_pub_.publish(probes);
 }
 
 bool ShellSimulator::forceCallback(relaxed_connectivity::ShellForce::Request& request,

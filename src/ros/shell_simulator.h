@@ -7,7 +7,8 @@
 //             ~cracks (sensor_msgs/PointCloud2, the crack discontinuity surfels), ~nodes
 //             (visualization_msgs/Marker SPHERE_LIST, one point per node), ~fibers (visualization_msgs/Marker
 //             LINE_LIST, end1-center and center-end2 per fiber), ~stats (relaxed_connectivity/ShellStats),
-//             all in frame_id
+//             all in frame_id; ~probes (relaxed_connectivity/ShellProbes) with each frame when the scene has
+//             probes (its key probes, as rc_shell writes them)
 // Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N (N frames, 0 means 1)
 // | reset;
 //             reset restores the scene at t = 0, paused, and drops the applied forces), ~apply_force
@@ -23,6 +24,7 @@
 #include <relaxed_connectivity/ShellForce.h>
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
+#include <std_msgs/Header.h>
 #include <visualization_msgs/Marker.h>
 
 #include <memory>
@@ -74,6 +76,8 @@ class ShellSimulator {
   /// Adds the impulses of the applied forces for the next frame (F dt / m per node).
   void applyForces();
   void publish();
+  /// The scene's probes on ~probes (relaxed_connectivity/ShellProbes), with each frame.
+  void publishProbes(const std_msgs::Header& header);
   void resetSimulation();
   bool forceCallback(relaxed_connectivity::ShellForce::Request& request,
                      relaxed_connectivity::ShellForce::Response& response);
@@ -83,10 +87,11 @@ class ShellSimulator {
   SimulationLoop loop_;  // timer, ~command, running, error, the mutex guarding the simulation
   ShellScene scene_;
   std::unique_ptr<ShellSimulation> simulation_;
+  std::vector<std::vector<uint32_t>> probe_nodes_;  // the nodes of each of the scene's probes
   std::vector<ShellAppliedForce> forces_;
   ShellFrameReport last_frame_;
   double node_size_ = 0.0;  ///< marker size: a quarter of the mean rest fiber length
-  ros::Publisher surfels_pub_, cracks_pub_, nodes_pub_, fibers_pub_, stats_pub_;
+  ros::Publisher surfels_pub_, cracks_pub_, nodes_pub_, fibers_pub_, stats_pub_, probes_pub_;
   ros::ServiceServer force_srv_;
 };
 

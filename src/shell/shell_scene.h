@@ -14,6 +14,7 @@
 #include "relaxed_connectivity/core/surfel_cloud.h"
 #include "relaxed_connectivity/shell/shell_material.h"
 #include "relaxed_connectivity/shell/shell_nodes.h"
+#include "relaxed_connectivity/shell/shell_probes.h"
 #include "relaxed_connectivity/shell/shell_solver.h"
 #include "relaxed_connectivity/shell/shell_static.h"
 
@@ -122,6 +123,8 @@ struct ShellScene {
   std::vector<ShellSceneLoad> loads;  ///< static
   ShellStaticOptions static_options;  ///< key static: {load_steps, max_iterations, tolerance}
   int modes = 6;                      ///< modal
+  /// dynamic: <name>_probes.csv in the output folder (shell_probes.h), a row at the start and per frame.
+  std::vector<ShellProbe> probes;
 };
 
 }  // namespace rc

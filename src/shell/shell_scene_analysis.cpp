@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/shell/shell_scene_analysis.h"
 
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -14,8 +15,10 @@ std::string boxText(const Vec3& lo, const Vec3& hi) {
   return text;
 }
 
-std::vector<uint32_t> nodesInBox(const ShellNodes& nodes, const Vec3& lo, const Vec3& hi,
-                                 const std::string& what) {
+}  // namespace
+
+std::vector<uint32_t> shellNodesInBox(const ShellNodes& nodes, const Vec3& lo, const Vec3& hi,
+                                      const std::string& what) {
   Vec3 min = nodes.rest_positions[0], max = min;
   for (const Vec3& p : nodes.rest_positions) min = min.cwiseMin(p), max = max.cwiseMax(p);
   const double tolerance = 1e-9 * (max - min).norm();
@@ -31,14 +34,12 @@ std::vector<uint32_t> nodesInBox(const ShellNodes& nodes, const Vec3& lo, const 
   return inside;
 }
 
-}  // namespace
-
 std::vector<ShellHeld> resolveShellHeld(const ShellScene& scene, const ShellNodes& nodes) {
   std::vector<ShellHeld> held;
   for (size_t k = 0; k < scene.held.size(); ++k) {
     const ShellSceneHeld& h = scene.held[k];
     ShellHeld region;
-    region.nodes = nodesInBox(nodes, h.lo, h.hi, scene.path + ": held[" + std::to_string(k) + "]");
+    region.nodes = shellNodesInBox(nodes, h.lo, h.hi, scene.path + ": held[" + std::to_string(k) + "]");
     region.components = h.components;
     region.displacement = h.displacement;
     held.push_back(std::move(region));
@@ -60,7 +61,7 @@ std::vector<ShellLoad> resolveShellLoads(const ShellScene& scene, const ShellNod
       }
       load.nodes = {nearest};
     } else {
-      load.nodes = nodesInBox(nodes, l.lo, l.hi, scene.path + ": loads[" + std::to_string(k) + "]");
+      load.nodes = shellNodesInBox(nodes, l.lo, l.hi, scene.path + ": loads[" + std::to_string(k) + "]");
     }
     load.force = l.force;
     load.traction = l.traction;

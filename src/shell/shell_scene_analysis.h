@@ -2,6 +2,7 @@
 // to the simulation's nodes, and the solves on the simulation's energy.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "relaxed_connectivity/shell/shell_modal.h"
@@ -9,6 +10,11 @@
 #include "relaxed_connectivity/shell/shell_static.h"
 
 namespace rc {
+
+/// The nodes whose rest positions lie in [lo, hi] (closed, within 1e-9 of the shell's diagonal). Throws
+/// ShellSceneError "<what> [lo] .. [hi] holds no node ..." when there is none.
+std::vector<uint32_t> shellNodesInBox(const ShellNodes& nodes, const Vec3& lo, const Vec3& hi,
+                                      const std::string& what);
 
 /// The scene's held regions on `nodes`: the nodes whose rest positions lie in each box (closed, within 1e-9
 /// of the shell's diagonal). Throws ShellSceneError naming the region for a box without nodes.

@@ -77,7 +77,7 @@ class SceneReader {
     src_.allowKeys(root, {"name",       "source",   "placement",  "velocity",   "nodes",    "material",
                           "plasticity", "fracture", "anisotropy", "weak_point", "dynamics", "ground",
                           "pins",       "balloon",  "frames",     "skinning",   "output",   "analysis",
-                          "held",       "loads",    "static",     "modes"},
+                          "held",       "loads",    "static",     "modes",      "probes"},
                    "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
     readSource(src_.require(root, "source", "scene"));
@@ -440,6 +440,27 @@ class SceneReader {
       if (s["tolerance"]) o.tolerance = src_.positive(s["tolerance"], "static.tolerance");
     }
     if (root["modes"]) scene_.modes = int(src_.integer(root["modes"], "modes", 1, 1000));
+    if (const YAML::Node probes = root["probes"]) {
+      if (is_static || is_modal)
+        src_.fail(probes, "probes: for analysis dynamic (static runs report in their JSON)");
+      readProbes(probes);
+    }
+  }
+
+  void readProbes(const YAML::Node& node) {
+    src_.forEachEntry(node, "probes", "{name, lo, hi}",
+                      [&](const YAML::Node& entry, const std::string& where) {
+                        src_.allowKeys(entry, {"name", "lo", "hi"}, where);
+                        ShellProbe probe;
+                        const YAML::Node name = src_.require(entry, "name", where);
+                        probe.name = src_.word(name, where + ".name");
+                        for (const ShellProbe& other : scene_.probes)
+                          if (other.name == probe.name)
+                            src_.fail(name, where + ".name: '" + probe.name + "' is taken");
+                        src_.box(entry, where, &probe.lo, &probe.hi);
+                        requireSurfelIn(entry, where, probe.lo, probe.hi);
+                        scene_.probes.push_back(std::move(probe));
+                      });
   }
 
   /// Fails unless the box holds a surfel of the source (the nodes are chosen among them when the run starts).

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <stdexcept>
 
 #include "relaxed_connectivity/io/cloud_io.h"
 #include "relaxed_connectivity/shell/shell_scene_analysis.h"
@@ -37,6 +39,27 @@ size_t writeFrame(const ShellSimulation& sim, const std::string& dir, int frame)
 /// analysis dynamic: the frames, an instability ending the run.
 void runFrames(ShellSimulation& sim, bool write, const ShellRunOptions& options, ShellRunStats* stats) {
   const ShellScene& scene = sim.scene();
+  std::ofstream probes;
+  std::vector<std::vector<uint32_t>> probe_nodes;
+  if (!scene.probes.empty() && options.write_files) {
+    for (size_t k = 0; k < scene.probes.size(); ++k)
+      probe_nodes.push_back(
+          shellNodesInBox(sim.solver().nodes(), scene.probes[k].lo, scene.probes[k].hi,
+                          scene.path + ": probes[" + std::to_string(k) + "] (" + scene.probes[k].name + ")"));
+    std::filesystem::create_directories(options.out_dir);
+    const std::string path = (std::filesystem::path(options.out_dir) / (scene.name + "_probes.csv")).string();
+    probes.open(path);
+    if (!probes) throw std::runtime_error("runShellScene: cannot write " + path);
+    writeShellProbeHeader(probes, scene.probes);
+  }
+  auto probe = [&] {
+    if (!probes.is_open()) return;
+    std::vector<ShellRegionMeasures> regions;
+    for (const std::vector<uint32_t>& nodes : probe_nodes)
+      regions.push_back(measureShellRegion(sim.solver(), nodes));
+    writeShellProbeRow(probes, sim.solver().time(), measureShell(sim.solver()), regions);
+  };
+  probe();
   try {
     for (int f = 1; f <= scene.frame_count; ++f) {
       const ShellFrameReport r = sim.advanceFrame();
@@ -48,6 +71,7 @@ void runFrames(ShellSimulation& sim, bool write, const ShellRunOptions& options,
         stats->files += writeFrame(sim, options.out_dir, f);
         if (options.on_written_frame) options.on_written_frame(sim, f);
       }
+      probe();
       if (options.on_frame) options.on_frame(r);
     }
   } catch (const ShellInstabilityError& e) {

@@ -93,6 +93,9 @@ class ShellSolver {
   const ShellNodes& nodes() const { return nodes_; }
   const ShellFibers& fibers() const { return fibers_; }
   const ShellEnergy& energy() const { return energy_; }
+  /// dE/dx at positions() (the elastic forces are its negative), as the last force evaluation left it.
+  const std::vector<Vec3>& elasticGradient() const { return gradient_; }
+  const Vec3& gravity() const { return options_.gravity; }
   /// Arc length and signed normal angle of every fiber at positions() (as measureFibers), measured with the
   /// forces; valid after construction, every step and every change of positions, rest state or topology.
   const std::vector<double>& fiberLengths() const { return fiber_length_; }

@@ -15,6 +15,7 @@ namespace {
 
 using namespace rc;
 
+#ifdef RC_SURFACE_TOOL
 struct ToolRun {
   int status = -1;
   std::string output;  // stdout and stderr
@@ -30,6 +31,8 @@ ToolRun runTool(const std::string& arguments) {
   run.status = pclose(pipe);
   return run;
 }
+
+#endif
 
 double rmsToSphere(const std::vector<Vec3>& points) {
   double sum = 0;
