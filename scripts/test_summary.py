@@ -1,12 +1,14 @@
 #!/usr/bin/python3
 """Counts test cases (not programs) from JUnit XML results and prints one summary line.
 
-Usage: test_summary.py [--ctest-junit FILE --gtest-dir DIR] [--rostest-dir DIR]
+Usage: test_summary.py [--ctest-junit FILE --gtest-dir DIR] [--rostest-dir DIR] [--validation-junit FILE]
 
 --ctest-junit: ctest --output-junit FILE (one entry per registered test program, with its exit status);
 --gtest-dir:   the folder GTEST_OUTPUT=xml:DIR/ filled (one file per gtest program, one entry per case);
 --rostest-dir: catkin's test_results folder (rosunit-*.xml: the cases of each rostest's gtest node;
-               rostest-*.xml: one wrapper entry per .test file, failed when the launch or the node failed).
+               rostest-*.xml: one wrapper entry per .test file, failed when the launch or the node failed);
+--validation-junit: scripts/validate --junit FILE (one case per benchmark, resolution and quantity; a missing file
+               counts as one failed case).
 
 A gtest program whose cases all passed but which failed in ctest (crash, exit code) counts as one more failed
 case; a program ctest ran without gtest XML (a script) counts as one case. A rostest wrapper that failed adds one
@@ -107,11 +109,23 @@ def ros_tally(result_dir):
     return tally, len(wrappers)
 
 
+def validation_tally(path):
+    tally = Tally("validation (scripts/validate --quick)")
+    if not os.path.exists(path):
+        tally.add("scripts/validate", "failed", "no results (%s)" % path)
+        return tally, 0
+    cases = gtest_cases(path)
+    for case, state, why in cases:
+        tally.add(case, state, why)
+    return tally, len(cases)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ctest-junit")
     parser.add_argument("--gtest-dir")
     parser.add_argument("--rostest-dir")
+    parser.add_argument("--validation-junit")
     parser.add_argument("--expect-shared-data", action="store_true",
                         help="a case skipped for missing ../shared/data counts as failed (CI has the data)")
     args = parser.parse_args()
@@ -122,6 +136,9 @@ def main():
     if args.rostest_dir:
         tally, launches = ros_tally(args.rostest_dir)
         tallies.append((tally, "%d launch files" % launches))
+    if args.validation_junit:
+        tally, quantities = validation_tally(args.validation_junit)
+        tallies.append((tally, "%d quantities" % quantities))
     for tally, unit in tallies:
         if args.expect_shared_data:
             missing = [(case, why) for case, why in tally.skipped if SHARED_DATA_MARK in why]
