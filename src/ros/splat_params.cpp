@@ -15,6 +15,7 @@ void readSplatParams(const ros::NodeHandle& pnh, const std::string& node, SplatC
   pnh.param("depth_tolerance_scale", s.depth_tolerance_scale, s.depth_tolerance_scale);
   pnh.param("shading", s.shading, s.shading);
   pnh.param("backface_culling", s.backface_culling, s.backface_culling);
+  pnh.param("exact_footprint", s.exact_footprint, s.exact_footprint);
   pnh.param("threads", s.threads, s.threads);
   std::vector<int> background{s.background[0], s.background[1], s.background[2]};
   pnh.param("background", background, background);

@@ -193,6 +193,12 @@ void setupCircularEwaSplats4(const Vec3* centers, const Vec3* normals, const dou
 
   alignas(32) double out[16][4];
   int culled_mask = _mm256_movemask_pd(culled), edge_mask = _mm256_movemask_pd(edge_on);
+  // Large splats: the exact footprint of the scalar set-up (kExactFootprintRatio).
+  const int large_mask =
+      params.exact_footprint
+          ? _mm256_movemask_pd(_mm256_cmp_pd(mul(set1(params.cutoff_radius), radius),
+                                             mul(set1(kExactFootprintRatio), cz), _CMP_GT_OQ))
+          : 0;
   const int bad_det_mask = _mm256_movemask_pd(bad_det), empty_mask = _mm_movemask_ps(_mm_castsi128_ps(empty));
   const int undefined_mask = _mm256_movemask_pd(plane_undefined);
   _mm256_store_pd(out[0], center_u);
@@ -217,7 +223,7 @@ void setupCircularEwaSplats4(const Vec3* centers, const Vec3* normals, const dou
     const int bit = 1 << k;
     if (culled_mask & bit) {
       results[k] = SplatSetup::kCulled;
-    } else if (edge_mask & bit) {
+    } else if ((edge_mask | large_mask) & bit) {
       fallback[k] = true;
     } else if (bad_det_mask & bit) {
       results[k] = SplatSetup::kInvalid;

@@ -141,6 +141,7 @@ void DifferentialSurfelRenderer::update(const SurfelCloud& cloud, const SurfelCl
   params.cutoff_radius = sc.cutoff_radius;
   params.depth_tolerance_scale = sc.depth_tolerance_scale;
   params.backface_culling = sc.backface_culling;
+  params.exact_footprint = sc.exact_footprint;
 
   // Set-up of the removed, then the added surfels (the order within a tile: un-splat first).
   const size_t n = removed.size() + added.size();

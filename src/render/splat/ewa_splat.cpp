@@ -169,6 +169,39 @@ inline bool planeDepth(const Vec3& c, const Vec3& n, double center_u, double cen
   return true;
 }
 
+/// The exact screen footprint of a perspective splat (camera frame: centre c, scaled tangent axes a1, a2; the
+/// cut-off disc s^2 + t^2 <= rho^2 in axis units): the homography M = K [a1 a2 c] maps the disc's conic
+/// diag(1, 1, -rho^2) to the screen conic M^-T diag(1, 1, -rho^2) M^-1, an ellipse while the whole disc lies
+/// in front of the camera. Writes its centre and the covariance-equivalent of the kernel, sigma^2 F with F
+/// the matrix whose cut-off ellipse it is (what the affine set-up calls sigma^2 J (..) J^T). False where the
+/// disc reaches the near plane (the conic is not an ellipse there).
+bool exactPerspectiveFootprint(const Vec3& c, const Vec3& a1, const Vec3& a2, double z_half_extent,
+                               const CameraFrame& camera, const EwaParams& params, double* center_u,
+                               double* center_v, Eigen::Matrix2d* kernel_covariance) {
+  if (!(c.z() - z_half_extent > camera.near_clip)) return false;
+  Eigen::Matrix3d K;
+  K << camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1;
+  Eigen::Matrix3d M;
+  M << K * a1, K * a2, K * c;
+  const Eigen::Matrix3d inverse = M.inverse();
+  if (!inverse.allFinite()) return false;
+  const double rho = params.cutoff_radius;
+  const Eigen::Matrix3d D = Eigen::Vector3d(1.0, 1.0, -rho * rho).asDiagonal();
+  const Eigen::Matrix3d C = inverse.transpose() * D * inverse;
+  const Eigen::Matrix2d A = C.topLeftCorner<2, 2>();
+  const Eigen::Vector2d b = C.topRightCorner<2, 1>();
+  if (!(A.determinant() > 0) || !(A.trace() > 0)) return false;
+  const Eigen::Vector2d centre = -A.inverse() * b;
+  const double k = -(b.dot(centre)) - C(2, 2);  // b^T A^-1 b - c
+  if (!(k > 0) || !std::isfinite(k) || !centre.allFinite()) return false;
+  // (x - centre)^T (A / k) (x - centre) = 1 on the cut-off; at the cut-off the kernel is at cutoff_sigmas.
+  const double cutoff_sigmas = params.cutoff_radius / kKernelSigmaPerRadius;
+  *kernel_covariance = (A / k).inverse() / (cutoff_sigmas * cutoff_sigmas);
+  *center_u = centre.x();
+  *center_v = centre.y();
+  return kernel_covariance->allFinite();
+}
+
 SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& camera, const EwaParams& params,
                              SplatRaster* raster, Eigen::Matrix2d* screen_to_local_out, double* center_u_out,
                              double* center_v_out, bool* edge_on_out) {
@@ -218,6 +251,16 @@ SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& came
   // always get the filter: their conic is (nearly) singular, the filter widens it to a line of pixel width.
   const double sigma2 = kKernelSigmaPerRadius * kKernelSigmaPerRadius;
   Eigen::Matrix2d covariance = sigma2 * footprint;
+  // The raster's centre: the projected surfel centre, or for large splats the centre of the exact conic (the
+  // geometry of clipped fragments keeps the projected centre, the reference of its affine inverse).
+  double raster_u = center_u, raster_v = center_v;
+  if (params.exact_footprint && camera.perspective && !edge_on && radius > kExactFootprintRatio * c.z()) {
+    Vec3 a1 = surfel.a1, a2 = surfel.a2;
+    if (!surfel.has_axes) tangentAxes(n, surfel.radius, &a1, &a2);
+    Eigen::Matrix2d exact;
+    if (exactPerspectiveFootprint(c, a1, a2, z_half_extent, camera, params, &raster_u, &raster_v, &exact))
+      covariance = exact;
+  }
   if (params.ewa_filter || edge_on) covariance.diagonal().array() += params.lowpass_variance;
   covariance.diagonal().array() += 1e-6;  // keeps tiny unfiltered splats invertible
   const double cutoff_sigmas = params.cutoff_radius / kKernelSigmaPerRadius;
@@ -227,10 +270,10 @@ SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& came
   // Conic scaled so that r2 = 1 is the cut-off ellipse.
   const double conic_scale = 1.0 / (det * cutoff2);
   const Eigen::Array2d half = cutoff_sigmas * covariance.diagonal().array().sqrt();
-  if (!pixelBox(center_u, center_v, half(0), half(1), camera, raster)) return SplatSetup::kCulled;
+  if (!pixelBox(raster_u, raster_v, half(0), half(1), camera, raster)) return SplatSetup::kCulled;
 
-  raster->center_u = float(center_u);
-  raster->center_v = float(center_v);
+  raster->center_u = float(raster_u);
+  raster->center_v = float(raster_v);
   raster->conic_a = float(covariance(1, 1) * conic_scale);
   raster->conic_b = float(-covariance(0, 1) * conic_scale);
   raster->conic_c = float(covariance(0, 0) * conic_scale);
@@ -239,7 +282,7 @@ SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& came
   double z_lo = c.z() - z_half_extent, z_hi = c.z() + z_half_extent;
   const double cos_view = std::abs(n_dot_view) / std::sqrt(view_length2);
   raster->depth_tolerance = depthTolerance(params, radius, cos_view, c.z());
-  const bool affine_depth = edge_on || !planeDepth(c, n, center_u, center_v, camera, raster, &z_lo, &z_hi);
+  const bool affine_depth = edge_on || !planeDepth(c, n, raster_u, raster_v, camera, raster, &z_lo, &z_hi);
   raster->z_lo = float(z_lo);
   raster->z_hi = float(z_hi);
 
@@ -250,7 +293,8 @@ SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& came
     if (screen_to_local_out) *screen_to_local_out = screen_to_local;
     if (affine_depth) {  // z = c.z + (a1.z, a2.z) * screen_to_local * (du, dv)
       const Eigen::RowVector2d gradient = Eigen::RowVector2d(a1.z(), a2.z()) * screen_to_local;
-      raster->depth_num[0] = float(c.z());
+      raster->depth_num[0] =
+          float(c.z() + gradient.dot(Eigen::Vector2d(raster_u - center_u, raster_v - center_v)));
       raster->depth_num[1] = float(gradient(0));
       raster->depth_num[2] = float(gradient(1));
       raster->depth_den[0] = raster->depth_den[1] = 0;
@@ -312,6 +356,10 @@ bool setupCircularCommonCase(const Vec3& c, const Vec3& n, double radius, const 
     *result = SplatSetup::kCulled;
     return true;
   }
+  // Large perspective splats get the exact footprint in the general path.
+  if (params.exact_footprint && camera.perspective &&
+      params.cutoff_radius * radius > kExactFootprintRatio * c.z())
+    return false;
   // Screen footprint r^2 J (I - n n^T) J^T of the affine approximation of the projection at the centre.
   const double r2 = radius * radius;
   double view_length2, f00, f01, f11, center_u, center_v;

@@ -192,6 +192,7 @@ struct RenderFrameState {
     params.cutoff_radius = config.cutoff_radius;
     params.depth_tolerance_scale = config.depth_tolerance_scale;
     params.backface_culling = config.backface_culling;
+    params.exact_footprint = config.exact_footprint;
   }
 
   const SplatConfig& config;
