@@ -11,8 +11,8 @@
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 #include "relaxed_connectivity/ros/simulation_loop.h"
 #include "relaxed_connectivity/shell/shell_probes.h"
-#include "relaxed_connectivity/shell/shell_scene_analysis.h"
 #include "relaxed_connectivity/shell/shell_scene_reader.h"
+#include "relaxed_connectivity/shell/shell_scene_regions.h"
 
 namespace rc {
 

@@ -416,13 +416,18 @@ class SceneReader {
                                                     {"modal", ShellAnalysis::kModal}});
     const bool is_static = scene_.analysis == ShellAnalysis::kStatic;
     const bool is_modal = scene_.analysis == ShellAnalysis::kModal;
-    if (root["held"] && !is_static && !is_modal)
-      src_.fail(root["held"], "held: for analysis static or modal (dynamic runs hold nodes with pins)");
-    if (root["loads"] && !is_static) src_.fail(root["loads"], "loads: for analysis static");
+    if (root["loads"] && is_modal) src_.fail(root["loads"], "loads: for analysis static or dynamic");
     if (root["static"] && !is_static) src_.fail(root["static"], "static: for analysis static");
     if (root["modes"] && !is_modal) src_.fail(root["modes"], "modes: for analysis modal");
     if (root["held"]) readHeld(root["held"]);
     if (root["loads"]) readLoads(root["loads"]);
+    if (!is_static && !is_modal)  // dynamic: held components stay where they are (pins move with a velocity)
+      for (size_t k = 0; k < scene_.held.size(); ++k)
+        if (scene_.held[k].displacement.squaredNorm() > 0)
+          src_.fail(root["held"][k],
+                    "held[" + std::to_string(k) +
+                        "].displacement: for analysis static (dynamic runs move nodes with pins' "
+                        "velocity)");
     if (is_static && scene_.held.empty())
       src_.fail(root, "analysis static: give held regions (a free shell has no equilibrium under loads)");
     if (is_static && scene_.loads.empty() && scene_.solver.gravity.squaredNorm() == 0) {

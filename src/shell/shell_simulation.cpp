@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "relaxed_connectivity/shell/shell_scene_regions.h"
+
 namespace rc {
 
 namespace {
@@ -31,6 +33,18 @@ ShellSimulation::ShellSimulation(const ShellScene& scene) : scene_(scene) {
         solver_->pin(i);
       }
     }
+  }
+  // Dynamic runs: held components of the held regions, constant loads (static and modal analyses use them in
+  // shell_scene_analysis).
+  std::vector<Vec3> loads;
+  if (scene_.analysis == ShellAnalysis::kDynamic) {
+    for (const ShellHeld& region : resolveShellHeld(scene_, nodes)) {
+      const uint8_t mask =
+          uint8_t(region.components[0] | region.components[1] << 1 | region.components[2] << 2);
+      for (uint32_t i : region.nodes) solver_->hold(i, mask);
+    }
+    if (!scene_.loads.empty())
+      loads = shellLoadForces(solver_->energy(), resolveShellLoads(scene_, nodes), Vec3::Zero());
   }
   if (scene_.initial_velocity.squaredNorm() > 0)
     solver_->setVelocities(std::vector<Vec3>(nodes.size(), scene_.initial_velocity));
@@ -76,10 +90,13 @@ ShellSimulation::ShellSimulation(const ShellScene& scene) : scene_(scene) {
     pressure_ = std::make_shared<double>(scene_.balloon.pressureAt(0.0));
     ShellExternalForce unit = balloonPressure(solver_->nodes(), solver_->fibers(), 1.0);
     std::shared_ptr<double> p = pressure_;
-    solver_->setExternalForce([unit, p](const std::vector<Vec3>& x, std::vector<Vec3>& force) {
+    solver_->setExternalForce([unit, p, loads](const std::vector<Vec3>& x, std::vector<Vec3>& force) {
       unit(x, force);
       for (Vec3& f : force) f *= *p;
+      for (size_t i = 0; i < loads.size(); ++i) force[i] += loads[i];
     });
+  } else if (!loads.empty()) {
+    solver_->setExternalForce([loads](const std::vector<Vec3>&, std::vector<Vec3>& force) { force = loads; });
   }
   surfels_ = scene_.surfels;
   animateSurface();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 namespace rc {
 namespace {
@@ -17,7 +18,7 @@ ShellSolver::ShellSolver(ShellNodes nodes, const ShellMaterial& material, const 
       options_(options),
       x_(nodes_.rest_positions),
       v_(nodes_.size(), Vec3::Zero()),
-      pinned_(nodes_.size(), 0) {
+      held_(nodes_.size(), 0) {
   if (!(options.time_step >= 0.0) || !(options.step_safety > 0.0 && options.step_safety <= 1.0) ||
       options.step_update_interval < 1 || !(options.blowup_factor > 1.0) || !options.gravity.allFinite()) {
     throw std::invalid_argument(
@@ -35,8 +36,15 @@ ShellSolver::ShellSolver(ShellNodes nodes, const ShellMaterial& material, const 
 }
 
 void ShellSolver::pin(size_t node) {
-  pinned_.at(node) = 1;
-  v_[node].setZero();
+  hold(node, 7);
+}
+
+void ShellSolver::hold(size_t node, uint8_t mask) {
+  if (mask > 7) throw std::invalid_argument("ShellSolver::hold: mask must be 0..7 (bits x, y, z)");
+  held_.at(node) |= mask;
+  for (int d = 0; d < 3; ++d)
+    if (held_[node] >> d & 1) v_[node][d] = 0.0;
+  partly_held_ = partly_held_ || (held_[node] != 0 && held_[node] != 7);
 }
 
 void ShellSolver::setPinVelocity(size_t node, const Vec3& velocity) {
@@ -66,9 +74,9 @@ void ShellSolver::setVelocities(const std::vector<Vec3>& v) {
   if (v.size() != v_.size())
     throw std::invalid_argument("ShellSolver::setVelocities: wrong number of velocities");
   v_ = v;
-  for (size_t i = 0; i < v_.size(); ++i) {
-    if (pinned_[i]) v_[i].setZero();
-  }
+  for (size_t i = 0; i < v_.size(); ++i)
+    for (int d = 0; d < 3; ++d)
+      if (held_[i] >> d & 1) v_[i][d] = 0.0;
   resetReference();
 }
 
@@ -121,7 +129,7 @@ void ShellSolver::applyGround() {
   const Vec3& n = options_.ground_normal;
   for (size_t i = 0; i < x_.size(); ++i) {
     const double depth = (x_[i] - options_.ground_point).dot(n);
-    if (depth >= 0.0 || pinned_[i]) continue;
+    if (depth >= 0.0 || held_[i] == 7) continue;
     x_[i] -= depth * n;
     const double vn = v_[i].dot(n);
     if (vn < 0.0) {
@@ -144,8 +152,11 @@ ShellStepReport ShellSolver::step() {
   if (external_force_) x_before_ = x_;
 #pragma omp parallel for schedule(static) if (n >= kParallelNodes)
   for (size_t i = 0; i < n; ++i) {  // (7.18): first half kick, drift
-    if (pinned_[i]) continue;
-    const Vec3 a = (external_[i] - gradient_[i]) / m[i] + options_.gravity - damping * v_[i];
+    if (held_[i] == 7) continue;
+    Vec3 a = (external_[i] - gradient_[i]) / m[i] + options_.gravity - damping * v_[i];
+    if (partly_held_ && held_[i])
+      for (int d = 0; d < 3; ++d)
+        if (held_[i] >> d & 1) a[d] = 0.0;  // its velocity component stays 0
     v_[i] += 0.5 * dt * a;
     x_[i] += dt * v_[i];
   }
@@ -169,9 +180,12 @@ ShellStepReport ShellSolver::step() {
   }
 #pragma omp parallel for schedule(static) if (n >= kParallelNodes)
   for (size_t i = 0; i < n; ++i) {  // second half kick, damping implicit
-    if (pinned_[i]) continue;
+    if (held_[i] == 7) continue;
     v_[i] = (v_[i] + 0.5 * dt * ((external_[i] - gradient_[i]) / m[i] + options_.gravity)) /
             (1.0 + 0.5 * dt * damping);
+    if (partly_held_ && held_[i])
+      for (int d = 0; d < 3; ++d)
+        if (held_[i] >> d & 1) v_[i][d] = 0.0;
   }
   applyGround();
   ++step_count_;

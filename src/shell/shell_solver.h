@@ -66,10 +66,15 @@ class ShellSolver {
   ShellSolver(ShellNodes nodes, const ShellMaterial& material, const ShellSolverOptions& options);
 
   void pin(size_t node);
+  /// Holds the components of `node` whose bits are set in `mask` (bit d: component d; 7 = pin): their
+  /// velocity stays 0 and their position where it is (a roller or a symmetry plane holds one).
+  void hold(size_t node, uint8_t mask);
+  /// The held components of every node (bit mask; pinned nodes 7).
+  const std::vector<uint8_t>& heldMask() const { return held_; }
   /// Pins `node` and moves it with this velocity during the drift of every step (a pulled edge, 7.3.2
   /// experiments). The work the moving pins do on the shell counts as available energy (trapezoidal).
   void setPinVelocity(size_t node, const Vec3& velocity);
-  bool pinned(size_t node) const { return pinned_.at(node) != 0; }
+  bool pinned(size_t node) const { return held_.at(node) == 7; }
   void setPositions(const std::vector<Vec3>& x);
   void setVelocities(const std::vector<Vec3>& v);
   /// Adds a position-dependent external force (evaluated after every drift); its work is counted as
@@ -118,7 +123,8 @@ class ShellSolver {
   ShellExternalForce external_force_;
   double external_work_ = 0.0;
   std::vector<double> fiber_length_, fiber_angle_;
-  std::vector<char> pinned_;
+  std::vector<uint8_t> held_;                         ///< per node: bit d = component d held (7: pinned)
+  bool partly_held_ = false;                          ///< some node holds only some components
   std::vector<std::pair<size_t, Vec3>> moving_pins_;  ///< node, velocity
   std::vector<Vec3> pin_force_before_;                ///< gradient at the moving pins before the drift
   double pin_work_ = 0.0;

@@ -98,6 +98,32 @@ TEST(ShellProbes, AFreeFallsMomentumIsMinusMgt) {
   }
 }
 
+TEST(ShellProbes, HeldComponentsAndLoadsInADynamicRun) {
+  // No pins: every node holds z (a sheet on a frictionless table), gravity pulls along -z, a constant load of
+  // 0.5 along +x acts on the right edge: nothing leaves the plane, and (no damping, nothing held along x) the
+  // momentum along x is 0.5 t exactly (Verlet integrates a constant force exactly).
+  std::string yaml = kHanging;
+  yaml.replace(yaml.find("pins:"), yaml.find("frames:") - yaml.find("pins:"),
+               "held:\n  - {lo: [-1, -1, -1], hi: [1, 1, 1], components: z}\n"
+               "loads:\n  - {lo: [0.44, -0.5, -1], hi: [0.5, 0.5, 1], force: [0.5, 0, 0]}\n");
+  yaml.replace(yaml.find("damping: 4"), 10, "damping: 0");
+  yaml.replace(yaml.find("gravity: [0, -1, 0]"), 19, "gravity: [0, 0, -1]");
+  yaml.replace(yaml.find("count: 30"), 9, "count: 5");
+  yaml.replace(yaml.find("name: hanging"), 13, "name: table");
+  yaml += "  - {name: all, lo: [-1, -1, -1], hi: [1, 1, 1]}\n";
+  const Table t = runWithProbes(yaml, "table");
+  ASSERT_EQ(t.rows.size(), 1u + 6u);
+  for (size_t r = 1; r < t.rows.size(); ++r) {
+    const double time = t.at(r, "time");
+    EXPECT_EQ(t.at(r, "all_uz"), 0.0) << time;  // held exactly, gravity or not
+    EXPECT_EQ(t.at(r, "momentum_z"), 0.0) << time;
+    EXPECT_NEAR(t.at(r, "momentum_x"), 0.5 * time, 1e-9) << time;
+    if (r > 1) {
+      EXPECT_GT(t.at(r, "all_ux"), 0.0);
+    }
+  }
+}
+
 TEST(ShellProbes, BadProbesAreNamedWithTheirLine) {
   const std::string head = kHanging.substr(0, kHanging.find("probes:"));  // 10 lines
   auto errorOf = [](const std::string& yaml) {

@@ -81,9 +81,13 @@ TEST(ShellSceneAnalysis, KeysAreCheckedWithTheirLine) {
       "");
   EXPECT_EQ(errorOf(kBase + "analysis: modal\nmodes: 3\n" + held), "");
   expectErrorAt(kBase + "analysis: quasi\n", 6, "analysis: unknown 'quasi'");
-  expectErrorAt(kBase + "frames: {count: 1, time: 0.1}\n" + held, 8, "held: for analysis static or modal");
+  EXPECT_EQ(errorOf(kBase + "frames: {count: 1, time: 0.1}\n" + held), "");  // dynamic: held components
+  expectErrorAt(kBase +
+                    "frames: {count: 1, time: 0.1}\nheld:\n  - {lo: [-0.5, -0.1, -1], hi: [-0.4, 0.1, 1], "
+                    "displacement: [0, 0, 1]}\n",
+                8, "held[0].displacement: for analysis static");
   expectErrorAt(kBase + "analysis: modal\n" + held + "loads:\n  - {point: [0, 0, 0], force: [0, 0, 1]}\n", 10,
-                "loads: for analysis static");
+                "loads: for analysis static or dynamic");
   expectErrorAt(kBase + "analysis: static\nmodes: 3\n" + held, 7, "modes: for analysis modal");
   expectErrorAt(kBase + "analysis: static\nloads:\n  - {point: [0, 0, 0], force: [0, 0, 1]}\n", 1,
                 "give held regions");

@@ -82,7 +82,8 @@ TEST(ShellSceneFile, EveryShippedSceneLoadsWithTheExpectedCounts) {
       {"cantilever_static",
        {2000, 0, false, false, false, false, 0}},  // test_shell_scene_analysis runs these
       {"cantilever_modal", {2000, 0, false, false, false, false, 0}},
-      {"hanging_sheet_probes", {2500, 0, false, false, false, false, 1}},  // test_shell_probes, shell_probes.test
+      {"hanging_sheet_probes",
+       {2500, 0, false, false, false, false, 1}},  // test_shell_probes, shell_probes.test
   };
   size_t seen = 0;
   for (const auto& entry : std::filesystem::directory_iterator(configDir())) {
