@@ -128,6 +128,7 @@ ShellSimulator::ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
                                        << " nodes, " << simulation_->fiberCount() << " fibers, "
                                        << simulation_->surfels().size() << " surfels");
   force_srv_ = private_nh_.advertiseService("apply_force", &ShellSimulator::forceCallback, this);
+  hold_srv_ = private_nh_.advertiseService("hold", &ShellSimulator::holdCallback, this);
   loop_.start(nh_, private_nh_, params_.rate);
 }
 
@@ -293,6 +294,36 @@ bool ShellSimulator::forceCallback(relaxed_connectivity::ShellForce::Request& re
     response.nodes = 0;
     response.message = e.what();
     ROS_WARN_STREAM("shell_sim: force refused: " << response.message);
+  }
+  return true;
+}
+
+bool ShellSimulator::holdCallback(relaxed_connectivity::ShellHold::Request& request,
+                                  relaxed_connectivity::ShellHold::Response& response) {
+  std::lock_guard<std::mutex> lock(loop_.mutex());
+  response.success = false;
+  response.nodes = 0;
+  try {
+    const Vec3 lo(request.lo.x, request.lo.y, request.lo.z), hi(request.hi.x, request.hi.y, request.hi.z);
+    if (!lo.allFinite() || !hi.allFinite() || !(lo.array() <= hi.array()).all())
+      throw std::invalid_argument("hold: the box needs finite lo <= hi");
+    uint8_t mask = request.components.empty() ? 7 : 0;
+    for (char k : request.components) {
+      if (k < 'x' || k > 'z' || (mask >> (k - 'x') & 1))
+        throw std::invalid_argument("hold: components '" + request.components +
+                                    "' (letters of xyz, each once; empty: all)");
+      mask |= uint8_t(1 << (k - 'x'));
+    }
+    const std::vector<uint32_t> nodes =
+        shellNodesInBox(simulation_->solver().nodes(), lo, hi, "hold: the box");  // throws when empty
+    for (uint32_t i : nodes) simulation_->mutableSolver().hold(i, mask);
+    response.nodes = uint32_t(nodes.size());
+    response.success = true;
+    response.message = "holding " + std::string(request.components.empty() ? "xyz" : request.components) +
+                       " of " + std::to_string(nodes.size()) + " nodes";
+  } catch (const std::exception& e) {
+    response.message = e.what();
+    ROS_WARN_STREAM("shell_sim: hold refused: " << response.message);
   }
   return true;
 }

@@ -13,7 +13,9 @@
 // | reset;
 //             reset restores the scene at t = 0, paused, and drops the applied forces), ~apply_force
 //             (relaxed_connectivity/ShellForce: a force on one node or on the nodes near a point for a
-//             simulated duration; bad input is refused with a message and changes nothing)
+//             simulated duration; bad input is refused with a message and changes nothing), ~hold
+//             (relaxed_connectivity/ShellHold: components of the nodes in a box held from now on, until
+//             reset)
 // Parameters  (private) scene (file, required), frame_id, rate (frames per wall second: one frame per tick),
 //             autostart, node_count (> 0 replaces the scene's node count, for speed); see
 //             config/shell_demo.yaml.
@@ -22,6 +24,7 @@
 #pragma once
 
 #include <relaxed_connectivity/ShellForce.h>
+#include <relaxed_connectivity/ShellHold.h>
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 #include <std_msgs/Header.h>
@@ -81,6 +84,8 @@ class ShellSimulator {
   void resetSimulation();
   bool forceCallback(relaxed_connectivity::ShellForce::Request& request,
                      relaxed_connectivity::ShellForce::Response& response);
+  bool holdCallback(relaxed_connectivity::ShellHold::Request& request,
+                    relaxed_connectivity::ShellHold::Response& response);
 
   ros::NodeHandle nh_, private_nh_;
   ShellSimulatorParams params_;
@@ -92,7 +97,7 @@ class ShellSimulator {
   ShellFrameReport last_frame_;
   double node_size_ = 0.0;  ///< marker size: a quarter of the mean rest fiber length
   ros::Publisher surfels_pub_, cracks_pub_, nodes_pub_, fibers_pub_, stats_pub_, probes_pub_;
-  ros::ServiceServer force_srv_;
+  ros::ServiceServer force_srv_, hold_srv_;
 };
 
 }  // namespace rc

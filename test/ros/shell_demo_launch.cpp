@@ -6,6 +6,7 @@
 // config shows topics the node publishes.
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/ShellForce.h>
+#include <relaxed_connectivity/ShellHold.h>
 #include <relaxed_connectivity/ShellStats.h>
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
@@ -154,6 +155,49 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
     EXPECT_NEAR(inbox.stats.time, 2 * scene.frame_time, 1e-9 * scene.frame_time);
     EXPECT_GT(inbox.stats.step, 2u);
     EXPECT_GT(inbox.stats.pressure, 0.0);  // the balloon's ramp has started
+  }
+
+  // ~hold: bad requests are refused and change nothing; holding every node keeps it where it is (the
+  // balloon's pressure pushes, nothing moves); reset restores the scene's own (none).
+  ros::ServiceClient hold = nh.serviceClient<relaxed_connectivity::ShellHold>("shell_sim/hold");
+  ASSERT_TRUE(hold.waitForExistence(ros::Duration(10)));
+  {
+    relaxed_connectivity::ShellHold bad;
+    bad.request.lo.x = bad.request.lo.y = bad.request.lo.z = -100;
+    bad.request.hi.x = bad.request.hi.y = bad.request.hi.z = 100;
+    bad.request.components = "xw";
+    ASSERT_TRUE(hold.call(bad));
+    EXPECT_FALSE(bad.response.success);
+    EXPECT_NE(bad.response.message.find("components 'xw'"), std::string::npos) << bad.response.message;
+    bad.request.components = "";
+    bad.request.lo.x = bad.request.hi.x = 1000;  // no node
+    ASSERT_TRUE(hold.call(bad));
+    EXPECT_FALSE(bad.response.success);
+    EXPECT_NE(bad.response.message.find("holds no node"), std::string::npos) << bad.response.message;
+    bad.request.lo.x = 5, bad.request.hi.x = -5;  // hi below lo
+    ASSERT_TRUE(hold.call(bad));
+    EXPECT_FALSE(bad.response.success);
+  }
+  {
+    relaxed_connectivity::ShellHold all;
+    all.request.lo.x = all.request.lo.y = all.request.lo.z = -100;
+    all.request.hi.x = all.request.hi.y = all.request.hi.z = 100;
+    ASSERT_TRUE(hold.call(all));
+    EXPECT_TRUE(all.response.success) << all.response.message;
+    EXPECT_EQ(all.response.nodes, nodes);
+    std::vector<rc::Vec3> before;
+    {
+      std::lock_guard<std::mutex> lock(inbox.mutex);
+      before = markerPoints(*inbox.nodes);
+    }
+    call("step", 1);
+    ASSERT_TRUE(waitForPausedFrame(inbox, 3));
+    std::lock_guard<std::mutex> lock(inbox.mutex);
+    const std::vector<rc::Vec3> after = markerPoints(*inbox.nodes);
+    ASSERT_EQ(after.size(), before.size());
+    double moved = 0.0;
+    for (size_t i = 0; i < after.size(); ++i) moved = std::max(moved, (after[i] - before[i]).norm());
+    EXPECT_EQ(moved, 0.0);
   }
 
   // One frame without a force, then the same frame with an outward force on node `pushed`: the node moves
