@@ -105,7 +105,7 @@ struct FemScene {
   FemAnalysis analysis = FemAnalysis::kDynamic;
   std::vector<FemHeldRegion> held;  ///< analysis: static or modal (so far)
   int modes = 6;                    ///< analysis: modal
-  std::vector<FemLoad> loads;       ///< analysis: static only (so far)
+  std::vector<FemLoad> loads;       ///< static; dynamic: constant nodal forces (FemSimulation::applyLoads)
   /// analysis: dynamic: <name>_probes.csv in the output folder (fem_probes.h), a row at the start and per
   /// frame.
   std::vector<FemProbe> probes;

@@ -59,10 +59,11 @@ class SceneReader {
                                                   {"modal", FemAnalysis::kModal}});
     const bool dynamic = scene_.analysis == FemAnalysis::kDynamic;
     const bool modal = scene_.analysis == FemAnalysis::kModal;
-    for (const char* key : {"held", "loads", "body_acceleration"})
+    for (const char* key : {"held", "body_acceleration"})
       if (root[key] && dynamic)
         src_.fail(root[key], std::string(key) +
-                                 ": only with analysis: static or modal (dynamic runs do not take them yet)");
+                                 ": only with analysis: static or modal (dynamic runs do not take them yet; "
+                                 "gravity is dynamics.gravity)");
     for (const char* key : {"loads", "body_acceleration"})
       if (root[key] && modal) src_.fail(root[key], std::string(key) + ": not with analysis: modal");
     if (root["modes"] && !modal) src_.fail(root["modes"], "modes: only with analysis: modal");

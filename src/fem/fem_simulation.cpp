@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "relaxed_connectivity/fem/fem_probes.h"
 #include "relaxed_connectivity/fem/polygon_cut.h"
 
 namespace rc {
@@ -134,6 +135,29 @@ FemSimulation::FemSimulation(const FemScene& scene) : scene_(scene) {
                                 "' is a static scene (analysis: static): runFemScene / rc_fem solve it once");
   bodies_.push_back(makeBody(*scene_.mesh, std::vector<Vec3>(scene_.mesh->numNodes(), Vec3::Zero()),
                              scene_.initial_velocities));
+  applyLoads();
+}
+
+void FemSimulation::applyLoads() {
+  if (scene_.loads.empty()) return;
+  const double tolerance = femBoxTolerance(*scene_.mesh);
+  auto inside = [&](const FemLoad& load, const Vec3& r) {
+    return ((r - load.lo).array() >= -tolerance).all() && ((load.hi - r).array() >= -tolerance).all();
+  };
+  std::vector<Eigen::VectorXd> forces;
+  for (const auto& body : bodies_) forces.push_back(Eigen::VectorXd::Zero(body->restPositions().size()));
+  for (const FemLoad& load : scene_.loads) {
+    size_t count = 0;
+    for (const auto& body : bodies_)
+      for (Eigen::Index i = 0; i < body->restPositions().size() / 3; ++i)
+        count += inside(load, body->restPositions().segment<3>(3 * i));
+    if (count == 0) continue;  // cut away
+    for (size_t b = 0; b < bodies_.size(); ++b)
+      for (Eigen::Index i = 0; i < bodies_[b]->restPositions().size() / 3; ++i)
+        if (inside(load, bodies_[b]->restPositions().segment<3>(3 * i)))
+          forces[b].segment<3>(3 * i) += load.force / double(count);
+  }
+  for (size_t b = 0; b < bodies_.size(); ++b) bodies_[b]->setExternalForces(forces[b]);
 }
 
 std::unique_ptr<WarpedDynamics> FemSimulation::makeBody(PolyhedralMesh mesh,
@@ -324,6 +348,7 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
     retireSolver(body->cholmodSolver());
   }
   bodies_ = std::move(next);
+  applyLoads();
   recomputed_elements_ += report.recomputed_elements;
   reused_elements_ += report.reused_elements;
   slivers_removed_ += report.slivers_removed;
@@ -414,6 +439,7 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
     retireSolver(body->cholmodSolver());
   }
   bodies_ = std::move(next);
+  applyLoads();
   recomputed_elements_ += report.recomputed_elements;
   reused_elements_ += report.reused_elements;
   slivers_removed_ += report.slivers_removed;

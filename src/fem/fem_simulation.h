@@ -101,6 +101,9 @@ class FemSimulation {
   double minGroundDistance() const;
 
  private:
+  /// The scene's loads (dynamic runs: constant nodal forces) on the current bodies: each load's total force
+  /// spread equally over the nodes whose rest positions lie in its box, over all bodies (after cuts too).
+  void applyLoads();
   /// State of a cut body handed to a body made from it: R_e per new element (warm start of the
   /// registrations), dv per new node (CG warm start).
   struct CarriedState {

@@ -66,6 +66,39 @@ TEST(FemProbes, AFallingBlocksMeanDisplacementIsTheDiscreteFreeFall) {
             stats.files.end());
 }
 
+TEST(FemProbes, AConstantLoadInADynamicRunGivesMomentumFt) {
+  // No gravity, a total force of 0.3 along y on the end face (loads in a dynamic run: constant nodal forces):
+  // internal forces cancel, so the momentum is F t exactly (implicit Euler, no mass damping).
+  std::string yaml = kFalling;
+  yaml.replace(yaml.find("gravity: [0, 0, -9.81]"), 22, "gravity: [0, 0, 0]");
+  yaml.replace(yaml.find("name: falling"), 13, "name: pushed");
+  yaml += "loads:\n  - {lo: [1, 0, 0], hi: [1, 0.5, 0.5], force: [0, 0.3, 0]}\n";
+  const FemScene scene = parseFemScene(yaml, "pushed.yaml", ".");
+  ASSERT_EQ(scene.loads.size(), 1u);
+  const std::string dir = ::testing::TempDir() + "fem_probes_pushed";
+  std::filesystem::remove_all(dir);
+  FemRunOptions options;
+  options.out_dir = dir;
+  const FemRunStats stats = runFemScene(scene, options);
+  ASSERT_TRUE(stats.error.empty()) << stats.error;
+  std::ifstream csv(dir + "/pushed_probes.csv");
+  const auto rows = test::readCsvRows(csv);
+  ASSERT_EQ(rows.size(), 1u + 6u);
+  const auto column = [&](const std::string& name) {
+    for (size_t c = 0; c < rows[0].size(); ++c)
+      if (rows[0][c] == name) return c;
+    ADD_FAILURE() << "no column " << name;
+    return size_t(0);
+  };
+  for (size_t r = 1; r < rows.size(); ++r) {
+    const double t = std::stod(rows[r][column("time")]);
+    EXPECT_NEAR(std::stod(rows[r][column("momentum_y")]), 0.3 * t, 1e-9) << t;
+    EXPECT_NEAR(std::stod(rows[r][column("momentum_z")]), 0.0, 1e-12);
+  }
+  EXPECT_GT(std::stod(rows.back()[column("end_face_uy")]),
+            std::stod(rows.back()[column("all_uy")]));  // pulled end leads
+}
+
 TEST(FemProbes, BadProbesAreNamedWithTheirLine) {
   const std::string head = kFalling.substr(0, kFalling.find("probes:"));  // 6 lines
   expectFemSceneErrorAt(head + "probes:\n  - {name: a, lo: [5, 5, 5], hi: [6, 6, 6]}\n", 8, "holds no node");
