@@ -138,8 +138,20 @@ FemSimulation::FemSimulation(const FemScene& scene) : scene_(scene) {
   applyLoads();
 }
 
-void FemSimulation::applyLoads() {
-  if (scene_.loads.empty()) return;
+std::vector<size_t> FemSimulation::setLoads(std::vector<FemLoad> loads) {
+  for (const FemLoad& load : loads)
+    if (!load.force.allFinite() || !load.lo.allFinite() || !load.hi.allFinite())
+      throw std::invalid_argument("FemSimulation::setLoads: a load with a non-finite box or force");
+  const bool had_loads = !scene_.loads.empty();
+  scene_.loads = std::move(loads);
+  if (scene_.loads.empty() && had_loads)  // remove the forces of the loads before
+    for (auto& body : bodies_) body->setExternalForces(Eigen::VectorXd::Zero(body->restPositions().size()));
+  return applyLoads();
+}
+
+std::vector<size_t> FemSimulation::applyLoads() {
+  std::vector<size_t> counts;
+  if (scene_.loads.empty()) return counts;
   const double tolerance = femBoxTolerance(*scene_.mesh);
   auto inside = [&](const FemLoad& load, const Vec3& r) {
     return ((r - load.lo).array() >= -tolerance).all() && ((load.hi - r).array() >= -tolerance).all();
@@ -151,6 +163,7 @@ void FemSimulation::applyLoads() {
     for (const auto& body : bodies_)
       for (Eigen::Index i = 0; i < body->restPositions().size() / 3; ++i)
         count += inside(load, body->restPositions().segment<3>(3 * i));
+    counts.push_back(count);
     if (count == 0) continue;  // cut away
     for (size_t b = 0; b < bodies_.size(); ++b)
       for (Eigen::Index i = 0; i < bodies_[b]->restPositions().size() / 3; ++i)
@@ -158,6 +171,7 @@ void FemSimulation::applyLoads() {
           forces[b].segment<3>(3 * i) += load.force / double(count);
   }
   for (size_t b = 0; b < bodies_.size(); ++b) bodies_[b]->setExternalForces(forces[b]);
+  return counts;
 }
 
 std::unique_ptr<WarpedDynamics> FemSimulation::makeBody(PolyhedralMesh mesh,

@@ -47,6 +47,9 @@ class FemSimulation {
   explicit FemSimulation(const FemScene& scene);
 
   const FemScene& scene() const { return scene_; }
+  /// Replaces the loads (the scene's key loads of a dynamic run) and applies them to the current bodies.
+  /// Returns per load the number of nodes its force is spread over now (0: none in its box).
+  std::vector<size_t> setLoads(std::vector<FemLoad> loads);
   int numBodies() const { return static_cast<int>(bodies_.size()); }
   const WarpedDynamics& body(int b) const { return *bodies_[b]; }
   std::vector<FemBodyState> bodyStates() const;
@@ -103,7 +106,7 @@ class FemSimulation {
  private:
   /// The scene's loads (dynamic runs: constant nodal forces) on the current bodies: each load's total force
   /// spread equally over the nodes whose rest positions lie in its box, over all bodies (after cuts too).
-  void applyLoads();
+  std::vector<size_t> applyLoads();
   /// State of a cut body handed to a body made from it: R_e per new element (warm start of the
   /// registrations), dv per new node (CG warm start).
   struct CarriedState {

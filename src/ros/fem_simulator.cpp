@@ -101,6 +101,7 @@ FemSimulator::FemSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
                                      << simulation_->numNodes() << " nodes, " << scene_->cuts.size()
                                      << " scheduled cuts");
   cut_srv_ = private_nh_.advertiseService("cut", &FemSimulator::cutCallback, this);
+  load_srv_ = private_nh_.advertiseService("load", &FemSimulator::loadCallback, this);
   loop_.start(nh_, private_nh_, params_.rate);
 }
 
@@ -242,6 +243,41 @@ std::vector<Vec3> FemSimulator::polygonInSceneFrame(const relaxed_connectivity::
   polygon.reserve(request.polygon.size());
   for (const geometry_msgs::Point& p : request.polygon) polygon.push_back(to_scene * Vec3(p.x, p.y, p.z));
   return polygon;
+}
+
+bool FemSimulator::loadCallback(relaxed_connectivity::FemLoad::Request& request,
+                                relaxed_connectivity::FemLoad::Response& response) {
+  std::lock_guard<std::mutex> lock(loop_.mutex());
+  response.success = false;
+  response.nodes = 0;
+  try {
+    FemLoad load;
+    load.lo = Vec3(request.lo.x, request.lo.y, request.lo.z);
+    load.hi = Vec3(request.hi.x, request.hi.y, request.hi.z);
+    load.force = Vec3(request.force.x, request.force.y, request.force.z);
+    if (!load.lo.allFinite() || !load.hi.allFinite() || !load.force.allFinite() ||
+        !(load.lo.array() <= load.hi.array()).all())
+      throw std::invalid_argument("load: needs a finite box with lo <= hi and a finite force");
+    std::vector<FemLoad> loads = request.clear ? std::vector<FemLoad>() : simulation_->scene().loads;
+    const bool adds = !(request.clear && load.force.isZero());
+    if (adds) loads.push_back(load);
+    const std::vector<FemLoad> before = simulation_->scene().loads;
+    const std::vector<size_t> counts = simulation_->setLoads(loads);
+    if (adds && counts.back() == 0) {
+      simulation_->setLoads(before);  // changes nothing
+      throw std::invalid_argument("load: the box holds no node of the bodies' rest positions");
+    }
+    response.nodes = adds ? uint32_t(counts.back()) : 0;
+    response.loads = uint32_t(loads.size());
+    response.success = true;
+    response.message = adds ? "force spread over " + std::to_string(response.nodes) + " nodes; " +
+                                  std::to_string(loads.size()) + " loads"
+                            : "loads cleared";
+  } catch (const std::exception& e) {
+    response.message = e.what();
+    ROS_WARN_STREAM("fem_sim: load refused: " << response.message);
+  }
+  return true;
 }
 
 bool FemSimulator::cutCallback(relaxed_connectivity::FemCut::Request& request,

@@ -14,6 +14,7 @@
 #include "fem_scene_test_support.h"
 #include "relaxed_connectivity/fem/fem_scene_reader.h"
 #include "relaxed_connectivity/fem/fem_scene_run.h"
+#include "relaxed_connectivity/fem/fem_simulation.h"
 
 namespace rc {
 namespace {
@@ -97,6 +98,33 @@ TEST(FemProbes, AConstantLoadInADynamicRunGivesMomentumFt) {
   }
   EXPECT_GT(std::stod(rows.back()[column("end_face_uy")]),
             std::stod(rows.back()[column("all_uy")]));  // pulled end leads
+}
+
+TEST(FemProbes, LoadsSetWhileRunning) {
+  // FemSimulation::setLoads (what fem_sim's ~load calls): the count of nodes per load, non-finite loads
+  // refused (nothing changes), and clearing the loads stops the push (momentum constant after).
+  std::string yaml = kFalling;
+  yaml.replace(yaml.find("gravity: [0, 0, -9.81]"), 22, "gravity: [0, 0, 0]");
+  FemSimulation sim(parseFemScene(yaml, "free.yaml", "."));
+  FemLoad push;
+  push.lo = Vec3(1, 0, 0), push.hi = Vec3(1, 0.5, 0.5), push.force = Vec3(0.2, 0, 0);
+  FemLoad nowhere = push;
+  nowhere.lo = Vec3(5, 5, 5), nowhere.hi = Vec3(6, 6, 6);
+  EXPECT_EQ(sim.setLoads({push, nowhere}), (std::vector<size_t>{9, 0}));  // the end face's 3 x 3 nodes
+  FemLoad bad = push;
+  bad.force.x() = std::nan("");
+  EXPECT_THROW(sim.setLoads({bad}), std::invalid_argument);
+  EXPECT_EQ(sim.scene().loads.size(), 2u);
+  auto momentum_x = [&] {
+    double p = 0;
+    for (int b = 0; b < sim.numBodies(); ++b) p += sim.body(b).linearMomentum().x();
+    return p;
+  };
+  for (int s = 0; s < 5; ++s) sim.step();
+  EXPECT_NEAR(momentum_x(), 0.2 * 0.05, 1e-9);
+  sim.setLoads({});
+  for (int s = 0; s < 5; ++s) sim.step();
+  EXPECT_NEAR(momentum_x(), 0.2 * 0.05, 1e-9);  // no force since
 }
 
 TEST(FemProbes, BadProbesAreNamedWithTheirLine) {

@@ -2,6 +2,7 @@
 // names and node counts of the scene, and before the block lands (t < 0.4 s) the exact implicit Euler free
 // fall of its mass-weighted mean displacement and momentum.
 #include <gtest/gtest.h>
+#include <relaxed_connectivity/FemLoad.h>
 #include <relaxed_connectivity/FemProbes.h>
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
@@ -66,6 +67,66 @@ TEST(FemProbes, TheNodePublishesTheScenesProbesWithEachFrame) {
   EXPECT_GE(falling, 5u);
   // Landed: the bottom face rests on the ground (its mean displacement about -1 m, within the bounce).
   EXPECT_LT(received.back()->mean_displacements[1].z, -0.9);
+}
+
+TEST(FemProbes, ALoadByServiceHoldsTheBlockAgainstGravity) {
+  // ~load with a force equal to the block's weight, upward, over all its nodes: its centre of mass stays (the
+  // mass-weighted mean displacement and the momentum 0 to 1e-9); bad loads are refused and change nothing.
+  ros::NodeHandle nh;
+  std::mutex mutex;
+  std::vector<relaxed_connectivity::FemProbesConstPtr> received;
+  auto sub = nh.subscribe<relaxed_connectivity::FemProbes>("fem_sim/probes", 100, [&](const auto& m) {
+    std::lock_guard<std::mutex> lock(mutex);
+    received.push_back(m);
+  });
+  ros::ServiceClient command = nh.serviceClient<relaxed_connectivity::SimulationCommand>("fem_sim/command");
+  ros::ServiceClient load = nh.serviceClient<relaxed_connectivity::FemLoad>("fem_sim/load");
+  ASSERT_TRUE(load.waitForExistence(ros::Duration(10)));
+  rc::callCommand(command, "pause");
+  rc::callCommand(command, "reset");
+  relaxed_connectivity::FemLoad bad;
+  bad.request.lo.x = bad.request.lo.y = bad.request.lo.z = 50;
+  bad.request.hi.x = bad.request.hi.y = bad.request.hi.z = 60;  // no node there
+  bad.request.force.z = 1;
+  ASSERT_TRUE(load.call(bad));
+  EXPECT_FALSE(bad.response.success);
+  EXPECT_NE(bad.response.message.find("holds no node"), std::string::npos) << bad.response.message;
+  bad.request.hi.x = 40;  // hi below lo
+  ASSERT_TRUE(load.call(bad));
+  EXPECT_FALSE(bad.response.success);
+  const double mass = 1.0 * 0.5 * 0.5, g = 9.81;
+  relaxed_connectivity::FemLoad lift;
+  lift.request.lo.x = lift.request.lo.y = lift.request.lo.z = -100;
+  lift.request.hi.x = lift.request.hi.y = lift.request.hi.z = 100;
+  lift.request.force.z = mass * g;
+  lift.request.clear = true;
+  ASSERT_TRUE(load.call(lift));
+  EXPECT_TRUE(lift.response.success) << lift.response.message;
+  EXPECT_EQ(lift.response.nodes, 45u);
+  EXPECT_EQ(lift.response.loads, 1u);
+  const ros::WallTime connect = ros::WallTime::now() + ros::WallDuration(10.0);
+  while (sub.getNumPublishers() == 0 && ros::WallTime::now() < connect) ros::WallDuration(0.01).sleep();
+  ros::WallDuration(0.2).sleep();
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    received.clear();
+  }
+  rc::callCommand(command, "step", 20);
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(20.0);
+  for (;;) {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!received.empty() && received.back()->time > 0.19) break;
+    }
+    ASSERT_LT(ros::WallTime::now(), end) << "no probes past t = 0.19 s within 20 s";
+    ros::WallDuration(0.05).sleep();
+  }
+  std::lock_guard<std::mutex> lock(mutex);
+  for (const auto& m : received) {
+    EXPECT_NEAR(m->momentum.z, 0.0, 1e-9) << "t " << m->time;
+    EXPECT_NEAR(m->mean_displacements[0].z, 0.0, 1e-9) << "t " << m->time;
+  }
+  rc::callCommand(command, "reset");  // the scene's own loads (none) again
 }
 
 }  // namespace
