@@ -15,14 +15,25 @@
 
 namespace {
 
-TEST(FemProbes, TheNodePublishesTheScenesProbesWithEachFrame) {
-  ros::NodeHandle nh;
+/// fem_sim's ~probes as they arrive.
+struct ProbeInbox {
   std::mutex mutex;
   std::vector<relaxed_connectivity::FemProbesConstPtr> received;
-  auto sub = nh.subscribe<relaxed_connectivity::FemProbes>("fem_sim/probes", 100, [&](const auto& m) {
-    std::lock_guard<std::mutex> lock(mutex);
-    received.push_back(m);
-  });
+  ros::Subscriber sub;
+  explicit ProbeInbox(ros::NodeHandle& nh) {
+    sub = nh.subscribe<relaxed_connectivity::FemProbes>("fem_sim/probes", 100, [this](const auto& m) {
+      std::lock_guard<std::mutex> lock(mutex);
+      received.push_back(m);
+    });
+  }
+};
+
+TEST(FemProbes, TheNodePublishesTheScenesProbesWithEachFrame) {
+  ros::NodeHandle nh;
+  ProbeInbox inbox(nh);
+  std::mutex& mutex = inbox.mutex;
+  std::vector<relaxed_connectivity::FemProbesConstPtr>& received = inbox.received;
+  ros::Subscriber& sub = inbox.sub;
   // From t = 0: reset (paused at the start), forget what came before, start.
   ros::ServiceClient command = nh.serviceClient<relaxed_connectivity::SimulationCommand>("fem_sim/command");
   ASSERT_TRUE(command.waitForExistence(ros::Duration(10)));
@@ -73,12 +84,10 @@ TEST(FemProbes, ALoadByServiceHoldsTheBlockAgainstGravity) {
   // ~load with a force equal to the block's weight, upward, over all its nodes: its centre of mass stays (the
   // mass-weighted mean displacement and the momentum 0 to 1e-9); bad loads are refused and change nothing.
   ros::NodeHandle nh;
-  std::mutex mutex;
-  std::vector<relaxed_connectivity::FemProbesConstPtr> received;
-  auto sub = nh.subscribe<relaxed_connectivity::FemProbes>("fem_sim/probes", 100, [&](const auto& m) {
-    std::lock_guard<std::mutex> lock(mutex);
-    received.push_back(m);
-  });
+  ProbeInbox inbox(nh);
+  std::mutex& mutex = inbox.mutex;
+  std::vector<relaxed_connectivity::FemProbesConstPtr>& received = inbox.received;
+  ros::Subscriber& sub = inbox.sub;
   ros::ServiceClient command = nh.serviceClient<relaxed_connectivity::SimulationCommand>("fem_sim/command");
   ros::ServiceClient load = nh.serviceClient<relaxed_connectivity::FemLoad>("fem_sim/load");
   ASSERT_TRUE(load.waitForExistence(ros::Duration(10)));
