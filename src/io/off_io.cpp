@@ -58,6 +58,15 @@ TriangleMesh readOffMesh(const std::string& path, const ReadOptions& options) {
       vertex_count < 0 || face_count < 0)
     throw IoError(path, lineWhere(lines), "malformed vertex/face counts");
 
+  // Counts far beyond what the file can hold are refused before anything is allocated for them (a vertex
+  // needs at least "x y z" and a separator, a face "n" and a separator; up to twice that, plus 1024, the
+  // reader names the line where the data ends).
+  const uint64_t room = bytes.size() + 1;
+  if (uint64_t(vertex_count) > 2 * (room / 6) + 1024 || uint64_t(face_count) > 2 * (room / 2) + 1024)
+    throw IoError(path, lineWhere(lines),
+                  "counts of " + std::to_string(vertex_count) + " vertices and " +
+                      std::to_string(face_count) + " faces, but the file has " +
+                      std::to_string(bytes.size()) + " bytes");
   TriangleMesh mesh;
   SurfelCloud& cloud = mesh.vertices;
   cloud.positions.resize(vertex_count);

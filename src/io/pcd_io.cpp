@@ -240,6 +240,19 @@ void readBinary(const uint8_t* data, const PcdHeader& header, bool field_major,
 SurfelCloud readPcdCloud(const std::string& path, const ReadOptions& options) {
   const std::string bytes = readFileBytes(path);
   const PcdHeader header = parseHeader(bytes, path);
+  // A POINTS count far beyond what the data can hold is refused before anything is allocated for it (up to
+  // twice that, plus 1024, the readers below name where the data ends): a point needs its stride in binary, a
+  // character and a separator per value in ascii.
+  if (header.data != PcdData::kBinaryCompressed) {
+    size_t minimum = 0;
+    for (const FieldSpec& f : header.fields)
+      minimum += header.data == PcdData::kAscii ? 2 * f.count : f.count * scalarSize(f.type);
+    const size_t body = bytes.size() - header.data_offset;
+    if (minimum > 0 && header.points > 2 * ((body + 1) / minimum) + 1024)
+      throw IoError(path, "header",
+                    "POINTS " + std::to_string(header.points) + " of at least " + std::to_string(minimum) +
+                        " bytes, but the file has " + std::to_string(body) + " bytes after its header");
+  }
   SurfelCloud cloud;
   std::vector<FieldBinding> bindings;
   if (!bindFields(header.fields, FieldNaming::kPcd, header.points, path, "header", &cloud, &bindings))

@@ -406,9 +406,29 @@ void readBody(Source* source, const PlyHeader& header, const std::string& file, 
   }
 }
 
+/// Refuses an element whose declared count is far beyond what the file can hold, before anything is allocated
+/// for it: each element needs at least its properties' bytes (binary: a scalar each, a list its count; ascii:
+/// a character and a separator each). Up to twice that (plus 1024) the reader goes on and names the element
+/// where the data ends, so what it allocates stays proportional to the file.
+void checkElementCounts(const PlyHeader& header, size_t body_bytes, const std::string& file) {
+  for (const PlyElement& element : header.elements) {
+    size_t minimum = 0;
+    for (const PlyProperty& p : element.properties)
+      minimum += header.format == PlyFormat::kAscii ? 2 : scalarSize(p.is_list ? p.count_type : p.type);
+    if (minimum == 0) continue;
+    const size_t capacity = (body_bytes + 1) / minimum;
+    if (element.count <= 2 * capacity + 1024) continue;
+    throw IoError(file, "element '" + element.name + "'",
+                  "declares " + std::to_string(element.count) + " elements of at least " +
+                      std::to_string(minimum) + " bytes, but the file has " + std::to_string(body_bytes) +
+                      " bytes after its header");
+  }
+}
+
 TriangleMesh readPly(const std::string& path, bool want_faces) {
   const std::string bytes = readFileBytes(path);
   const PlyHeader header = parseHeader(bytes, path);
+  checkElementCounts(header, bytes.size() - header.data_offset, path);
   TriangleMesh mesh;
   if (header.format == PlyFormat::kAscii) {
     AsciiSource source(std::string_view(bytes).substr(header.data_offset), header.data_first_line);

@@ -62,6 +62,43 @@ TEST(IoErrors, BadPlyHeaders) {
   expectIoError([&] { readPlyCloud(path); }, {"bad_header.ply", "header line 2", "unknown format 'utf8'"});
 }
 
+TEST(IoErrors, PlyCountsBeyondTheFileAreRefusedBeforeAllocating) {
+  // A header claiming 2^40 vertices (12 TiB of floats) over a body of 12 bytes: refused, nothing allocated (a
+  // count up to twice what the file holds is read until the data ends, TruncatedBinaryPly).
+  const std::string path = tempPath("huge.ply");
+  writeText(path,
+            "ply\nformat binary_little_endian 1.0\nelement vertex 1099511627776\nproperty float x\n"
+            "property float y\nproperty float z\nend_header\n" +
+                std::string(12, '\0'));
+  expectIoError([&] { readPlyCloud(path); },
+                {"huge.ply", "element 'vertex'", "declares 1099511627776 elements of at least 12 bytes",
+                 "12 bytes after its header"});
+  writeText(path,
+            "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 1000000000\nproperty list uchar int vertex_indices\n"
+            "end_header\n0 0 0\n1 1 1\n");
+  expectIoError([&] { readPlyMesh(path); }, {"huge.ply", "element 'face'", "declares 1000000000 elements"});
+  // The same for PCD (binary and ascii) and OFF.
+  const std::string pcd = tempPath("huge.pcd");
+  writeText(pcd,
+            "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4000000000\nHEIGHT 1\n"
+            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4000000000\nDATA binary\n" +
+                std::string(12, '\0'));
+  expectIoError([&] { readPcdCloud(pcd); }, {"huge.pcd", "POINTS 4000000000 of at least 12 bytes"});
+  writeText(pcd,
+            "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4000000000\nHEIGHT 1\n"
+            "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4000000000\nDATA ascii\n1 2 3\n");
+  expectIoError([&] { readPcdCloud(pcd); }, {"huge.pcd", "POINTS 4000000000 of at least 6 bytes"});
+  const std::string off = tempPath("huge.off");
+  writeText(off, "OFF\n4000000000 1 0\n0 0 0\n");
+  expectIoError([&] { readOffMesh(off); }, {"huge.off", "counts of 4000000000 vertices"});
+  // Exactly as many bytes as declared still reads.
+  writeText(path,
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+            "property float z\nend_header\n1 2 3");
+  EXPECT_EQ(readPlyCloud(path).size(), 1u);
+}
+
 TEST(IoErrors, PlyAsciiValueAndIndexProblems) {
   const std::string header =
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
