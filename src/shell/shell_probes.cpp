@@ -16,9 +16,8 @@ ShellMeasures measureShell(const ShellSolver& solver) {
     m.gravity_potential_energy -= mass[i] * solver.gravity().dot(x[i]);
     m.momentum += mass[i] * v[i];
   }
-  const ShellEnergyValue elastic = solver.energy().evaluate(x);
-  m.membrane_energy = elastic.membrane;
-  m.bending_energy = elastic.bending;
+  m.membrane_energy = solver.elasticEnergy().membrane;  // of the last force evaluation, at x
+  m.bending_energy = solver.elasticEnergy().bending;
   return m;
 }
 

@@ -100,6 +100,8 @@ class ShellSolver {
   const ShellEnergy& energy() const { return energy_; }
   /// dE/dx at positions() (the elastic forces are its negative), as the last force evaluation left it.
   const std::vector<Vec3>& elasticGradient() const { return gradient_; }
+  /// E of the last force evaluation (at positions(), but for nodes the ground projected after it).
+  const ShellEnergyValue& elasticEnergy() const { return elastic_; }
   const Vec3& gravity() const { return options_.gravity; }
   /// Arc length and signed normal angle of every fiber at positions() (as measureFibers), measured with the
   /// forces; valid after construction, every step and every change of positions, rest state or topology.

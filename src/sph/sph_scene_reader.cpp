@@ -206,12 +206,13 @@ void SceneReader::readSolver(const YAML::Node& node) {
   if (const YAML::Node r = field("density_reinit_interval", "density_reinit_interval"))
     c.density_reinit_interval = int(src_.integer(r, "solver.density_reinit_interval", 0, 1000000));
   if (kernel && c.pressure_kernel == SphPressureKernel::kSpiky)
-    warn(kernel, c.density == SphDensityMethod::kSummation
-                     ? "solver.pressure_kernel spiky is not the gradient of the summation density's energy and "
-                       "pumps energy into the fluid (docs/sph_choices.md: +28 % in a 2D dam break in 0.25 s, "
-                       "+454 % in inviscid sloshing in 0.5 s); poly6, the default, conserves it"
-                     : "solver.pressure_kernel spiky with continuity densities gains energy at the adaptive step "
-                       "(docs/sph_choices.md: +7.7 % in a free 2D blob in 0.2 s, poly6 -1.1 %)");
+    warn(kernel,
+         c.density == SphDensityMethod::kSummation
+             ? "solver.pressure_kernel spiky is not the gradient of the summation density's energy and "
+               "pumps energy into the fluid (docs/sph_choices.md: +28 % in a 2D dam break in 0.25 s, "
+               "+454 % in inviscid sloshing in 0.5 s); poly6, the default, conserves it"
+             : "solver.pressure_kernel spiky with continuity densities gains energy at the adaptive step "
+               "(docs/sph_choices.md: +7.7 % in a free 2D blob in 0.2 s, poly6 -1.1 %)");
   if (const YAML::Node b = field("boundary_pressure", "boundary_pressure"))
     c.boundary_pressure =
         src_.choice<SphBoundaryPressure>(b, "solver.boundary_pressure",

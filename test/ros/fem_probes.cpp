@@ -26,36 +26,43 @@ struct ProbeInbox {
       received.push_back(m);
     });
   }
+  void waitForPublisher() {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(10.0);
+    while (sub.getNumPublishers() == 0 && ros::WallTime::now() < end) ros::WallDuration(0.01).sleep();
+  }
+  /// Forgets what came, after the frames in flight.
+  void clear() {
+    ros::WallDuration(0.2).sleep();
+    std::lock_guard<std::mutex> lock(mutex);
+    received.clear();
+  }
+  /// Whether probes past simulated time `t` arrive within `seconds` of wall time.
+  bool waitPast(double t, double seconds) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+    for (;;) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!received.empty() && received.back()->time > t) return true;
+      }
+      if (ros::WallTime::now() > end) return false;
+      ros::WallDuration(0.05).sleep();
+    }
+  }
 };
 
 TEST(FemProbes, TheNodePublishesTheScenesProbesWithEachFrame) {
   ros::NodeHandle nh;
   ProbeInbox inbox(nh);
-  std::mutex& mutex = inbox.mutex;
-  std::vector<relaxed_connectivity::FemProbesConstPtr>& received = inbox.received;
-  ros::Subscriber& sub = inbox.sub;
   // From t = 0: reset (paused at the start), forget what came before, start.
   ros::ServiceClient command = nh.serviceClient<relaxed_connectivity::SimulationCommand>("fem_sim/command");
   ASSERT_TRUE(command.waitForExistence(ros::Duration(10)));
-  const ros::WallTime connect = ros::WallTime::now() + ros::WallDuration(10.0);
-  while (sub.getNumPublishers() == 0 && ros::WallTime::now() < connect) ros::WallDuration(0.01).sleep();
+  inbox.waitForPublisher();
   rc::callCommand(command, "reset");
-  ros::WallDuration(0.2).sleep();  // frames in flight
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    received.clear();
-  }
+  inbox.clear();
   rc::callCommand(command, "start");
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(30.0);
-  for (;;) {
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      if (!received.empty() && received.back()->time > 0.6) break;
-    }
-    ASSERT_LT(ros::WallTime::now(), end) << "no probes past t = 0.6 s within 30 s";
-    ros::WallDuration(0.05).sleep();
-  }
-  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_TRUE(inbox.waitPast(0.6, 30.0)) << "no probes past t = 0.6 s within 30 s";
+  std::lock_guard<std::mutex> lock(inbox.mutex);
+  const auto& received = inbox.received;
   const double h = 0.01, g = 9.81, mass = 1.0 * 0.5 * 0.5;
   size_t falling = 0;
   for (const auto& m : received) {
@@ -85,9 +92,6 @@ TEST(FemProbes, ALoadByServiceHoldsTheBlockAgainstGravity) {
   // mass-weighted mean displacement and the momentum 0 to 1e-9); bad loads are refused and change nothing.
   ros::NodeHandle nh;
   ProbeInbox inbox(nh);
-  std::mutex& mutex = inbox.mutex;
-  std::vector<relaxed_connectivity::FemProbesConstPtr>& received = inbox.received;
-  ros::Subscriber& sub = inbox.sub;
   ros::ServiceClient command = nh.serviceClient<relaxed_connectivity::SimulationCommand>("fem_sim/command");
   ros::ServiceClient load = nh.serviceClient<relaxed_connectivity::FemLoad>("fem_sim/load");
   ASSERT_TRUE(load.waitForExistence(ros::Duration(10)));
@@ -113,25 +117,12 @@ TEST(FemProbes, ALoadByServiceHoldsTheBlockAgainstGravity) {
   EXPECT_TRUE(lift.response.success) << lift.response.message;
   EXPECT_EQ(lift.response.nodes, 45u);
   EXPECT_EQ(lift.response.loads, 1u);
-  const ros::WallTime connect = ros::WallTime::now() + ros::WallDuration(10.0);
-  while (sub.getNumPublishers() == 0 && ros::WallTime::now() < connect) ros::WallDuration(0.01).sleep();
-  ros::WallDuration(0.2).sleep();
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    received.clear();
-  }
+  inbox.waitForPublisher();
+  inbox.clear();
   rc::callCommand(command, "step", 20);
-  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(20.0);
-  for (;;) {
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      if (!received.empty() && received.back()->time > 0.19) break;
-    }
-    ASSERT_LT(ros::WallTime::now(), end) << "no probes past t = 0.19 s within 20 s";
-    ros::WallDuration(0.05).sleep();
-  }
-  std::lock_guard<std::mutex> lock(mutex);
-  for (const auto& m : received) {
+  ASSERT_TRUE(inbox.waitPast(0.19, 20.0)) << "no probes past t = 0.19 s within 20 s";
+  std::lock_guard<std::mutex> lock(inbox.mutex);
+  for (const auto& m : inbox.received) {
     EXPECT_NEAR(m->momentum.z, 0.0, 1e-9) << "t " << m->time;
     EXPECT_NEAR(m->mean_displacements[0].z, 0.0, 1e-9) << "t " << m->time;
   }

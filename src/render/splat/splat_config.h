@@ -33,10 +33,10 @@ struct SplatConfig {
   double cutoff_radius = 1.0;          ///< reconstruction kernel cut-off, in units of the surfel radius
   double depth_tolerance_scale = 1.0;  ///< per-fragment fuzzy-depth tolerance multiplier (3.2.1)
   /// Perspective splats larger than kExactFootprintRatio of their depth get the exact projection of their
-  /// disc as footprint (ewa_splat.h): a 3x3 inverse per such splat, set up in scalar arithmetic; smaller splats
-  /// are set up as before (bitwise the same images, test_large_splats). Off: the affine approximation at the
-  /// centre for every splat (EWA as published; large oblique splats fall short of their far side: 43 % of a
-  /// grazing floor of nine discs left empty in test_large_splats).
+  /// disc as footprint (ewa_splat.h): a 3x3 inverse per such splat, set up in scalar arithmetic; smaller
+  /// splats are set up as before (bitwise the same images, test_large_splats). Off: the affine approximation
+  /// at the centre for every splat (EWA as published; large oblique splats fall short of their far side: 43 %
+  /// of a grazing floor of nine discs left empty in test_large_splats).
   bool exact_footprint = true;
   int threads = 0;  ///< 0: all cores
   /// Surfels facing away from the camera are drawn too (two-sided, shaded with the flipped normal) unless
