@@ -99,7 +99,7 @@ PolyhedralMesh buildFemMesh(const FemMeshSource& s) {
       return PolyhedralMesh(hull.nodes(), std::move(elements));
     }
     case FemMeshType::kHexGrid:
-      return PolyhedralMesh::hexahedralGrid(s.lo, s.hi, s.cells[0], s.cells[1], s.cells[2]);
+      return PolyhedralMesh::hexahedralGrid(s.lo, s.hi, s.cells[0], s.cells[1], s.cells[2], s.face_diagonals);
     case FemMeshType::kTetGrid:
       return PolyhedralMesh::tetrahedralGrid(s.lo, s.hi, s.cells[0], s.cells[1], s.cells[2], s.split);
     case FemMeshType::kRandomPlanes:

@@ -26,6 +26,8 @@ struct FemMeshSource {
   Vec3 lo = Vec3::Zero(), hi = Vec3::Ones();
   int cells[3] = {1, 1, 1};
   PolyhedralMesh::TetrahedronSplit split = PolyhedralMesh::TetrahedronSplit::kSix;
+  /// hex_grid: how square faces are triangulated (kMirrorSymmetric: a mirror-symmetric mesh).
+  PolyhedralMesh::FaceDiagonals face_diagonals = PolyhedralMesh::FaceDiagonals::kFan;
   int planes = 0;
   unsigned seed = 1;
   double min_relative_gap = 0.02;

@@ -39,6 +39,7 @@ FemRegionMeasures measureFemRegion(const std::vector<const WarpedDynamics*>& bod
       m.mass += mass[3 * i];
       weighted += mass[3 * i] * u;
       m.max_displacement = std::max(m.max_displacement, u.norm());
+      if (b->numHeldDofs() > 0) m.reaction += b->heldReactions().segment<3>(3 * i);
     }
   }
   if (m.mass > 0) m.mean_displacement = weighted / m.mass;
@@ -48,7 +49,8 @@ FemRegionMeasures measureFemRegion(const std::vector<const WarpedDynamics*>& bod
 void writeFemProbeHeader(std::ostream& out, const std::vector<FemProbe>& probes) {
   out << "time,kinetic_energy,elastic_energy,gravity_potential_energy,momentum_x,momentum_y,momentum_z";
   for (const FemProbe& p : probes)
-    for (const char* column : {"nodes", "mass", "ux", "uy", "uz", "max_u"})
+    for (const char* column :
+         {"nodes", "mass", "ux", "uy", "uz", "max_u", "reaction_x", "reaction_y", "reaction_z"})
       out << ',' << p.name << '_' << column;
   out << '\n';
 }
@@ -60,7 +62,8 @@ void writeFemProbeRow(std::ostream& out, double time, const FemBodiesMeasures& b
       << bodies.momentum.z();
   for (const FemRegionMeasures& r : regions)
     out << ',' << r.nodes << ',' << r.mass << ',' << r.mean_displacement.x() << ',' << r.mean_displacement.y()
-        << ',' << r.mean_displacement.z() << ',' << r.max_displacement;
+        << ',' << r.mean_displacement.z() << ',' << r.max_displacement << ',' << r.reaction.x() << ','
+        << r.reaction.y() << ',' << r.reaction.z();
   out << '\n';
 }
 

@@ -30,11 +30,13 @@ struct FemBodiesMeasures {
 FemBodiesMeasures measureFemBodies(const std::vector<const WarpedDynamics*>& bodies);
 
 /// One probe region: its nodes (over all bodies), their lumped mass, the mass-weighted mean displacement
-/// sum m_i (x_i - X_i) / sum m_i and the largest |x_i - X_i|. A region without nodes (cut away) has zeros.
+/// sum m_i (x_i - X_i) / sum m_i, the largest |x_i - X_i| and the reaction of its held components (the force
+/// the holders exerted during the last step, WarpedDynamics::heldReactions). A region without nodes (cut
+/// away) has zeros.
 struct FemRegionMeasures {
   size_t nodes = 0;
   double mass = 0.0, max_displacement = 0.0;
-  Vec3 mean_displacement = Vec3::Zero();
+  Vec3 mean_displacement = Vec3::Zero(), reaction = Vec3::Zero();
 };
 FemRegionMeasures measureFemRegion(const std::vector<const WarpedDynamics*>& bodies, const FemProbe& probe,
                                    double tolerance);

@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "relaxed_connectivity/fem/fem_mesh_source.h"
@@ -71,19 +72,31 @@ enum class FemAnalysis { kDynamic, kStatic, kModal };
 
 /// Key held: the nodes whose rest positions lie in the box [lo, hi] (closed, with a tolerance of 1e-9 of the
 /// mesh's diagonal) hold the listed components at `displacement` (a roller or a symmetry plane holds one).
+/// Dynamic runs: the held components reach displacementAt(t) at the end of each step (a constant
+/// `displacement` at the end of the first one); `path` (time, displacement) keyframes, interpolated linearly
+/// and held constant before the first and after the last, prescribe a motion. Nodes made by cuts inside the
+/// box are held too; a held node takes no ground contact.
 struct FemHeldRegion {
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
   std::array<bool, 3> components = {true, true, true};
   Vec3 displacement = Vec3::Zero();
-  std::vector<int> nodes;  ///< filled by the reader (never empty)
+  std::vector<std::pair<double, Vec3>> path;  ///< keyframes, times increasing (empty: `displacement`)
+  /// Hold the components where they are when the region is applied (fem_sim's ~hold; FemSimulation::setHeld),
+  /// not at rest + displacement; displacement and path unused (zero / empty).
+  bool in_place = false;
+  std::vector<int> nodes;  ///< of the scene's rest mesh, filled by the reader
+  Vec3 displacementAt(double time) const;
 };
 
 /// Key loads: a total force spread equally over the nodes in the box [lo, hi] (nodal forces; on a regular
-/// grid face the consistent load differs at its rim, which a resolution study sees).
+/// grid face the consistent load differs at its rim, which a resolution study sees), or a traction (force per
+/// rest area) on the boundary faces whose nodes all lie in the box, as consistent nodal forces
+/// (femTractionForces).
 struct FemLoad {
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
   Vec3 force = Vec3::Zero();
-  std::vector<int> nodes;  ///< filled by the reader (never empty)
+  bool is_traction = false;  ///< `traction` given: `force` is per unit area
+  std::vector<int> nodes;    ///< filled by the reader (never empty)
 };
 
 /// A loaded scene: the placed rest mesh, material, dynamics options (incl. ground), initial velocities.
@@ -103,7 +116,7 @@ struct FemScene {
   std::vector<FemSceneCut> cuts;  ///< sorted by time
   FemSceneOutput output;
   FemAnalysis analysis = FemAnalysis::kDynamic;
-  std::vector<FemHeldRegion> held;  ///< analysis: static or modal (so far)
+  std::vector<FemHeldRegion> held;  ///< every analysis (dynamic: FemSimulation holds them every step)
   int modes = 6;                    ///< analysis: modal
   std::vector<FemLoad> loads;       ///< static; dynamic: constant nodal forces (FemSimulation::applyLoads)
   /// analysis: dynamic: <name>_probes.csv in the output folder (fem_probes.h), a row at the start and per

@@ -12,6 +12,7 @@
 
 #include "relaxed_connectivity/fem/fem_cut_polygon.h"
 #include "relaxed_connectivity/fem/fem_mesh_source.h"
+#include "relaxed_connectivity/fem/fem_scene_regions.h"
 #include "relaxed_connectivity/io/yaml_reader.h"
 
 namespace rc {
@@ -59,11 +60,9 @@ class SceneReader {
                                                   {"modal", FemAnalysis::kModal}});
     const bool dynamic = scene_.analysis == FemAnalysis::kDynamic;
     const bool modal = scene_.analysis == FemAnalysis::kModal;
-    for (const char* key : {"held", "body_acceleration"})
-      if (root[key] && dynamic)
-        src_.fail(root[key], std::string(key) +
-                                 ": only with analysis: static or modal (dynamic runs do not take them yet; "
-                                 "gravity is dynamics.gravity)");
+    if (root["body_acceleration"] && dynamic)
+      src_.fail(root["body_acceleration"],
+                "body_acceleration: only with analysis: static (dynamic runs: dynamics.gravity)");
     for (const char* key : {"loads", "body_acceleration"})
       if (root[key] && modal) src_.fail(root[key], std::string(key) + ": not with analysis: modal");
     if (root["modes"] && !modal) src_.fail(root["modes"], "modes: only with analysis: modal");
@@ -86,7 +85,7 @@ class SceneReader {
     place(root["placement"], std::move(built), mesh);
     if (root["body_acceleration"])
       scene_.body_acceleration = src_.vec3(root["body_acceleration"], "body_acceleration");
-    if (root["held"]) readHeld(root["held"]);
+    if (root["held"]) readHeld(root["held"], dynamic);
     if (root["loads"]) readLoads(root["loads"]);
     if (root["probes"]) readProbes(root["probes"]);
     if (!dynamic && scene_.held.empty())
@@ -189,16 +188,41 @@ class SceneReader {
     return nodes;
   }
 
-  void readHeld(const YAML::Node& node) {
-    src_.forEachEntry(node, "held", "regions {lo, hi, components, displacement}",
+  /// Key path: [[t, ux, uy, uz], ...] with increasing times.
+  std::vector<std::pair<double, Vec3>> readPath(const YAML::Node& node, const std::string& what) const {
+    if (!node.IsSequence() || node.size() == 0)
+      src_.fail(node, what + ": expected a list of keyframes [t, ux, uy, uz]");
+    std::vector<std::pair<double, Vec3>> path;
+    for (size_t k = 0; k < node.size(); ++k) {
+      const std::string key = what + "[" + std::to_string(k) + "]";
+      const YAML::Node row = node[k];
+      if (!row.IsSequence() || row.size() != 4) src_.fail(row, key + ": expected [t, ux, uy, uz]");
+      const double t = src_.number(row[0], key + ".t");
+      if (!path.empty() && !(t > path.back().first))
+        src_.fail(row[0], key + ": times must increase (" + std::to_string(t) + " after " +
+                              std::to_string(path.back().first) + ")");
+      path.emplace_back(t, Vec3(src_.number(row[1], key + ".ux"), src_.number(row[2], key + ".uy"),
+                                src_.number(row[3], key + ".uz")));
+    }
+    return path;
+  }
+
+  void readHeld(const YAML::Node& node, bool dynamic) {
+    src_.forEachEntry(node, "held", "regions {lo, hi, components, displacement | path}",
                       [&](const YAML::Node& entry, const std::string& where) {
-                        src_.allowKeys(entry, {"lo", "hi", "components", "displacement"}, where);
+                        src_.allowKeys(entry, {"lo", "hi", "components", "displacement", "path"}, where);
                         FemHeldRegion region;
                         region.nodes = nodesInBox(entry, where, &region.lo, &region.hi);
                         if (const YAML::Node c = entry["components"])
                           region.components = src_.components(c, where + ".components");
+                        if (entry["displacement"] && entry["path"])
+                          src_.fail(entry["path"], where + ".path: give displacement or path, not both");
                         if (entry["displacement"])
                           region.displacement = src_.vec3(entry["displacement"], where + ".displacement");
+                        if (const YAML::Node p = entry["path"]) {
+                          if (!dynamic) src_.fail(p, where + ".path: only with analysis: dynamic");
+                          region.path = readPath(p, where + ".path");
+                        }
                         for (const FemHeldRegion& other : scene_.held)
                           for (int k = 0; k < 3; ++k)
                             if (other.components[size_t(k)] && region.components[size_t(k)])
@@ -212,14 +236,26 @@ class SceneReader {
   }
 
   void readLoads(const YAML::Node& node) {
-    src_.forEachEntry(node, "loads", "{lo, hi, force}",
-                      [&](const YAML::Node& entry, const std::string& where) {
-                        src_.allowKeys(entry, {"lo", "hi", "force"}, where);
-                        FemLoad load;
-                        load.nodes = nodesInBox(entry, where, &load.lo, &load.hi);
-                        load.force = src_.vec3(src_.require(entry, "force", where), where + ".force");
-                        scene_.loads.push_back(std::move(load));
-                      });
+    src_.forEachEntry(
+        node, "loads", "{lo, hi, force | traction}", [&](const YAML::Node& entry, const std::string& where) {
+          src_.allowKeys(entry, {"lo", "hi", "force", "traction"}, where);
+          FemLoad load;
+          load.nodes = nodesInBox(entry, where, &load.lo, &load.hi);
+          if (entry["force"] && entry["traction"])
+            src_.fail(entry["traction"], where + ".traction: give force or traction, not both");
+          if (const YAML::Node t = entry["traction"]) {
+            load.is_traction = true;
+            load.force = src_.vec3(t, where + ".traction");
+            double area = 0.0;
+            femTractionForces(*scene_.mesh, load.lo, load.hi, load.force, femBoxTolerance(*scene_.mesh),
+                              &area);
+            if (!(area > 0.0))
+              src_.fail(entry, where + ": no boundary face lies in the box (a traction needs one)");
+          } else {
+            load.force = src_.vec3(src_.require(entry, "force", where), where + ".force");
+          }
+          scene_.loads.push_back(std::move(load));
+        });
   }
 
   void readProbes(const YAML::Node& node) {
@@ -384,8 +420,15 @@ class SceneReader {
         break;
       case FemMeshType::kHexGrid:
       case FemMeshType::kTetGrid:
-        src_.allowKeys(node, {"type", "lo", "hi", "cells", "split"}, "mesh");
+        src_.allowKeys(node, {"type", "lo", "hi", "cells", "split", "face_diagonals"}, "mesh");
         readBox(node, s);
+        if (const YAML::Node d = node["face_diagonals"]) {
+          if (s.type != FemMeshType::kHexGrid) src_.fail(d, "mesh.face_diagonals: only for type hex_grid");
+          s.face_diagonals = src_.choice<PolyhedralMesh::FaceDiagonals>(
+              d, "mesh.face_diagonals",
+              {{"fan", PolyhedralMesh::FaceDiagonals::kFan},
+               {"symmetric", PolyhedralMesh::FaceDiagonals::kMirrorSymmetric}});
+        }
         if (const YAML::Node sp = node["split"]) {
           if (s.type != FemMeshType::kTetGrid) src_.fail(sp, "mesh.split: only for type tet_grid");
           const long n = src_.integer(sp, "mesh.split", 5, 6);
@@ -471,7 +514,9 @@ class SceneReader {
     std::vector<PolyhedralMesh::ElementFaces> elements(mesh.numElements());
     for (int e = 0; e < mesh.numElements(); ++e) elements[e] = mesh.elementFaces(e);
     try {
-      scene_.mesh = std::make_shared<const PolyhedralMesh>(nodes, std::move(elements));
+      // The same face triangulations (given ones, e.g. mesh.face_diagonals, stay).
+      scene_.mesh =
+          std::make_shared<const PolyhedralMesh>(nodes, std::move(elements), mesh.elementFaceTriangles());
     } catch (const std::exception& e) {
       src_.fail(mesh_node, std::string("mesh after placement: ") + e.what());
     }

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "relaxed_connectivity/fem/fem_probes.h"
+#include "relaxed_connectivity/fem/fem_scene_regions.h"
 #include "relaxed_connectivity/fem/polygon_cut.h"
 
 namespace rc {
@@ -136,6 +137,7 @@ FemSimulation::FemSimulation(const FemScene& scene) : scene_(scene) {
   bodies_.push_back(makeBody(*scene_.mesh, std::vector<Vec3>(scene_.mesh->numNodes(), Vec3::Zero()),
                              scene_.initial_velocities));
   applyLoads();
+  applyHeld();
 }
 
 std::vector<size_t> FemSimulation::setLoads(std::vector<FemLoad> loads) {
@@ -153,13 +155,21 @@ std::vector<size_t> FemSimulation::applyLoads() {
   std::vector<size_t> counts;
   if (scene_.loads.empty()) return counts;
   const double tolerance = femBoxTolerance(*scene_.mesh);
-  auto inside = [&](const FemLoad& load, const Vec3& r) {
-    return ((r - load.lo).array() >= -tolerance).all() && ((load.hi - r).array() >= -tolerance).all();
-  };
+  auto inside = [&](const FemLoad& load, const Vec3& r) { return inFemBox(r, load.lo, load.hi, tolerance); };
   std::vector<Eigen::VectorXd> forces;
   for (const auto& body : bodies_) forces.push_back(Eigen::VectorXd::Zero(body->restPositions().size()));
   for (const FemLoad& load : scene_.loads) {
     size_t count = 0;
+    if (load.is_traction) {  // per body: its boundary faces in the box (crack faces too)
+      for (size_t b = 0; b < bodies_.size(); ++b) {
+        const PolyhedralMesh& mesh = bodies_[b]->model().mesh();
+        const Eigen::VectorXd f = femTractionForces(mesh, load.lo, load.hi, load.force, tolerance);
+        forces[b] += f;
+        for (int i = 0; i < mesh.numNodes(); ++i) count += f.segment<3>(3 * i) != Vec3::Zero();
+      }
+      counts.push_back(count);
+      continue;
+    }
     for (const auto& body : bodies_)
       for (Eigen::Index i = 0; i < body->restPositions().size() / 3; ++i)
         count += inside(load, body->restPositions().segment<3>(3 * i));
@@ -172,6 +182,79 @@ std::vector<size_t> FemSimulation::applyLoads() {
   }
   for (size_t b = 0; b < bodies_.size(); ++b) bodies_[b]->setExternalForces(forces[b]);
   return counts;
+}
+
+std::vector<size_t> FemSimulation::setHeld(std::vector<FemHeldRegion> regions) {
+  for (const FemHeldRegion& region : regions) {
+    if (!region.lo.allFinite() || !region.hi.allFinite() || !region.displacement.allFinite())
+      throw std::invalid_argument("FemSimulation::setHeld: a region with a non-finite box or displacement");
+    if (region.in_place && (!region.path.empty() || !region.displacement.isZero()))
+      throw std::invalid_argument("FemSimulation::setHeld: an in-place region takes no displacement or path");
+    for (size_t k = 0; k < region.path.size(); ++k) {
+      if (!std::isfinite(region.path[k].first) || !region.path[k].second.allFinite())
+        throw std::invalid_argument("FemSimulation::setHeld: path keyframe " + std::to_string(k) +
+                                    " is not finite");
+      if (k > 0 && !(region.path[k].first > region.path[k - 1].first))
+        throw std::invalid_argument("FemSimulation::setHeld: path times must increase (keyframe " +
+                                    std::to_string(k) + ")");
+    }
+  }
+  scene_.held = std::move(regions);
+  return applyHeld();
+}
+
+std::vector<size_t> FemSimulation::applyHeld() {
+  std::vector<size_t> counts(scene_.held.size(), 0);
+  const double tolerance = femBoxTolerance(*scene_.mesh);
+  held_region_.assign(bodies_.size(), {});
+  held_anchor_.assign(bodies_.size(), Eigen::VectorXd());
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    const Eigen::VectorXd& rest = bodies_[b]->restPositions();
+    std::vector<int> region_of(size_t(rest.size()), -1);
+    std::vector<char> mask(size_t(rest.size()), 0);
+    for (size_t r = 0; r < scene_.held.size(); ++r) {
+      const FemHeldRegion& region = scene_.held[r];
+      for (Eigen::Index i = 0; i < rest.size() / 3; ++i) {
+        if (!inFemBox(rest.segment<3>(3 * i), region.lo, region.hi, tolerance)) continue;
+        ++counts[r];
+        for (int k = 0; k < 3; ++k)
+          if (region.components[size_t(k)])
+            region_of[size_t(3 * i + k)] = int(r), mask[size_t(3 * i + k)] = 1;
+      }
+    }
+    bodies_[b]->setHeld(std::move(mask));
+    held_region_[b] = std::move(region_of);
+    held_anchor_[b] = bodies_[b]->positions();
+  }
+  return counts;
+}
+
+void FemSimulation::setHeldTargets(double time) {
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    if (bodies_[b]->numHeldDofs() == 0) continue;
+    std::vector<Vec3> displacement(scene_.held.size());
+    for (size_t r = 0; r < scene_.held.size(); ++r) displacement[r] = scene_.held[r].displacementAt(time);
+    Eigen::VectorXd targets = bodies_[b]->restPositions();
+    for (size_t d = 0; d < held_region_[b].size(); ++d) {
+      const int r = held_region_[b][d];
+      if (r < 0) continue;
+      targets[Eigen::Index(d)] = scene_.held[size_t(r)].in_place
+                                     ? held_anchor_[b][Eigen::Index(d)]
+                                     : targets[Eigen::Index(d)] + displacement[size_t(r)][int(d % 3)];
+    }
+    bodies_[b]->setHeldTargets(targets);
+  }
+}
+
+std::vector<Vec3> FemSimulation::heldReactions() const {
+  std::vector<Vec3> sums(scene_.held.size(), Vec3::Zero());
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    if (bodies_[b]->numHeldDofs() == 0) continue;
+    for (size_t d = 0; d < held_region_[b].size(); ++d)
+      if (held_region_[b][d] >= 0)
+        sums[size_t(held_region_[b][d])][int(d % 3)] += bodies_[b]->heldReactions()[Eigen::Index(d)];
+  }
+  return sums;
 }
 
 std::unique_ptr<WarpedDynamics> FemSimulation::makeBody(PolyhedralMesh mesh,
@@ -363,6 +446,7 @@ FemCutReport FemSimulation::applyPolygonCuts(const std::vector<std::vector<Vec3>
   }
   bodies_ = std::move(next);
   applyLoads();
+  applyHeld();
   recomputed_elements_ += report.recomputed_elements;
   reused_elements_ += report.reused_elements;
   slivers_removed_ += report.slivers_removed;
@@ -454,6 +538,7 @@ FemCutReport FemSimulation::applyCut(const FemSceneCut& cut) {
   }
   bodies_ = std::move(next);
   applyLoads();
+  applyHeld();
   recomputed_elements_ += report.recomputed_elements;
   reused_elements_ += report.reused_elements;
   slivers_removed_ += report.slivers_removed;
@@ -511,6 +596,7 @@ void FemSimulation::step() {
   }
   flush();
   const Clock::time_point start = Clock::now();
+  if (!scene_.held.empty()) setHeldTargets(time_ + dt);
   int iterations = 0;
   for (auto& body : bodies_) {
     const StepStatistics stats = body->step();

@@ -50,6 +50,16 @@ class FemSimulation {
   /// Replaces the loads (the scene's key loads of a dynamic run) and applies them to the current bodies.
   /// Returns per load the number of nodes its force is spread over now (0: none in its box).
   std::vector<size_t> setLoads(std::vector<FemLoad> loads);
+  /// Replaces the held regions (the scene's key held) and holds them on the current bodies from the next step
+  /// on; a later region's components replace an earlier one's on shared nodes; in-place regions hold their
+  /// nodes where they are now (also after later calls and cuts: held nodes stay where they are held). Returns
+  /// per region the number of nodes it holds now (0: none in its box). Throws std::invalid_argument for a
+  /// non-finite box, displacement or path, path times that do not increase, or an in-place region with a
+  /// displacement or path.
+  std::vector<size_t> setHeld(std::vector<FemHeldRegion> regions);
+  /// Per held region: the force its holder exerted on its held components during the last step, summed over
+  /// the bodies (zero before the first step).
+  std::vector<Vec3> heldReactions() const;
   int numBodies() const { return static_cast<int>(bodies_.size()); }
   const WarpedDynamics& body(int b) const { return *bodies_[b]; }
   std::vector<FemBodyState> bodyStates() const;
@@ -107,6 +117,11 @@ class FemSimulation {
   /// The scene's loads (dynamic runs: constant nodal forces) on the current bodies: each load's total force
   /// spread equally over the nodes whose rest positions lie in its box, over all bodies (after cuts too).
   std::vector<size_t> applyLoads();
+  /// The held regions on the current bodies (held_region_ and WarpedDynamics::setHeld); node counts per
+  /// region.
+  std::vector<size_t> applyHeld();
+  /// Held targets for the step ending at `time` (rest + displacementAt(time) of each dof's region).
+  void setHeldTargets(double time);
   /// State of a cut body handed to a body made from it: R_e per new element (warm start of the
   /// registrations), dv per new node (CG warm start).
   struct CarriedState {
@@ -123,6 +138,8 @@ class FemSimulation {
 
   FemScene scene_;
   std::vector<std::unique_ptr<WarpedDynamics>> bodies_;
+  std::vector<std::vector<int>> held_region_;  // per body, per dof: the region holding it (-1: free)
+  std::vector<Eigen::VectorXd> held_anchor_;   // per body: positions when held (in-place regions' targets)
   double time_ = 0.0;
   long steps_ = 0;
   int next_cut_ = 0, next_polygon_ = 0;  // next_polygon_: of cut next_cut_

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "relaxed_connectivity/fem/fem_scene_regions.h"
 #include "relaxed_connectivity/fem/linear_elasticity.h"
 
 namespace rc {
@@ -16,8 +17,12 @@ FemStaticResult solveFemStatic(const FemScene& scene) {
   const int n = model.mesh().numNodes();
   Eigen::VectorXd forces = Eigen::VectorXd::Zero(model.numDofs());
   for (int i = 0; i < n; ++i) forces.segment<3>(3 * i) += model.lumpedMasses()[i] * scene.body_acceleration;
+  const double tolerance = femBoxTolerance(model.mesh());
   for (const FemLoad& load : scene.loads)
-    for (int i : load.nodes) forces.segment<3>(3 * i) += load.force / double(load.nodes.size());
+    if (load.is_traction)
+      forces += femTractionForces(model.mesh(), load.lo, load.hi, load.force, tolerance);
+    else
+      for (int i : load.nodes) forces.segment<3>(3 * i) += load.force / double(load.nodes.size());
   // One constraint per node: the union of the components its regions hold (the reader refuses a component
   // held twice).
   std::vector<int> slot(size_t(n), -1);

@@ -134,6 +134,17 @@ struct FaceKeys {
   }
 };
 
+// The same triangles (each up to a cyclic rotation of its nodes), in any order.
+bool sameTriangles(const std::vector<PolyhedralMesh::Triangle>& a,
+                   const std::vector<PolyhedralMesh::Triangle>& b) {
+  auto canonical = [](std::vector<PolyhedralMesh::Triangle> list) {
+    for (auto& t : list) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    std::sort(list.begin(), list.end());
+    return list;
+  };
+  return a.size() == b.size() && canonical(a) == canonical(b);
+}
+
 }  // namespace
 
 // Faces of all elements by global index g = face_start[e] + f: the element, the face of the element and,
@@ -151,6 +162,29 @@ PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces
                                double relative_tolerance, std::vector<FaceRef> crack_faces,
                                const std::vector<const ConvexPolyhedron*>& prebuilt)
     : nodes_(std::move(nodes)), element_faces_(std::move(elements)), crack_faces_(std::move(crack_faces)) {
+  build(relative_tolerance, prebuilt);
+}
+
+PolyhedralMesh::PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
+                               std::vector<std::vector<std::vector<Triangle>>> face_triangles,
+                               double relative_tolerance, std::vector<FaceRef> crack_faces)
+    : nodes_(std::move(nodes)),
+      element_faces_(std::move(elements)),
+      crack_faces_(std::move(crack_faces)),
+      given_triangles_(std::move(face_triangles)) {
+  if (given_triangles_.size() != element_faces_.size())
+    fail("given triangulations for " + std::to_string(given_triangles_.size()) + " elements of " +
+         std::to_string(element_faces_.size()));
+  for (size_t e = 0; e < given_triangles_.size(); ++e)
+    if (!given_triangles_[e].empty() && given_triangles_[e].size() != element_faces_[e].size())
+      fail("element " + std::to_string(e) + ": given triangulations for " +
+           std::to_string(given_triangles_[e].size()) + " of its " +
+           std::to_string(element_faces_[e].size()) + " faces");
+  build(relative_tolerance, {});
+  given_triangles_ = {};
+}
+
+void PolyhedralMesh::build(double relative_tolerance, const std::vector<const ConvexPolyhedron*>& prebuilt) {
   checkInput(prebuilt.size());
   const FaceAdjacency faces = buildFaceAdjacency();
   const std::vector<std::vector<Triangle>> face_triangles =
@@ -269,10 +303,22 @@ std::vector<std::vector<PolyhedralMesh::Triangle>> PolyhedralMesh::buildElements
     for (size_t f = 0; f < faces.size(); ++f) {
       const int g = face_start[e] + static_cast<int>(f);
       const int other = adjacency.other_user[g];
+      const std::vector<Triangle>* given = givenTriangles(int(e), int(f));
       if (other < 0 || other > g) {
-        face_triangles[g] = bestFanTriangulation(nodes_, faces[f]);
+        const std::vector<Triangle>* other_given =
+            other < 0 ? nullptr : givenTriangles(adjacency.face_element[other], adjacency.face_local[other]);
+        if (given)
+          face_triangles[g] = *given;
+        else if (other_given)
+          for (const Triangle& t : *other_given) face_triangles[g].push_back({t[0], t[2], t[1]});
+        else
+          face_triangles[g] = bestFanTriangulation(nodes_, faces[f]);
       } else {
         for (const Triangle& t : face_triangles[other]) face_triangles[g].push_back({t[0], t[2], t[1]});
+        if (given && !sameTriangles(*given, face_triangles[g]))
+          fail("element " + std::to_string(e) + " face " + std::to_string(f) +
+               ": its given triangulation differs from the one element " +
+               std::to_string(adjacency.face_element[other]) + " gives the shared face");
       }
     }
     // Local nodes in order of first use.
@@ -422,6 +468,21 @@ void PolyhedralMesh::checkVolumes() {
 
 bool PolyhedralMesh::isCrackFace(int e, int f) const {
   return std::binary_search(crack_faces_.begin(), crack_faces_.end(), FaceRef(e, f));
+}
+
+std::vector<std::vector<std::vector<PolyhedralMesh::Triangle>>> PolyhedralMesh::elementFaceTriangles() const {
+  std::vector<std::vector<std::vector<Triangle>>> out(elements_.size());
+  for (size_t e = 0; e < elements_.size(); ++e) {
+    const ConvexPolyhedron& element = elements_[e];
+    const std::vector<int>& ids = element.globalNodeIds();
+    out[e].resize(size_t(element.numFaces()));
+    for (int t = 0; t < element.numTriangles(); ++t) {
+      const ConvexPolyhedron::Triangle& local = element.triangles()[size_t(t)];
+      out[e][size_t(element.triangleFace()[size_t(t)])].push_back(
+          {ids[size_t(local[0])], ids[size_t(local[1])], ids[size_t(local[2])]});
+    }
+  }
+  return out;
 }
 
 }  // namespace rc

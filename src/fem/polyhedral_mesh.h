@@ -45,8 +45,24 @@ class PolyhedralMesh {
   PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements, double relative_tolerance,
                  std::vector<FaceRef> crack_faces, const std::vector<const ConvexPolyhedron*>& prebuilt);
 
+  /// Given face triangulations: face_triangles[e][f] (global ids, counter-clockwise seen from outside element
+  /// e) tiles face f of element e; an empty list (for an element or a face) leaves the best fan. A face
+  /// shared by two elements takes the triangulation one of them gives, and the other must give the same
+  /// triangles (reversed) or none; throws std::invalid_argument naming the element and face otherwise, or
+  /// when the triangles do not tile the face (ConvexPolyhedron). Cuts build their meshes with fans again.
+  PolyhedralMesh(std::vector<Vec3> nodes, std::vector<ElementFaces> elements,
+                 std::vector<std::vector<std::vector<Triangle>>> face_triangles,
+                 double relative_tolerance = ConvexPolyhedron::kDefaultRelativeTolerance,
+                 std::vector<FaceRef> crack_faces = {});
+
+  /// How hexahedralGrid splits its square faces: the best fan (the diagonal from the first corner), or the
+  /// diagonal mirrored across the box's mid-planes, so that the mesh is mirror-symmetric about each mid-plane
+  /// across which its cell count is even (equal diagonals where the two halves meet along an axis are
+  /// impossible when the count is odd).
+  enum class FaceDiagonals { kFan, kMirrorSymmetric };
   /// nx x ny x nz boxes of the axis-aligned box [lo, hi] as hexahedra.
-  static PolyhedralMesh hexahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz);
+  static PolyhedralMesh hexahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz,
+                                       FaceDiagonals diagonals = FaceDiagonals::kFan);
   /// The same grid with each box split into 5 or 6 tetrahedra (conforming face diagonals).
   static PolyhedralMesh tetrahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz,
                                         TetrahedronSplit split = TetrahedronSplit::kSix);
@@ -66,6 +82,10 @@ class PolyhedralMesh {
   /// The input surface of element e (global ids).
   const ElementFaces& elementFaces(int e) const { return element_faces_[e]; }
 
+  /// The triangulation of every face of every element (global ids), as the constructor taking face_triangles
+  /// accepts it: a mesh rebuilt from it (e.g. with moved nodes) keeps its shape functions.
+  std::vector<std::vector<std::vector<Triangle>>> elementFaceTriangles() const;
+
   int numInteriorFaces() const { return num_interior_faces_; }
   /// Boundary faces (used by one element) triangulated as in their element, outward, global ids.
   const std::vector<Triangle>& boundaryTriangles() const { return boundary_triangles_; }
@@ -82,7 +102,16 @@ class PolyhedralMesh {
 
  private:
   struct FaceAdjacency;
-  // Phases of the constructor.
+  // The constructors' work.
+  void build(double relative_tolerance, const std::vector<const ConvexPolyhedron*>& prebuilt);
+  // The given triangulation of face f of element e (null: none given).
+  const std::vector<Triangle>* givenTriangles(int e, int f) const {
+    if (given_triangles_.empty() || given_triangles_[size_t(e)].empty() ||
+        given_triangles_[size_t(e)][size_t(f)].empty())
+      return nullptr;
+    return &given_triangles_[size_t(e)][size_t(f)];
+  }
+  // Phases of build().
   void checkInput(size_t num_prebuilt);
   FaceAdjacency buildFaceAdjacency() const;
   std::vector<std::vector<Triangle>> buildElements(const FaceAdjacency& adjacency, double relative_tolerance,
@@ -98,6 +127,7 @@ class PolyhedralMesh {
   std::vector<Triangle> boundary_triangles_;
   std::vector<char> is_boundary_node_;
   std::vector<FaceRef> crack_faces_;
+  std::vector<std::vector<std::vector<Triangle>>> given_triangles_;  // during construction only
   int num_interior_faces_ = 0, num_prebuilt_elements_ = 0;
   double volume_ = 0.0;
 };

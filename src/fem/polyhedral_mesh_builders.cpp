@@ -1,5 +1,6 @@
 // The mesh builders of PolyhedralMesh: hexahedral and tetrahedral grids, and the grid cut by random planes.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -66,11 +67,47 @@ std::vector<PolyhedralMesh::ElementFaces> hexahedralCells(int nx, int ny, int nz
   return cells;
 }
 
+// The two triangles of each square face, its diagonal mirrored across the grid's mid-planes: the diagonal
+// from the square's lower corner (in the face's two axes) when the square lies on the same side of both
+// mid-planes, the other one otherwise (FaceDiagonals::kMirrorSymmetric).
+std::vector<std::vector<std::vector<PolyhedralMesh::Triangle>>> mirroredFaceDiagonals(
+    const std::vector<PolyhedralMesh::ElementFaces>& cells, int nx, int ny, int nz) {
+  const int counts[3] = {nx, ny, nz};
+  auto gridIndex = [&](int id) {
+    return std::array<int, 3>{id % (nx + 1), (id / (nx + 1)) % (ny + 1), id / ((nx + 1) * (ny + 1))};
+  };
+  std::vector<std::vector<std::vector<PolyhedralMesh::Triangle>>> triangles(cells.size());
+  for (size_t e = 0; e < cells.size(); ++e)
+    for (const PolyhedralMesh::Face& face : cells[e]) {
+      std::array<std::array<int, 3>, 4> g;
+      for (int q = 0; q < 4; ++q) g[size_t(q)] = gridIndex(face[size_t(q)]);
+      int normal = 0;  // the axis along which the face's nodes share their index
+      while (!(g[0][size_t(normal)] == g[1][size_t(normal)] && g[0][size_t(normal)] == g[2][size_t(normal)]))
+        ++normal;
+      const int b = normal == 0 ? 1 : 0, c = normal == 2 ? 1 : 2;
+      int low_b = g[0][size_t(b)], low_c = g[0][size_t(c)];
+      for (const auto& n : g) low_b = std::min(low_b, n[size_t(b)]), low_c = std::min(low_c, n[size_t(c)]);
+      const bool lower_b = 2 * low_b + 1 < counts[b], lower_c = 2 * low_c + 1 < counts[c];
+      // The diagonal's start: the lower corner (main diagonal) or the corner low in c, high in b.
+      const int start_b = lower_b == lower_c ? low_b : low_b + 1;
+      int p = 0;
+      while (!(g[size_t(p)][size_t(b)] == start_b && g[size_t(p)][size_t(c)] == low_c)) ++p;
+      auto v = [&](int k) { return face[size_t((p + k) % 4)]; };
+      triangles[e].push_back({{v(0), v(1), v(2)}, {v(0), v(2), v(3)}});
+    }
+  return triangles;
+}
+
 }  // namespace
 
-PolyhedralMesh PolyhedralMesh::hexahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz) {
+PolyhedralMesh PolyhedralMesh::hexahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz,
+                                              FaceDiagonals diagonals) {
   checkGridArguments("hexahedralGrid", lo, hi, nx, ny, nz);
-  return PolyhedralMesh(gridNodes(lo, hi, nx, ny, nz), hexahedralCells(nx, ny, nz));
+  std::vector<ElementFaces> cells = hexahedralCells(nx, ny, nz);
+  if (diagonals == FaceDiagonals::kFan)
+    return PolyhedralMesh(gridNodes(lo, hi, nx, ny, nz), std::move(cells));
+  auto triangles = mirroredFaceDiagonals(cells, nx, ny, nz);
+  return PolyhedralMesh(gridNodes(lo, hi, nx, ny, nz), std::move(cells), std::move(triangles));
 }
 
 PolyhedralMesh PolyhedralMesh::tetrahedralGrid(const Vec3& lo, const Vec3& hi, int nx, int ny, int nz,

@@ -286,7 +286,8 @@ Eigen::VectorXd WarpedDynamics::solveSystem(const Eigen::SparseMatrix<double>& a
     stats.solver_iterations += 1;
   } else if (options_.solver == WarpedDynamicsOptions::Solver::kCholmodPcg) {
     // The system and contact-filtered matrices share one pattern for the life of the body.
-    const bool fresh = !cholmod_->factorized() || !prepareContactCorrection(active, stats);
+    const bool fresh = held_changed_ || !cholmod_->factorized() || !prepareContactCorrection(active, stats);
+    held_changed_ = false;
     if (fresh) {
       factorizeCholmod(a, stats);
       recordFactoredContact(active);
@@ -534,7 +535,9 @@ StepStatistics WarpedDynamics::step() {
   const Eigen::VectorXd kv = warped_stiffness_ * velocities_;
   const Eigen::VectorXd rhs = dt * (gravity_forces_ + user_forces_ + elastic_forces_ -
                                     alpha * masses3_.cwiseProduct(velocities_) - (beta + dt) * kv);
-  const Eigen::VectorXd guess = options_.cg_warm_start ? previous_dv_ : Eigen::VectorXd::Zero(numDofs());
+  Eigen::VectorXd guess = options_.cg_warm_start ? previous_dv_ : Eigen::VectorXd::Zero(numDofs());
+  Eigen::VectorXd system_rhs = rhs, held_dv;
+  if (num_held_dofs_ > 0) held_dv = eliminateHeldDofs(system_rhs, guess);
 
   // Contact set: a node is held when it is on or below the ground or would cross it during the step. A held
   // node gets n . v+ = w_i = min(0, (offset - n . x_i) / dt) inside the solve, so a landing node stops on the
@@ -545,12 +548,13 @@ StepStatistics WarpedDynamics::step() {
   const GroundPlane& g = options_.ground;
   const int num_nodes = numNodes();
   if (contact_impulses_.size() != num_nodes) contact_impulses_ = Eigen::VectorXd::Zero(num_nodes);
-  Eigen::VectorXd system_rhs = rhs, bound = Eigen::VectorXd::Zero(num_nodes), friction;
+  Eigen::VectorXd bound = Eigen::VectorXd::Zero(num_nodes), friction;
   std::vector<char> active(num_nodes, 0), released(num_nodes, 0), pinned(num_nodes, 0);
   int num_active = 0;
   if (g.enabled) {
     friction = Eigen::VectorXd::Zero(num_nodes);
     for (int i = 0; i < num_nodes; ++i) {
+      if (!held_nodes_.empty() && held_nodes_[size_t(i)]) continue;
       const double height = g.normal.dot(positions_.segment<3>(3 * i)) - g.offset;
       bound[i] = std::min(0.0, -height / dt);
       // Predicted n . v+: v plus the previous step's dv.
@@ -577,7 +581,7 @@ StepStatistics WarpedDynamics::step() {
   for (int round = 0;; ++round) {
     ++stats.contact_rounds;
     double b_norm = rhs_norm;
-    if (num_active == 0) {
+    if (num_active == 0) {  // the held dofs (if any) are filtered in system_matrix_ already
       stats.assembly_ms += millisecondsSince(phase_start);
       phase_start = Clock::now();
       dv = solveSystem(system_matrix_, system_rhs, round == 0 ? guess : dv, active, stats);
@@ -617,10 +621,11 @@ StepStatistics WarpedDynamics::step() {
         --num_active;
         addGroundFriction(i, -friction[i], system_rhs);
         ++changed;
-      } else if (g.normal.dot(positions_.segment<3>(3 * i) +
+      } else if ((held_nodes_.empty() || !held_nodes_[size_t(i)]) &&
+                 g.normal.dot(positions_.segment<3>(3 * i) +
                               dt * (velocities_.segment<3>(3 * i) + dv.segment<3>(3 * i))) -
-                     g.offset <
-                 -depth_limit) {
+                         g.offset <
+                     -depth_limit) {
         active[i] = 1;
         pinned[i] = released[i];
         ++num_active;
@@ -629,6 +634,10 @@ StepStatistics WarpedDynamics::step() {
       }
     }
     if (changed == 0) break;
+  }
+  if (num_held_dofs_ > 0) {
+    dv += held_dv;
+    computeHeldReactions(dv, rhs);
   }
   previous_dv_ = dv;
   velocities_ += dv;
@@ -649,6 +658,7 @@ void WarpedDynamics::applyGroundContact(StepStatistics& stats) {
   if (!options_.ground.enabled) return;
   const GroundPlane& g = options_.ground;
   for (int i = 0; i < numNodes(); ++i) {
+    if (!held_nodes_.empty() && held_nodes_[size_t(i)]) continue;
     auto x = positions_.segment<3>(3 * i);
     const double depth = g.offset - g.normal.dot(x);
     if (depth <= 0.0) continue;

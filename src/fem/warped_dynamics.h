@@ -16,6 +16,10 @@
 // would still cross are added, and the step re-solved (at most 8 solves). Coulomb friction is the implicit
 // tangential impulse -c_i (I - n n^T) v+_i, c_i = mu J_i / |v_t| from the previous step's J_i (capped), so it
 // cannot add energy. Nodes left below the plane (solver error) are projected onto it.
+// Held dofs (Dirichlet conditions, any subset of a node's components) are eliminated before the contact
+// solve: with dv = y + z_h (z_h the prescribed increments that bring each held dof to its target at the end
+// of the step), (S_h A S_h + I - S_h) y = S_h (b - A z_h), S_h removing the held dofs; the held dofs'
+// reactions are (A dv - b) / dt. A node with a held component takes no ground contact.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -110,6 +114,18 @@ class WarpedDynamics {
   /// Nodal forces applied in addition to gravity (m_i g).
   void setExternalForces(const Eigen::VectorXd& forces);
 
+  /// Held degrees of freedom: dof_mask has 3 N entries (non-zero: held; empty: none held). Held dofs reach
+  /// their targets at the end of every following step (v+ = (target - x) / dt); the targets start as the
+  /// current positions (the dofs hold still). Throws std::invalid_argument for a wrong size.
+  void setHeld(std::vector<char> dof_mask);
+  /// Positions the held dofs reach at the end of the next step (3 N; free dofs' entries are ignored).
+  /// Throws std::invalid_argument for a wrong size or non-finite values.
+  void setHeldTargets(const Eigen::VectorXd& targets);
+  const std::vector<char>& heldDofs() const { return held_dofs_; }
+  int numHeldDofs() const { return num_held_dofs_; }
+  /// The force the holder exerted on each held dof during the last step ((A dv - b) / dt), zero elsewhere.
+  const Eigen::VectorXd& heldReactions() const { return held_reactions_; }
+
   /// One linearised backward Euler step (header equations) followed by ground contact.
   StepStatistics step();
 
@@ -152,6 +168,10 @@ class WarpedDynamics {
   void gatherElement(int e, const Eigen::VectorXd& global, Eigen::VectorXd& local) const;
   Eigen::VectorXd elementDisplacement(int e, const ElementFrame& frame) const;  // u_e
   void applyGroundContact(StepStatistics& stats);
+  // Eliminates the held dofs from system_matrix_ and rhs (header); returns z_h, zero at free dofs.
+  Eigen::VectorXd eliminateHeldDofs(Eigen::VectorXd& rhs, Eigen::VectorXd& guess);
+  // held_reactions_ from the full step's dv and the unfiltered right-hand side.
+  void computeHeldReactions(const Eigen::VectorXd& dv, const Eigen::VectorXd& rhs);
   // Friction coefficient c of the node's tangential impulse -c (I - n n^T) v+ this step, for the normal
   // ground impulse J (Coulomb bound mu J).
   double groundFrictionCoefficient(int node, double normal_impulse) const;
@@ -193,6 +213,10 @@ class WarpedDynamics {
   std::vector<int> diagonal_index_;  // dof -> value index of the diagonal entry
   Eigen::SparseMatrix<double> warped_stiffness_, system_matrix_, constrained_matrix_;
   Eigen::VectorXd previous_dv_;
+  std::vector<char> held_dofs_, held_nodes_;  // per dof / per node (any component held); empty: none
+  int num_held_dofs_ = 0;
+  Eigen::VectorXd held_targets_, held_reactions_;
+  bool held_changed_ = false;  // the factorised system (kCholmod*) filtered a different held set
   // Lower: the symmetric product is serial; Eigen's OpenMP SpMV (Lower | Upper) spin-waits badly on small
   // systems when cores are shared.
   Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::DiagonalPreconditioner<double>>

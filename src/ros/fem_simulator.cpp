@@ -102,6 +102,7 @@ FemSimulator::FemSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
                                      << " scheduled cuts");
   cut_srv_ = private_nh_.advertiseService("cut", &FemSimulator::cutCallback, this);
   load_srv_ = private_nh_.advertiseService("load", &FemSimulator::loadCallback, this);
+  hold_srv_ = private_nh_.advertiseService("hold", &FemSimulator::holdCallback, this);
   loop_.start(nh_, private_nh_, params_.rate);
 }
 
@@ -220,6 +221,9 @@ void FemSimulator::publishProbes(const std_msgs::Header& header) {
     u.x = m.mean_displacement.x(), u.y = m.mean_displacement.y(), u.z = m.mean_displacement.z();
     probes.mean_displacements.push_back(u);
     probes.max_displacements.push_back(m.max_displacement);
+    geometry_msgs::Vector3 r;
+    r.x = m.reaction.x(), r.y = m.reaction.y(), r.z = m.reaction.z();
+    probes.reactions.push_back(r);
   }
   probes_pub_.publish(probes);
 }
@@ -255,6 +259,7 @@ bool FemSimulator::loadCallback(relaxed_connectivity::FemLoad::Request& request,
     load.lo = Vec3(request.lo.x, request.lo.y, request.lo.z);
     load.hi = Vec3(request.hi.x, request.hi.y, request.hi.z);
     load.force = Vec3(request.force.x, request.force.y, request.force.z);
+    load.is_traction = request.traction;
     if (!load.lo.allFinite() || !load.hi.allFinite() || !load.force.allFinite() ||
         !(load.lo.array() <= load.hi.array()).all())
       throw std::invalid_argument("load: needs a finite box with lo <= hi and a finite force");
@@ -276,6 +281,57 @@ bool FemSimulator::loadCallback(relaxed_connectivity::FemLoad::Request& request,
   } catch (const std::exception& e) {
     response.message = e.what();
     ROS_WARN_STREAM("fem_sim: load refused: " << response.message);
+  }
+  return true;
+}
+
+bool FemSimulator::holdCallback(relaxed_connectivity::FemHold::Request& request,
+                                relaxed_connectivity::FemHold::Response& response) {
+  std::lock_guard<std::mutex> lock(loop_.mutex());
+  response.success = false;
+  response.nodes = 0;
+  try {
+    FemHeldRegion region;
+    region.lo = Vec3(request.lo.x, request.lo.y, request.lo.z);
+    region.hi = Vec3(request.hi.x, request.hi.y, request.hi.z);
+    region.displacement = Vec3(request.displacement.x, request.displacement.y, request.displacement.z);
+    region.in_place = request.in_place;
+    if (!region.lo.allFinite() || !region.hi.allFinite() || !(region.lo.array() <= region.hi.array()).all())
+      throw std::invalid_argument("hold: needs a finite box with lo <= hi");
+    if (!request.components.empty()) {
+      region.components = {false, false, false};
+      for (char k : request.components) {
+        if (k < 'x' || k > 'z')
+          throw std::invalid_argument("hold: components '" + request.components + "' are not letters of xyz");
+        region.components[size_t(k - 'x')] = true;
+      }
+    }
+    if (request.path_times.size() != request.path_displacements.size())
+      throw std::invalid_argument("hold: " + std::to_string(request.path_times.size()) + " path times for " +
+                                  std::to_string(request.path_displacements.size()) + " displacements");
+    for (size_t k = 0; k < request.path_times.size(); ++k) {
+      const geometry_msgs::Vector3& u = request.path_displacements[k];
+      region.path.emplace_back(simulation_->time() + request.path_times[k], Vec3(u.x, u.y, u.z));
+    }
+    const bool adds = !(request.clear && region.lo.isZero() && region.hi.isZero());
+    std::vector<FemHeldRegion> regions =
+        request.clear ? std::vector<FemHeldRegion>() : simulation_->scene().held;
+    if (adds) regions.push_back(region);
+    const std::vector<FemHeldRegion> before = simulation_->scene().held;
+    const std::vector<size_t> counts = simulation_->setHeld(regions);  // throws before changing anything
+    if (adds && counts.back() == 0) {
+      simulation_->setHeld(before);  // changes nothing
+      throw std::invalid_argument("hold: the box holds no node of the bodies' rest positions");
+    }
+    response.nodes = adds ? uint32_t(counts.back()) : 0;
+    response.regions = uint32_t(regions.size());
+    response.success = true;
+    response.message = adds ? "holding " + std::to_string(response.nodes) + " nodes; " +
+                                  std::to_string(regions.size()) + " held regions"
+                            : "held regions released";
+  } catch (const std::exception& e) {
+    response.message = e.what();
+    ROS_WARN_STREAM("fem_sim: hold refused: " << response.message);
   }
   return true;
 }

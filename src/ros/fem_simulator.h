@@ -12,8 +12,10 @@
 //             in any tf2 frame, applied to the rest configuration: the crossed elements it overlaps are
 //             split by its plane (FemSimulation::applyCut with a region) or, progressive, the polygon itself
 //             cuts (FemSimulation::applyPolygonCuts); a refused cut is reported and changes nothing), ~load
-//             (relaxed_connectivity/FemLoad: a constant force spread over the nodes in a box, added to the
-//             loads or replacing them, until reset)
+//             (relaxed_connectivity/FemLoad: a constant force spread over the nodes in a box, or a traction
+//             on the boundary faces in it, added to the loads or replacing them, until reset), ~hold
+//             (relaxed_connectivity/FemHold: components of the nodes in a box held in place, at a
+//             displacement or along a path, added to the held regions or replacing them, until reset)
 // Parameters  (private) scene (file, required), frame_id, rate (frames per second), autostart,
 //             real_time_factor (simulated seconds per wall second), tf_timeout (s),
 //             planarity_tolerance (relative to the polygon's diameter); see config/fem_demo.yaml.
@@ -23,6 +25,7 @@
 #pragma once
 
 #include <relaxed_connectivity/FemCut.h>
+#include <relaxed_connectivity/FemHold.h>
 #include <relaxed_connectivity/FemLoad.h>
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
@@ -81,6 +84,8 @@ class FemSimulator {
   void resetSimulation();
   bool loadCallback(relaxed_connectivity::FemLoad::Request& request,
                     relaxed_connectivity::FemLoad::Response& response);
+  bool holdCallback(relaxed_connectivity::FemHold::Request& request,
+                    relaxed_connectivity::FemHold::Response& response);
   bool cutCallback(relaxed_connectivity::FemCut::Request& request,
                    relaxed_connectivity::FemCut::Response& response);
   /// The polygon of a request in the scene frame (throws std::invalid_argument / std::runtime_error).
@@ -97,7 +102,7 @@ class FemSimulator {
   int interactive_cuts_ = 0;
   double step_ms_ = 0.0;
   ros::Publisher surface_pub_, nodes_pub_, stats_pub_, probes_pub_;
-  ros::ServiceServer cut_srv_, load_srv_;
+  ros::ServiceServer cut_srv_, load_srv_, hold_srv_;
 };
 
 }  // namespace rc

@@ -87,8 +87,20 @@ TEST(FemStaticScene, BadKeysAreNamed) {
       "material: {youngs_modulus: 1000, poisson_ratio: 0.3}\n"
       "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 1], cells: [1, 1, 1]}\n";
   expectFemSceneErrorAt(
-      head + "dynamics: {time_step: 0.01}\nframes: {count: 1}\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0]}]\n", 5,
-      "only with analysis: static or modal");
+      head + "dynamics: {time_step: 0.01}\nframes: {count: 1}\nbody_acceleration: [0, 0, -1]\n", 5,
+      "body_acceleration: only with analysis: static");
+  expectFemSceneErrorAt(
+      head + "analysis: static\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0], path: [[0, 0, 0, 0]]}]\n", 4,
+      "path: only with analysis: dynamic");
+  expectFemSceneErrorAt(head +
+                            "analysis: static\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0]}]\n"
+                            "loads: [{lo: [0, 0, 1], hi: [1, 0, 1], traction: [0, 0, 1]}]\n",
+                        5, "no boundary face lies in the box");
+  expectFemSceneErrorAt(
+      head +
+          "analysis: static\nheld: [{lo: [0, 0, 0], hi: [1, 1, 0]}]\n"
+          "loads: [{lo: [0, 0, 1], hi: [1, 1, 1], traction: [0, 0, 1], force: [0, 0, 1]}]\n",
+      5, "give force or traction, not both");
   expectFemSceneErrorAt(head + "analysis: static\n", 1, "needs 'held' regions");
   expectFemSceneErrorAt(head + "analysis: static\nheld: [{lo: [5, 5, 5], hi: [6, 6, 6]}]\n", 4,
                         "holds no node");

@@ -1,7 +1,8 @@
 // fem_sim's ~probes (relaxed_connectivity/FemProbes) for config/fem/dropped_block_probes.yaml: the probe
 // names and node counts of the scene, and before the block lands (t < 0.4 s) the exact implicit Euler free
-// fall of its mass-weighted mean displacement and momentum.
+// fall of its mass-weighted mean displacement and momentum; ~load and ~hold change the run as they say.
 #include <gtest/gtest.h>
+#include <relaxed_connectivity/FemHold.h>
 #include <relaxed_connectivity/FemLoad.h>
 #include <relaxed_connectivity/FemProbes.h>
 #include <relaxed_connectivity/SimulationCommand.h>
@@ -50,6 +51,15 @@ struct ProbeInbox {
   }
 };
 
+/// fem_sim's ~command, the simulation paused at t = 0 (reset).
+ros::ServiceClient pausedAtStart(ros::NodeHandle& nh) {
+  ros::ServiceClient command = nh.serviceClient<relaxed_connectivity::SimulationCommand>("fem_sim/command");
+  EXPECT_TRUE(command.waitForExistence(ros::Duration(10)));
+  rc::callCommand(command, "pause");
+  rc::callCommand(command, "reset");
+  return command;
+}
+
 TEST(FemProbes, TheNodePublishesTheScenesProbesWithEachFrame) {
   ros::NodeHandle nh;
   ProbeInbox inbox(nh);
@@ -92,11 +102,9 @@ TEST(FemProbes, ALoadByServiceHoldsTheBlockAgainstGravity) {
   // mass-weighted mean displacement and the momentum 0 to 1e-9); bad loads are refused and change nothing.
   ros::NodeHandle nh;
   ProbeInbox inbox(nh);
-  ros::ServiceClient command = nh.serviceClient<relaxed_connectivity::SimulationCommand>("fem_sim/command");
+  ros::ServiceClient command = pausedAtStart(nh);
   ros::ServiceClient load = nh.serviceClient<relaxed_connectivity::FemLoad>("fem_sim/load");
   ASSERT_TRUE(load.waitForExistence(ros::Duration(10)));
-  rc::callCommand(command, "pause");
-  rc::callCommand(command, "reset");
   relaxed_connectivity::FemLoad bad;
   bad.request.lo.x = bad.request.lo.y = bad.request.lo.z = 50;
   bad.request.hi.x = bad.request.hi.y = bad.request.hi.z = 60;  // no node there
@@ -127,6 +135,80 @@ TEST(FemProbes, ALoadByServiceHoldsTheBlockAgainstGravity) {
     EXPECT_NEAR(m->mean_displacements[0].z, 0.0, 1e-9) << "t " << m->time;
   }
   rc::callCommand(command, "reset");  // the scene's own loads (none) again
+}
+
+TEST(FemProbes, HoldByServiceKeepsRegionsWhereTheyAreAndReportsTheirReactions) {
+  // ~hold in place over the whole block: it stays exactly, and the holders carry its weight (the probe's
+  // reaction m g); then only the bottom face: it stays, the rest sags; a clear releases (free fall again).
+  ros::NodeHandle nh;
+  ProbeInbox inbox(nh);
+  ros::ServiceClient command = pausedAtStart(nh);
+  ros::ServiceClient hold = nh.serviceClient<relaxed_connectivity::FemHold>("fem_sim/hold");
+  ASSERT_TRUE(hold.waitForExistence(ros::Duration(10)));
+  relaxed_connectivity::FemHold request;
+  request.request.lo.x = request.request.lo.y = request.request.lo.z = -100;
+  request.request.hi.x = request.request.hi.y = request.request.hi.z = 100;
+  request.request.components = "xw";
+  ASSERT_TRUE(hold.call(request));
+  EXPECT_FALSE(request.response.success);
+  EXPECT_NE(request.response.message.find("letters of xyz"), std::string::npos) << request.response.message;
+  request.request.components = "";
+  request.request.path_times = {0.0};  // without its displacement
+  ASSERT_TRUE(hold.call(request));
+  EXPECT_FALSE(request.response.success);
+  request.request.path_times.clear();
+  request.request.in_place = true;
+  ASSERT_TRUE(hold.call(request));
+  ASSERT_TRUE(request.response.success) << request.response.message;
+  EXPECT_EQ(request.response.nodes, 45u);
+  EXPECT_EQ(request.response.regions, 1u);
+  const double mass = 1.0 * 0.5 * 0.5, g = 9.81;
+  inbox.waitForPublisher();
+  inbox.clear();
+  rc::callCommand(command, "step", 10);
+  ASSERT_TRUE(inbox.waitPast(0.09, 20.0)) << "no probes past t = 0.09 s within 20 s";
+  {
+    std::lock_guard<std::mutex> lock(inbox.mutex);
+    for (const auto& m : inbox.received) {
+      EXPECT_EQ(m->momentum.z, 0.0) << "t " << m->time;
+      EXPECT_EQ(m->mean_displacements[0].z, 0.0) << "t " << m->time;
+      ASSERT_EQ(m->reactions.size(), 2u);
+      if (m->time > 0) EXPECT_NEAR(m->reactions[0].z, mass * g, 1e-9) << "t " << m->time;
+    }
+  }
+  // Only the bottom face, replacing the region.
+  request.request.clear = true;
+  request.request.lo.x = 0, request.request.lo.y = 0, request.request.lo.z = 1;
+  request.request.hi.x = 1, request.request.hi.y = 0.5, request.request.hi.z = 1;
+  ASSERT_TRUE(hold.call(request));
+  ASSERT_TRUE(request.response.success) << request.response.message;
+  EXPECT_EQ(request.response.nodes, 15u);
+  EXPECT_EQ(request.response.regions, 1u);
+  inbox.clear();
+  rc::callCommand(command, "step", 10);
+  ASSERT_TRUE(inbox.waitPast(0.19, 20.0)) << "no probes past t = 0.19 s within 20 s";
+  {
+    std::lock_guard<std::mutex> lock(inbox.mutex);
+    const auto& last = inbox.received.back();
+    EXPECT_EQ(last->mean_displacements[1].z, 0.0);
+    EXPECT_LT(last->mean_displacements[0].z, -1e-4);  // the block sags onto its held face
+    EXPECT_GT(last->mean_displacements[0].z, -0.1);
+    EXPECT_GT(last->reactions[1].z, 0.0);
+  }
+  // Release everything: the block falls (its momentum grows downward).
+  relaxed_connectivity::FemHold release;
+  release.request.clear = true;
+  ASSERT_TRUE(hold.call(release));
+  ASSERT_TRUE(release.response.success) << release.response.message;
+  EXPECT_EQ(release.response.regions, 0u);
+  inbox.clear();
+  rc::callCommand(command, "step", 5);
+  ASSERT_TRUE(inbox.waitPast(0.24, 20.0)) << "no probes past t = 0.24 s within 20 s";
+  {
+    std::lock_guard<std::mutex> lock(inbox.mutex);
+    EXPECT_LT(inbox.received.back()->momentum.z, -0.5 * mass * g * 0.05);
+  }
+  rc::callCommand(command, "reset");  // the scene's own held regions (none) again
 }
 
 }  // namespace
