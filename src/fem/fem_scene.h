@@ -99,6 +99,16 @@ struct FemLoad {
   std::vector<int> nodes;    ///< filled by the reader (never empty)
 };
 
+/// Key static (analysis: static): linear (K U = F, one solve) or corotational: the equilibrium of the warped
+/// internal forces f(x) = -sum_e R_e K_e u_e (9.1.4) with the loads, large rotations and small strains, by
+/// iterations x += K_w^-1 (f(x) + F) (K_w = sum_e R_e K_e R_e^T) over `load_steps` equal load increments,
+/// each until |residual| <= tolerance times the load (at most max_iterations).
+struct FemStaticOptions {
+  bool corotational = false;
+  int load_steps = 10, max_iterations = 200;
+  double tolerance = 1e-8;
+};
+
 /// A loaded scene: the placed rest mesh, material, dynamics options (incl. ground), initial velocities.
 struct FemScene {
   std::string name;  ///< `name:` or the file name without extension
@@ -117,6 +127,7 @@ struct FemScene {
   FemSceneOutput output;
   FemAnalysis analysis = FemAnalysis::kDynamic;
   std::vector<FemHeldRegion> held;  ///< every analysis (dynamic: FemSimulation holds them every step)
+  FemStaticOptions static_options;  ///< analysis: static
   int modes = 6;                    ///< analysis: modal
   std::vector<FemLoad> loads;       ///< static; dynamic: constant nodal forces (FemSimulation::applyLoads)
   /// analysis: dynamic: <name>_probes.csv in the output folder (fem_probes.h), a row at the start and per

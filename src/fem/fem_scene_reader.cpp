@@ -50,7 +50,7 @@ class SceneReader {
   void read(const YAML::Node& root) {
     src_.allowKeys(root,
                    {"name", "mesh", "placement", "material", "dynamics", "ground", "frames", "cuts", "output",
-                    "analysis", "held", "loads", "body_acceleration", "modes", "probes"},
+                    "analysis", "held", "loads", "body_acceleration", "modes", "probes", "static"},
                    "scene");
     if (root["name"]) scene_.name = src_.string(root["name"], "name");
     if (const YAML::Node a = root["analysis"])
@@ -66,6 +66,10 @@ class SceneReader {
     for (const char* key : {"loads", "body_acceleration"})
       if (root[key] && modal) src_.fail(root[key], std::string(key) + ": not with analysis: modal");
     if (root["modes"] && !modal) src_.fail(root["modes"], "modes: only with analysis: modal");
+    if (const YAML::Node s = root["static"]) {
+      if (scene_.analysis != FemAnalysis::kStatic) src_.fail(s, "static: only with analysis: static");
+      readStaticOptions(s);
+    }
     if (root["probes"] && !dynamic)
       src_.fail(root["probes"],
                 "probes: only with analysis: dynamic (static and modal runs report in their JSON)");
@@ -271,6 +275,21 @@ class SceneReader {
                         nodesInBox(entry, where, &probe.lo, &probe.hi);  // fails for a box without nodes
                         scene_.probes.push_back(std::move(probe));
                       });
+  }
+
+  void readStaticOptions(const YAML::Node& node) {
+    src_.allowKeys(node, {"corotational", "load_steps", "max_iterations", "tolerance"}, "static");
+    FemStaticOptions& o = scene_.static_options;
+    if (node["corotational"]) o.corotational = src_.boolean(node["corotational"], "static.corotational");
+    if (node["load_steps"])
+      o.load_steps = int(src_.integer(node["load_steps"], "static.load_steps", 1, 100000));
+    if (node["max_iterations"])
+      o.max_iterations = int(src_.integer(node["max_iterations"], "static.max_iterations", 1, 1000000));
+    if (node["tolerance"]) o.tolerance = src_.positive(node["tolerance"], "static.tolerance");
+    if (!o.corotational)
+      for (const char* key : {"load_steps", "max_iterations", "tolerance"})
+        if (node[key])
+          src_.fail(node[key], std::string("static.") + key + ": only with static.corotational: true");
   }
 
   void readGround(const YAML::Node& node) {

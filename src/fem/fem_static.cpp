@@ -2,7 +2,9 @@
 
 #include <chrono>
 #include <stdexcept>
+#include <utility>
 
+#include "relaxed_connectivity/fem/fem_corotational_static.h"
 #include "relaxed_connectivity/fem/fem_scene_regions.h"
 #include "relaxed_connectivity/fem/linear_elasticity.h"
 
@@ -39,8 +41,18 @@ FemStaticResult solveFemStatic(const FemScene& scene) {
           c.held[size_t(k)] = true, c.displacement[k] = region.displacement[k];
     }
   FemStaticResult result;
-  result.displacements = model.solveStatic(forces, constraints);
-  const Eigen::VectorXd reactions = model.reactions(result.displacements, forces);
+  Eigen::VectorXd reactions;
+  if (scene.static_options.corotational) {
+    CorotationalStaticResult corotational =
+        solveCorotationalStatic(model, forces, constraints, scene.static_options);
+    result.displacements = std::move(corotational.displacements);
+    reactions = std::move(corotational.reactions);
+    result.iterations = corotational.iterations;
+    result.residual = corotational.residual;
+  } else {
+    result.displacements = model.solveStatic(forces, constraints);
+    reactions = model.reactions(result.displacements, forces);
+  }
   for (int i = 0; i < n; ++i)
     result.max_displacement =
         std::max(result.max_displacement, result.displacements.segment<3>(3 * i).norm());
