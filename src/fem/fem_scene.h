@@ -71,13 +71,16 @@ struct FemSceneOutput {
 enum class FemAnalysis { kDynamic, kStatic, kModal };
 
 /// Key held: the nodes whose rest positions lie in the box [lo, hi] (closed, with a tolerance of 1e-9 of the
-/// mesh's diagonal) hold the listed components at `displacement` (a roller or a symmetry plane holds one).
-/// Dynamic runs: the held components reach displacementAt(t) at the end of each step (a constant
-/// `displacement` at the end of the first one); `path` (time, displacement) keyframes, interpolated linearly
-/// and held constant before the first and after the last, prescribe a motion. Nodes made by cuts inside the
-/// box are held too; a held node takes no ground contact.
+/// mesh's diagonal), or the listed nodes (key nodes), hold the listed components at `displacement` (a roller
+/// or a symmetry plane holds one). Dynamic runs: the held components reach displacementAt(t) at the end of
+/// each step (a constant `displacement` at the end of the first one); `path` (time, displacement) keyframes,
+/// interpolated linearly and held constant before the first and after the last, prescribe a motion. Nodes
+/// made by cuts inside the box are held too; a held node takes no ground contact.
 struct FemHeldRegion {
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  /// Key nodes (a node set): the rest positions of the listed nodes; only nodes at one of them are held
+  /// (lo, hi: their bounding box). Empty: every node in the box.
+  std::vector<Vec3> points;
   std::array<bool, 3> components = {true, true, true};
   Vec3 displacement = Vec3::Zero();
   std::vector<std::pair<double, Vec3>> path;  ///< keyframes, times increasing (empty: `displacement`)
@@ -94,6 +97,7 @@ struct FemHeldRegion {
 /// (femTractionForces).
 struct FemLoad {
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  std::vector<Vec3> points;  ///< key nodes: as FemHeldRegion::points
   Vec3 force = Vec3::Zero();
   bool is_traction = false;  ///< `traction` given: `force` is per unit area
   std::vector<int> nodes;    ///< filled by the reader (never empty)

@@ -192,6 +192,30 @@ class SceneReader {
     return nodes;
   }
 
+  /// A region's nodes: the box (keys lo, hi) or a node set (key nodes: indices into the placed mesh, then
+  /// lo, hi their bounding box and points their rest positions); fails if none is selected.
+  std::vector<int> selectedNodes(const YAML::Node& entry, const std::string& where, Vec3* lo, Vec3* hi,
+                                 std::vector<Vec3>* points) const {
+    const YAML::Node list = entry["nodes"];
+    if (!list) return nodesInBox(entry, where, lo, hi);
+    if (entry["lo"] || entry["hi"]) src_.fail(list, where + ".nodes: give a box (lo, hi) or nodes, not both");
+    if (!list.IsSequence() || list.size() == 0)
+      src_.fail(list, where + ".nodes: expected a list of node indices");
+    const PolyhedralMesh& mesh = *scene_.mesh;
+    std::vector<int> nodes;
+    for (size_t k = 0; k < list.size(); ++k) {
+      const int i =
+          int(src_.integer(list[k], where + ".nodes[" + std::to_string(k) + "]", 0, mesh.numNodes() - 1));
+      if (std::find(nodes.begin(), nodes.end(), i) != nodes.end())
+        src_.fail(list[k], where + ".nodes: node " + std::to_string(i) + " is listed twice");
+      nodes.push_back(i);
+      points->push_back(mesh.node(i));
+    }
+    *lo = *hi = points->front();
+    for (const Vec3& p : *points) *lo = lo->cwiseMin(p), *hi = hi->cwiseMax(p);
+    return nodes;
+  }
+
   /// Key path: [[t, ux, uy, uz], ...] with increasing times.
   std::vector<std::pair<double, Vec3>> readPath(const YAML::Node& node, const std::string& what) const {
     if (!node.IsSequence() || node.size() == 0)
@@ -212,49 +236,50 @@ class SceneReader {
   }
 
   void readHeld(const YAML::Node& node, bool dynamic) {
-    src_.forEachEntry(node, "held", "regions {lo, hi, components, displacement | path}",
-                      [&](const YAML::Node& entry, const std::string& where) {
-                        src_.allowKeys(entry, {"lo", "hi", "components", "displacement", "path"}, where);
-                        FemHeldRegion region;
-                        region.nodes = nodesInBox(entry, where, &region.lo, &region.hi);
-                        if (const YAML::Node c = entry["components"])
-                          region.components = src_.components(c, where + ".components");
-                        if (entry["displacement"] && entry["path"])
-                          src_.fail(entry["path"], where + ".path: give displacement or path, not both");
-                        if (entry["displacement"])
-                          region.displacement = src_.vec3(entry["displacement"], where + ".displacement");
-                        if (const YAML::Node p = entry["path"]) {
-                          if (!dynamic) src_.fail(p, where + ".path: only with analysis: dynamic");
-                          region.path = readPath(p, where + ".path");
-                        }
-                        for (const FemHeldRegion& other : scene_.held)
-                          for (int k = 0; k < 3; ++k)
-                            if (other.components[size_t(k)] && region.components[size_t(k)])
-                              for (int i : region.nodes)
-                                if (std::find(other.nodes.begin(), other.nodes.end(), i) != other.nodes.end())
-                                  src_.fail(entry, where + ": node " + std::to_string(i) + " already holds " +
-                                                       std::string(1, char('x' + k)) +
-                                                       " in an earlier region");
-                        scene_.held.push_back(std::move(region));
-                      });
+    src_.forEachEntry(
+        node, "held", "regions {lo, hi | nodes, components, displacement | path}",
+        [&](const YAML::Node& entry, const std::string& where) {
+          src_.allowKeys(entry, {"lo", "hi", "nodes", "components", "displacement", "path"}, where);
+          FemHeldRegion region;
+          region.nodes = selectedNodes(entry, where, &region.lo, &region.hi, &region.points);
+          if (const YAML::Node c = entry["components"])
+            region.components = src_.components(c, where + ".components");
+          if (entry["displacement"] && entry["path"])
+            src_.fail(entry["path"], where + ".path: give displacement or path, not both");
+          if (entry["displacement"])
+            region.displacement = src_.vec3(entry["displacement"], where + ".displacement");
+          if (const YAML::Node p = entry["path"]) {
+            if (!dynamic) src_.fail(p, where + ".path: only with analysis: dynamic");
+            region.path = readPath(p, where + ".path");
+          }
+          for (const FemHeldRegion& other : scene_.held)
+            for (int k = 0; k < 3; ++k)
+              if (other.components[size_t(k)] && region.components[size_t(k)])
+                for (int i : region.nodes)
+                  if (std::find(other.nodes.begin(), other.nodes.end(), i) != other.nodes.end())
+                    src_.fail(entry, where + ": node " + std::to_string(i) + " already holds " +
+                                         std::string(1, char('x' + k)) + " in an earlier region");
+          scene_.held.push_back(std::move(region));
+        });
   }
 
   void readLoads(const YAML::Node& node) {
     src_.forEachEntry(
-        node, "loads", "{lo, hi, force | traction}", [&](const YAML::Node& entry, const std::string& where) {
-          src_.allowKeys(entry, {"lo", "hi", "force", "traction"}, where);
+        node, "loads", "{lo, hi | nodes, force | traction}",
+        [&](const YAML::Node& entry, const std::string& where) {
+          src_.allowKeys(entry, {"lo", "hi", "nodes", "force", "traction"}, where);
           FemLoad load;
-          load.nodes = nodesInBox(entry, where, &load.lo, &load.hi);
+          load.nodes = selectedNodes(entry, where, &load.lo, &load.hi, &load.points);
           if (entry["force"] && entry["traction"])
             src_.fail(entry["traction"], where + ".traction: give force or traction, not both");
           if (const YAML::Node t = entry["traction"]) {
             load.is_traction = true;
             load.force = src_.vec3(t, where + ".traction");
             double area = 0.0;
-            femTractionForces(*scene_.mesh, load.lo, load.hi, load.force, femBoxTolerance(*scene_.mesh),
-                              &area);
+            femTractionForces(*scene_.mesh, load, femBoxTolerance(*scene_.mesh), &area);
             if (!(area > 0.0))
-              src_.fail(entry, where + ": no boundary face lies in the box (a traction needs one)");
+              src_.fail(entry,
+                        where + ": no boundary face lies in the box or node set (a traction needs one)");
           } else {
             load.force = src_.vec3(src_.require(entry, "force", where), where + ".force");
           }

@@ -155,7 +155,7 @@ std::vector<size_t> FemSimulation::applyLoads() {
   std::vector<size_t> counts;
   if (scene_.loads.empty()) return counts;
   const double tolerance = femBoxTolerance(*scene_.mesh);
-  auto inside = [&](const FemLoad& load, const Vec3& r) { return inFemBox(r, load.lo, load.hi, tolerance); };
+  auto inside = [&](const FemLoad& load, const Vec3& r) { return femSelects(load, r, tolerance); };
   std::vector<Eigen::VectorXd> forces;
   for (const auto& body : bodies_) forces.push_back(Eigen::VectorXd::Zero(body->restPositions().size()));
   for (const FemLoad& load : scene_.loads) {
@@ -163,7 +163,7 @@ std::vector<size_t> FemSimulation::applyLoads() {
     if (load.is_traction) {  // per body: its boundary faces in the box (crack faces too)
       for (size_t b = 0; b < bodies_.size(); ++b) {
         const PolyhedralMesh& mesh = bodies_[b]->model().mesh();
-        const Eigen::VectorXd f = femTractionForces(mesh, load.lo, load.hi, load.force, tolerance);
+        const Eigen::VectorXd f = femTractionForces(mesh, load, tolerance);
         forces[b] += f;
         for (int i = 0; i < mesh.numNodes(); ++i) count += f.segment<3>(3 * i) != Vec3::Zero();
       }
@@ -215,7 +215,7 @@ std::vector<size_t> FemSimulation::applyHeld() {
     for (size_t r = 0; r < scene_.held.size(); ++r) {
       const FemHeldRegion& region = scene_.held[r];
       for (Eigen::Index i = 0; i < rest.size() / 3; ++i) {
-        if (!inFemBox(rest.segment<3>(3 * i), region.lo, region.hi, tolerance)) continue;
+        if (!femSelects(region, rest.segment<3>(3 * i), tolerance)) continue;
         ++counts[r];
         for (int k = 0; k < 3; ++k)
           if (region.components[size_t(k)])

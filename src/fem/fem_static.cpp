@@ -22,7 +22,7 @@ FemStaticResult solveFemStatic(const FemScene& scene) {
   const double tolerance = femBoxTolerance(model.mesh());
   for (const FemLoad& load : scene.loads)
     if (load.is_traction)
-      forces += femTractionForces(model.mesh(), load.lo, load.hi, load.force, tolerance);
+      forces += femTractionForces(model.mesh(), load, tolerance);
     else
       for (int i : load.nodes) forces.segment<3>(3 * i) += load.force / double(load.nodes.size());
   // One constraint per node: the union of the components its regions hold (the reader refuses a component

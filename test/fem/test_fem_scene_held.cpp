@@ -2,7 +2,8 @@
 // a traction on rollers gives the exact uniaxial stress state on hex, tet and randomly cut meshes (where an
 // equal force per node does not), a dynamic bar pulled along a path follows it and settles on the static
 // reactions, held regions stay held after a cut separates the body (also in the shipped cut_shelf scene),
-// probes report the reactions, and FemSimulation::setHeld refuses bad regions.
+// node sets hold point supports and stay held through cuts, probes report the reactions, and
+// FemSimulation::setHeld refuses bad regions.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -168,6 +169,69 @@ TEST(FemSceneHeld, TheShippedShelfHangsFromItsWallUntilSawnOff) {
   }
   // While whole, the wall's reaction rings about weight plus load.
   EXPECT_NEAR(before_sum / before, shelf_weight + load, 0.25 * (shelf_weight + load));
+}
+
+TEST(FemSceneHeld, NodeSetsHoldPointSupportsAndCarryLoads) {
+  // A column supported at three bottom corners only (a statically determinate point support: xyz, yz, z)
+  // plus the fourth corner's z, under a top traction: still the exact uniaxial state; a node-set load.
+  const std::string head =
+      "material: {youngs_modulus: 1000, poisson_ratio: 0.3}\n"
+      "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 2], cells: [1, 1, 2]}\n"
+      "analysis: static\n";
+  // Nodes of the 1 x 1 x 2 grid: i + 2 (j + 2 k); the bottom corners are 0, 1, 2, 3.
+  const FemScene scene = parseFemScene(head +
+                                           "held:\n"
+                                           "  - {nodes: [0]}\n"
+                                           "  - {nodes: [1], components: yz}\n"
+                                           "  - {nodes: [2, 3], components: z}\n"
+                                           "loads: [{lo: [0, 0, 2], hi: [1, 1, 2], traction: [0, 0, -5]}]\n",
+                                       "points.yaml", ".");
+  ASSERT_EQ(scene.held[2].nodes, (std::vector<int>{2, 3}));
+  const FemStaticResult result = solveFemStatic(scene);
+  for (int i = 0; i < scene.mesh->numNodes(); ++i) {
+    const Vec3 x = scene.mesh->node(i);
+    const Vec3 exact(0.3 * 5 * x.x() / 1000, 0.3 * 5 * x.y() / 1000, -5 * x.z() / 1000);
+    EXPECT_LT((result.displacements.segment<3>(3 * i) - exact).norm(), 1e-15) << i;
+  }
+  EXPECT_NEAR(result.held_reactions[0].z() + result.held_reactions[1].z() + result.held_reactions[2].z(), 5.0,
+              1e-12);
+  // A load on a node set: the same total as on the top face's box, spread over its four nodes.
+  const FemScene nodal = parseFemScene(
+      head + "held: [{lo: [0, 0, 0], hi: [1, 1, 0]}]\nloads: [{nodes: [8, 9, 10, 11], force: [0, 0, -4]}]\n",
+      "nodal.yaml", ".");
+  EXPECT_EQ(nodal.loads[0].nodes.size(), 4u);
+  EXPECT_NEAR(solveFemStatic(nodal).held_reactions[0].z(), 4.0, 1e-12);
+  // Bad node sets are named with their line.
+  expectFemSceneErrorAt(head + "held: [{nodes: [0, 99]}]\n", 4, "held[0].nodes[1]");
+  expectFemSceneErrorAt(head + "held: [{nodes: [0, 0]}]\n", 4, "listed twice");
+  expectFemSceneErrorAt(head + "held: [{nodes: [0], lo: [0, 0, 0], hi: [1, 1, 0]}]\n", 4, "not both");
+}
+
+TEST(FemSceneHeld, ANodeSetStaysHeldInADynamicRunAndThroughACut) {
+  // A bar hung from two nodes of its top end; a cut below them: the piece holding them hangs on, the rest
+  // falls; the two nodes never move.
+  const FemScene scene = parseFemScene(
+      "material: {youngs_modulus: 2000, poisson_ratio: 0.3}\n"
+      "mesh: {type: hex_grid, lo: [0, 0, 0], hi: [1, 1, 4], cells: [1, 1, 4]}\n"
+      "dynamics: {time_step: 0.01, gravity: [0, 0, -10], mass_damping: 4, solver: {type: ldlt}}\n"
+      "frames: {count: 1}\n"
+      "held: [{nodes: [16, 17]}]\n"
+      "cuts: [{time: 0.2, point: [0.5, 0.5, 2.5], normal: [0, 0, 1]}]\n",
+      "hung.yaml", ".");
+  ASSERT_EQ(scene.held[0].points.size(), 2u);
+  FemSimulation sim(scene);
+  EXPECT_EQ(sim.body(0).numHeldDofs(), 6);
+  for (int s = 0; s < 60; ++s) sim.step();
+  ASSERT_EQ(sim.numBodies(), 2);
+  int held = 0;
+  for (int b = 0; b < 2; ++b) {
+    held += sim.body(b).numHeldDofs();
+    const WarpedDynamics& body = sim.body(b);
+    for (int i = 0; i < body.numNodes(); ++i)
+      if (body.numHeldDofs() > 0 && body.heldDofs()[size_t(3 * i)])
+        EXPECT_EQ(body.positions().segment<3>(3 * i), body.restPositions().segment<3>(3 * i));
+  }
+  EXPECT_EQ(held, 6);
 }
 
 TEST(FemSceneHeld, SetHeldReplacesTheRegionsAndRefusesBadOnes) {
