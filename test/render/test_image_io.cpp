@@ -34,7 +34,7 @@ TEST(ImageIo, PfmRoundTripOneAndThreeChannels) {
 }
 
 TEST(ImageIo, PngAndPatchIdRoundTrip) {
-  const uint32_t width = 300, height = 200;  // raw 16-bit data > 65535 bytes: several deflate blocks
+  const uint32_t width = 300, height = 200;  // raw 16-bit data > 65535 bytes
   std::vector<Rgba> colors(width * height);
   std::vector<int32_t> ids(width * height);
   for (size_t i = 0; i < ids.size(); ++i) {
@@ -50,6 +50,31 @@ TEST(ImageIo, PngAndPatchIdRoundTrip) {
   EXPECT_EQ(h, height);
   EXPECT_EQ(readPatchIdPng(patch, &w, &h), ids);
   std::remove(png.c_str());
+  std::remove(patch.c_str());
+}
+
+TEST(ImageIo, PatchIdPngsAreDeflated) {
+  // A 1280 x 720 patch-id image of a few regions (as rendered scenes give): raw 16-bit rows are 1.8 MB;
+  // deflated they are a few kB, and read back exactly.
+  const uint32_t width = 1280, height = 720;
+  std::vector<int32_t> ids(size_t(width) * height, -1);
+  for (uint32_t y = 0; y < height; ++y)
+    for (uint32_t x = 0; x < width; ++x) {
+      const double dx = x - 640.0, dy = y - 360.0;
+      if (dx * dx + dy * dy < 300.0 * 300.0) ids[size_t(y) * width + x] = dx < 0 ? 3 : 7;
+    }
+  const std::string patch = tempPath("patch_regions.png");
+  writePatchIdPng(patch, ids, width, height);
+  FILE* file = std::fopen(patch.c_str(), "rb");
+  ASSERT_TRUE(file);
+  std::fseek(file, 0, SEEK_END);
+  const long size = std::ftell(file);
+  std::fclose(file);
+  std::printf("patch-id PNG 1280 x 720, three regions: %ld bytes (raw rows %zu)\n", size,
+              size_t(height) * (1 + 2 * width));
+  EXPECT_LT(size, 40000);  // the raw rows: 1.84 MB
+  uint32_t w = 0, h = 0;
+  EXPECT_EQ(readPatchIdPng(patch, &w, &h), ids);
   std::remove(patch.c_str());
 }
 

@@ -142,7 +142,8 @@ FloatImage readPfm(const std::string& path) {
 void writeGray16Png(const std::string& path, const std::vector<uint16_t>& values, uint32_t width,
                     uint32_t height) {
   checkSize(path, values.size(), width, height, 1);
-  // Raw scanlines (filter 0), 16-bit big-endian samples, in stored (uncompressed) deflate blocks.
+  // Raw scanlines (filter 0: constant regions, as in patch-id images, deflate to almost nothing), 16-bit
+  // big-endian samples.
   std::vector<uint8_t> raw;
   raw.reserve(size_t(height) * (1 + 2 * width));
   for (uint32_t y = 0; y < height; ++y) {
@@ -153,23 +154,12 @@ void writeGray16Png(const std::string& path, const std::vector<uint16_t>& values
       raw.push_back(uint8_t(value));
     }
   }
-  std::vector<uint8_t> zlib = {0x78, 0x01};
-  for (size_t offset = 0; offset < raw.size() || offset == 0; offset += 65535) {
-    const size_t length = std::min<size_t>(65535, raw.size() - offset);
-    zlib.push_back(offset + length >= raw.size() ? 1 : 0);
-    zlib.push_back(uint8_t(length));
-    zlib.push_back(uint8_t(length >> 8));
-    zlib.push_back(uint8_t(~length));
-    zlib.push_back(uint8_t(~length >> 8));
-    zlib.insert(zlib.end(), raw.begin() + offset, raw.begin() + offset + length);
-    if (raw.empty()) break;
-  }
-  uint32_t a = 1, b = 0;  // Adler-32
-  for (uint8_t byte : raw) {
-    a = (a + byte) % 65521;
-    b = (b + a) % 65521;
-  }
-  appendBigEndian(zlib, (b << 16) | a);
+  // Deflate by stb_image_write's compressor (a zlib stream with its Adler-32).
+  int compressed_size = 0;
+  std::unique_ptr<unsigned char, void (*)(void*)> compressed(
+      stbi_zlib_compress(raw.data(), int(raw.size()), &compressed_size, 8), free);
+  if (!compressed) fail(path, "cannot compress the 16-bit PNG data");
+  const std::vector<uint8_t> zlib(compressed.get(), compressed.get() + compressed_size);
 
   std::vector<uint8_t> file = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   std::vector<uint8_t> header;

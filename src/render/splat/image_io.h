@@ -33,7 +33,7 @@ std::vector<Rgba> readPng(const std::string& path, uint32_t* width, uint32_t* he
 void writePfm(const std::string& path, const FloatImage& image);
 FloatImage readPfm(const std::string& path);
 
-/// 16-bit greyscale PNG (rows top to bottom; stored uncompressed), and its reader (any 8- or 16-bit PNG, as
+/// 16-bit greyscale PNG (rows top to bottom; deflated), and its reader (any 8- or 16-bit PNG, as
 /// 16-bit grey).
 void writeGray16Png(const std::string& path, const std::vector<uint16_t>& values, uint32_t width,
                     uint32_t height);
