@@ -112,6 +112,10 @@ SimulationLoopCallbacks FemSimulator::loopCallbacks() {
     return advance(params_.real_time_factor / params_.rate, std::numeric_limits<uint64_t>::max());
   };
   c.step = [this](uint32_t steps) { return advance(std::numeric_limits<double>::infinity(), steps); };
+  c.frame = [this](uint32_t frames) {
+    return advance(std::numeric_limits<double>::infinity(),
+                   uint64_t(frames) * uint64_t(scene_->steps_per_frame));
+  };
   c.where = [this] {
     return "step " + std::to_string(simulation_->steps()) + ", t = " + std::to_string(simulation_->time()) +
            " s";

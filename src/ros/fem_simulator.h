@@ -6,7 +6,8 @@
 //             velocity[3], displacement[3] (float32), body (uint32)), ~stats (relaxed_connectivity/FemStats),
 //             all in frame_id (the scene's frame); ~probes (relaxed_connectivity/FemProbes) with each frame
 //             when the scene has probes (its key probes, as rc_fem writes them)
-// Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N | reset; reset
+// Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N (solver steps) |
+//             frame N (steps_per_frame steps each) | reset; reset
 // restores the
 //             scene file's mesh at t = 0, paused), ~cut (relaxed_connectivity/FemCut: a convex planar polygon
 //             in any tf2 frame, applied to the rest configuration: the crossed elements it overlaps are

@@ -135,7 +135,8 @@ ShellSimulator::ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
 SimulationLoopCallbacks ShellSimulator::loopCallbacks() {
   SimulationLoopCallbacks c;
   c.tick = [this] { return advance(1); };  // one frame per tick
-  c.step = [this](uint32_t frames) { return advance(int(std::min<uint32_t>(frames, 1000000))); };
+  c.step = [this](uint32_t steps) { return advance(int(std::min<uint32_t>(steps, 1000000)), true); };
+  c.frame = [this](uint32_t frames) { return advance(int(std::min<uint32_t>(frames, 1000000))); };
   c.where = [this] {
     return "frame " + std::to_string(simulation_->frame()) +
            ", t = " + std::to_string(simulation_->solver().time()) + " s";
@@ -157,16 +158,13 @@ void ShellSimulator::resetSimulation() {
   loop_.setError("");
 }
 
-void ShellSimulator::applyForces() {
-  if (forces_.empty()) return;
-  const double dt = last_frame_.dt > 0 ? last_frame_.dt : scene_.solver.time_step;
-  const double frame_time = scene_.frame_time > 0 ? scene_.frame_time : scene_.steps_per_frame * dt;
-  if (!(frame_time > 0)) return;  // adaptive step before the first frame: the forces start next frame
+void ShellSimulator::applyForces(double interval) {
+  if (forces_.empty() || !(interval > 0)) return;  // (an adaptive step before the first frame: next frame)
   ShellSolver& solver = simulation_->mutableSolver();
   const std::vector<double>& masses = solver.energy().masses();
   std::vector<Vec3> velocities = solver.velocities();
   for (ShellAppliedForce& applied : forces_) {
-    const double duration = std::min(applied.remaining, frame_time);
+    const double duration = std::min(applied.remaining, interval);
     for (size_t i : applied.nodes) velocities[i] += applied.force * (duration / masses[i]);
     applied.remaining -= duration;
   }
@@ -176,11 +174,13 @@ void ShellSimulator::applyForces() {
                 forces_.end());
 }
 
-std::string ShellSimulator::advance(int frames) {
-  for (int k = 0; k < frames; ++k) {
+std::string ShellSimulator::advance(int count, bool steps) {
+  const double dt = last_frame_.dt > 0 ? last_frame_.dt : scene_.solver.time_step;
+  const double frame_time = scene_.frame_time > 0 ? scene_.frame_time : scene_.steps_per_frame * dt;
+  for (int k = 0; k < count; ++k) {
     try {
-      applyForces();
-      last_frame_ = simulation_->advanceFrame();
+      applyForces(steps ? dt : frame_time);
+      last_frame_ = steps ? simulation_->advanceSteps(1) : simulation_->advanceFrame();
     } catch (const std::exception& e) {
       const std::string what = e.what();
       resetSimulation();

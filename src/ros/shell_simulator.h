@@ -9,13 +9,12 @@
 //             LINE_LIST, end1-center and center-end2 per fiber), ~stats (relaxed_connectivity/ShellStats),
 //             all in frame_id; ~probes (relaxed_connectivity/ShellProbes) with each frame when the scene has
 //             probes (its key probes, as rc_shell writes them)
-// Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N (N frames, 0 means 1)
-// | reset;
-//             reset restores the scene at t = 0, paused, and drops the applied forces), ~apply_force
-//             (relaxed_connectivity/ShellForce: a force on one node or on the nodes near a point for a
-//             simulated duration; bad input is refused with a message and changes nothing), ~hold
-//             (relaxed_connectivity/ShellHold: components of the nodes in a box held from now on, until
-//             reset)
+// Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N (solver steps) |
+//             frame N (frames) | reset; reset restores the scene at t = 0, paused, and drops the applied
+//             forces), ~apply_force (relaxed_connectivity/ShellForce: a force on one node or on the nodes
+//             near a point for a simulated duration; bad input is refused with a message and changes
+//             nothing), ~hold (relaxed_connectivity/ShellHold: components of the nodes in a box held from now
+//             on, until reset)
 // Parameters  (private) scene (file, required), frame_id, rate (frames per wall second: one frame per tick),
 //             autostart, node_count (> 0 replaces the scene's node count, for speed); see
 //             config/shell_demo.yaml.
@@ -73,11 +72,11 @@ class ShellSimulator {
 
  private:
   SimulationLoopCallbacks loopCallbacks();
-  /// Simulates `frames` frames with the applied forces; a failing frame resets to t = 0, paused, and
-  /// returns the error (empty: none).
-  std::string advance(int frames);
-  /// Adds the impulses of the applied forces for the next frame (F dt / m per node).
-  void applyForces();
+  /// Simulates `count` frames (or, with `steps`, solver steps) with the applied forces; a failure resets to
+  /// t = 0, paused, and returns the error (empty: none).
+  std::string advance(int count, bool steps = false);
+  /// Adds the impulses of the applied forces for the next `interval` simulated seconds (F dt / m per node).
+  void applyForces(double interval);
   void publish();
   /// The scene's probes on ~probes (relaxed_connectivity/ShellProbes), with each frame.
   void publishProbes(const std_msgs::Header& header);

@@ -1,5 +1,5 @@
-// The start / pause / step / reset protocol (SimulationCommand.srv) shared by the simulator nodes: the node
-// says what each command does, the dispatcher parses the request and refuses unknown commands.
+// The start / pause / step / frame / reset protocol (SimulationCommand.srv) shared by the simulator nodes:
+// the node says what each command does, the dispatcher parses the request and refuses unknown commands.
 #pragma once
 
 #include <cstdint>
@@ -17,7 +17,8 @@ struct CommandResult {
 
 struct SimulationCommandHandlers {
   std::function<CommandResult()> start, pause, reset;
-  std::function<CommandResult(uint32_t steps)> step;  ///< steps >= 1 (a request of 0 steps is 1)
+  std::function<CommandResult(uint32_t steps)> step;    ///< solver steps >= 1 (a request of 0 is 1)
+  std::function<CommandResult(uint32_t frames)> frame;  ///< frames >= 1 (a request of 0 is 1)
 };
 
 /// Runs the handler of request.command; an unknown command fails naming the known ones.
@@ -31,10 +32,12 @@ inline void dispatchSimulationCommand(const relaxed_connectivity::SimulationComm
     result = handlers.pause();
   } else if (request.command == "step") {
     result = handlers.step(request.steps > 0 ? request.steps : 1);
+  } else if (request.command == "frame") {
+    result = handlers.frame(request.steps > 0 ? request.steps : 1);
   } else if (request.command == "reset") {
     result = handlers.reset();
   } else {
-    result = {false, "unknown command '" + request.command + "' (start, pause, step, reset)"};
+    result = {false, "unknown command '" + request.command + "' (start, pause, step, frame, reset)"};
   }
   response.success = result.success;
   response.message = result.message;

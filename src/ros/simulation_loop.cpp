@@ -8,8 +8,9 @@ namespace rc {
 
 SimulationLoop::SimulationLoop(std::string name, SimulationLoopCallbacks callbacks)
     : name_(std::move(name)), callbacks_(std::move(callbacks)) {
-  if (!callbacks_.tick || !callbacks_.step || !callbacks_.where || !callbacks_.reset || !callbacks_.publish)
-    throw std::invalid_argument(name_ + ": SimulationLoop needs tick, step, where, reset and publish");
+  if (!callbacks_.tick || !callbacks_.step || !callbacks_.frame || !callbacks_.where || !callbacks_.reset ||
+      !callbacks_.publish)
+    throw std::invalid_argument(name_ + ": SimulationLoop needs tick, step, frame, where, reset and publish");
 }
 
 void SimulationLoop::start(ros::NodeHandle nh, ros::NodeHandle private_nh, double rate) {
@@ -56,14 +57,16 @@ void SimulationLoop::command(const relaxed_connectivity::SimulationCommand::Requ
       running_ = false;
       return {true, "paused at " + callbacks_.where()};
     };
-    handlers.step = [&](uint32_t count) -> CommandResult {
+    auto advance = [&](const std::function<std::string(uint32_t)>& by, uint32_t count) -> CommandResult {
       running_ = false;
       if (blocked()) return {false, error_ + " at " + callbacks_.where() + ": reset first"};
       error_.clear();
-      setError(callbacks_.step(count));
+      setError(by(count));
       if (!error_.empty()) return {false, error_};
       return {true, callbacks_.where()};
     };
+    handlers.step = [&](uint32_t count) { return advance(callbacks_.step, count); };
+    handlers.frame = [&](uint32_t count) { return advance(callbacks_.frame, count); };
     handlers.reset = [&]() -> CommandResult {
       running_ = false;
       error_.clear();

@@ -1,7 +1,8 @@
 // The real-time loop every simulator node shares (sph_sim, fem_sim, shell_sim; the haptic driver later): a
 // wall timer that advances a running simulation by one tick and then publishes, the start / pause / step /
-// reset commands of ~command (SimulationCommand.srv), the error that stops a run, and the mutex that guards
-// the simulation against the timer and service calls. The node says what a tick, a step and a reset are.
+// frame / reset commands of ~command (SimulationCommand.srv), the error that stops a run, and the mutex that
+// guards the simulation against the timer and service calls. The node says what a tick, a step and a reset
+// are.
 #pragma once
 
 #include <ros/ros.h>
@@ -23,8 +24,11 @@ struct SimulationLoopCallbacks {
   /// Advances a running simulation by one timer tick (e.g. real_time_factor / rate simulated seconds, or one
   /// frame); returns the error that stops the run, empty when fine.
   std::function<std::string()> tick;
-  /// Advances by `count` >= 1 steps (solver steps or frames, as the node documents); same return.
+  /// Advances by `count` >= 1 solver steps; same return.
   std::function<std::string(uint32_t count)> step;
+  /// Advances by `count` >= 1 frames of the scene (its output frames: steps_per_frame steps or frame_time
+  /// seconds); same return.
+  std::function<std::string(uint32_t count)> frame;
   /// Where the simulation is, for messages ("step 12, t = 0.0400 s").
   std::function<std::string()> where;
   /// Back to the scene's start; returns the message ("reset to t = 0: 8 bodies").

@@ -71,6 +71,9 @@ SimulationLoopCallbacks SphSimulator::loopCallbacks() {
     return advance(params_.real_time_factor / params_.rate, std::numeric_limits<uint64_t>::max());
   };
   c.step = [this](uint32_t steps) { return advance(std::numeric_limits<double>::infinity(), steps); };
+  c.frame = [this](uint32_t frames) {  // until the frames' simulated time has passed
+    return advance(frames * scene_->frame_time, std::numeric_limits<uint64_t>::max());
+  };
   c.where = [this] {
     return "step " + std::to_string(simulation_->solver().stepCount()) +
            ", t = " + std::to_string(simulation_->solver().time()) + " s";

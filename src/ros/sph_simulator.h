@@ -9,7 +9,8 @@
 //             true), ~stats (relaxed_connectivity/SphStats), ~probes (relaxed_connectivity/SphProbes:
 //             the liquid's measures and density and pressure at points, for scenes with the key probes), all
 //             in frame_id
-// Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N | reset),
+// Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N (solver steps) |
+//             frame N (frame_time each) | reset),
 //             ~load_scene (relaxed_connectivity/LoadSphScene; a bad file is reported and changes nothing)
 // Parameters  (private) scene (file; empty: wait for ~load_scene), frame_id, rate (frames per second),
 //             autostart, real_time_factor (simulated seconds per wall second), surface, surface_cell_size

@@ -161,6 +161,8 @@ bool SurfelEstimator::resetAccumulation(relaxed_connectivity::ResetAccumulation:
                                         relaxed_connectivity::ResetAccumulation::Response& response) {
   std::lock_guard<std::mutex> lock(mutex_);
   response.dropped_surfels = static_cast<uint32_t>(accumulator_.reset());
+  response.success = true;
+  response.message = "dropped " + std::to_string(response.dropped_surfels) + " surfels";
   ROS_INFO_STREAM("surfel_estimator: accumulation reset, dropped " << response.dropped_surfels << " surfels");
   SurfelCloud empty;
   sensor_msgs::PointCloud2Ptr msg = PointCloud2Converter::toMessage(empty);
@@ -194,9 +196,12 @@ bool SurfelEstimator::save(relaxed_connectivity::SaveSurfels::Request& request,
                            relaxed_connectivity::SaveSurfels::Response& response) {
   try {
     response.saved_surfels = static_cast<uint32_t>(saveAccumulated(request.path));
-    ROS_INFO_STREAM("surfel_estimator: saved " << response.saved_surfels << " surfels to " << request.path);
+    response.success = true;
+    response.message = "saved " + std::to_string(response.saved_surfels) + " surfels to " + request.path;
+    ROS_INFO_STREAM("surfel_estimator: " << response.message);
   } catch (const std::exception& e) {
-    response.error = e.what();
+    response.success = false;
+    response.message = e.what();
     ROS_ERROR_STREAM("surfel_estimator: save failed: " << e.what());
   }
   return true;

@@ -130,12 +130,25 @@ ShellFrameReport ShellSimulation::advanceFrame() {
     const double end = frame_ * scene_.frame_time;
     while (solver_->time() < end - 1e-9 * scene_.frame_time) takeStep(&report);
   }
-  report.surface_ms = animateSurface();
-  report.time = solver_->time();
-  report.steps = solver_->stepCount();
-  report.cracks = crackCount();
-  report.pressure = pressure_ ? *pressure_ : 0.0;
+  finishReport(&report);
   return report;
+}
+
+ShellFrameReport ShellSimulation::advanceSteps(int steps) {
+  ShellFrameReport report;
+  report.frame = frame_;
+  report.frame_count = scene_.frame_count;
+  for (int s = 0; s < steps; ++s) takeStep(&report);
+  finishReport(&report);
+  return report;
+}
+
+void ShellSimulation::finishReport(ShellFrameReport* report) {
+  report->surface_ms = animateSurface();
+  report->time = solver_->time();
+  report->steps = solver_->stepCount();
+  report->cracks = crackCount();
+  report->pressure = pressure_ ? *pressure_ : 0.0;
 }
 
 double ShellSimulation::animateSurface() {

@@ -34,6 +34,9 @@ class ShellSimulation {
 
   /// Simulates one frame and animates the surface; throws ShellInstabilityError.
   ShellFrameReport advanceFrame();
+  /// Takes `steps` solver steps (inside the current frame; the frame count stays) and animates the surface;
+  /// throws ShellInstabilityError. A later advanceFrame() still ends at its frame's time.
+  ShellFrameReport advanceSteps(int steps);
   /// Crack surfels sit this many crack radii inside their material (behind their normal), so each binds to
   /// its own side; the crack plane is that far in front of each.
   static constexpr double kCrackSurfelInset = 0.25;
@@ -65,6 +68,8 @@ class ShellSimulation {
 
  private:
   void takeStep(ShellFrameReport* report);
+  // Animates the surface and fills the report's state fields (time, steps, cracks, pressure).
+  void finishReport(ShellFrameReport* report);
 
   ShellScene scene_;
   std::unique_ptr<ShellSolver> solver_;

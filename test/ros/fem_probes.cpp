@@ -137,6 +137,34 @@ TEST(FemProbes, ALoadByServiceHoldsTheBlockAgainstGravity) {
   rc::callCommand(command, "reset");  // the scene's own loads (none) again
 }
 
+TEST(FemProbes, FrameAdvancesStepsPerFrameAndStepOneSolverStep) {
+  // dropped_block_probes: dt 0.01, 3 steps per frame: "frame 2" ends at t = 0.06, then "step 1" at 0.07.
+  ros::NodeHandle nh;
+  ProbeInbox inbox(nh);
+  ros::ServiceClient command = pausedAtStart(nh);
+  inbox.waitForPublisher();
+  inbox.clear();
+  EXPECT_TRUE(rc::callCommand(command, "frame", 2).success);
+  ASSERT_TRUE(inbox.waitPast(0.05, 20.0)) << "no probes past t = 0.05 s within 20 s";
+  {
+    std::lock_guard<std::mutex> lock(inbox.mutex);
+    EXPECT_NEAR(inbox.received.back()->time, 0.06, 1e-12);
+  }
+  EXPECT_TRUE(rc::callCommand(command, "step", 1).success);
+  ASSERT_TRUE(inbox.waitPast(0.065, 20.0)) << "no probes past t = 0.065 s within 20 s";
+  {
+    std::lock_guard<std::mutex> lock(inbox.mutex);
+    EXPECT_NEAR(inbox.received.back()->time, 0.07, 1e-12);
+  }
+  relaxed_connectivity::SimulationCommand unknown;
+  unknown.request.command = "leap";
+  ASSERT_TRUE(command.call(unknown));
+  EXPECT_FALSE(unknown.response.success);
+  EXPECT_NE(unknown.response.message.find("(start, pause, step, frame, reset)"), std::string::npos)
+      << unknown.response.message;
+  rc::callCommand(command, "reset");
+}
+
 TEST(FemProbes, HoldByServiceKeepsRegionsWhereTheyAreAndReportsTheirReactions) {
   // ~hold in place over the whole block: it stays exactly, and the holders carry its weight (the probe's
   // reaction m g); then only the bottom face: it stays, the rest sags; a clear releases (free fall again).

@@ -24,7 +24,7 @@ bool waitFor(Done&& done, double seconds) {
   return false;
 }
 
-/// Calls a simulator's ~command service (start, pause, step, reset) and expects it to succeed.
+/// Calls a simulator's ~command service (start, pause, step, frame, reset) and expects it to succeed.
 inline relaxed_connectivity::SimulationCommand::Response callCommand(ros::ServiceClient& client,
                                                                      const std::string& name,
                                                                      uint32_t steps = 0) {

@@ -86,7 +86,7 @@ TEST(ScanLaunch, SaveServiceWritesTheAccumulatedSurfels) {
   relaxed_connectivity::SaveSurfels srv;
   srv.request.path = path;
   ASSERT_TRUE(save.call(srv));
-  EXPECT_EQ(srv.response.error, "");
+  EXPECT_TRUE(srv.response.success) << srv.response.message;
   EXPECT_GT(srv.response.saved_surfels, 100u);
   const rc::SurfelCloud saved = rc::readCloud(path);
   EXPECT_EQ(saved.size(), srv.response.saved_surfels);
@@ -96,7 +96,8 @@ TEST(ScanLaunch, SaveServiceWritesTheAccumulatedSurfels) {
 
   srv.request.path = "/nonexistent_dir/x.ply";  // a bad path is reported, the node keeps running
   ASSERT_TRUE(save.call(srv));
-  EXPECT_NE(srv.response.error.find("/nonexistent_dir/x.ply"), std::string::npos) << srv.response.error;
+  EXPECT_FALSE(srv.response.success);
+  EXPECT_NE(srv.response.message.find("/nonexistent_dir/x.ply"), std::string::npos) << srv.response.message;
 }
 
 // config/rviz/scan.rviz is loaded and shows topics that the launched nodes publish, in the estimator's frame.

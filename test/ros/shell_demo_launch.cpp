@@ -148,13 +148,34 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
   }
 
   // Exactly 2 frames of frame_time each.
-  call("step", 2);
+  call("frame", 2);
   ASSERT_TRUE(waitForPausedFrame(inbox, 2));
   {
     std::lock_guard<std::mutex> lock(inbox.mutex);
     EXPECT_NEAR(inbox.stats.time, 2 * scene.frame_time, 1e-9 * scene.frame_time);
     EXPECT_GT(inbox.stats.step, 2u);
     EXPECT_GT(inbox.stats.pressure, 0.0);  // the balloon's ramp has started
+  }
+  // step N: N solver steps inside the frame (the frame count stays; the next frame still ends at its time).
+  uint64_t steps_before = 0;
+  double time_before = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(inbox.mutex);
+    steps_before = inbox.stats.step;
+    time_before = inbox.stats.time;
+  }
+  call("step", 3);
+  ASSERT_TRUE(waitFor(
+      [&] {
+        std::lock_guard<std::mutex> lock(inbox.mutex);
+        return inbox.stats.step == steps_before + 3;
+      },
+      30.0));
+  {
+    std::lock_guard<std::mutex> lock(inbox.mutex);
+    EXPECT_EQ(inbox.stats.frame, 2u);
+    EXPECT_GT(inbox.stats.time, time_before);
+    EXPECT_LT(inbox.stats.time, time_before + scene.frame_time);
   }
 
   // ~hold: bad requests are refused and change nothing; holding every node keeps it where it is (the
@@ -190,7 +211,7 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
       std::lock_guard<std::mutex> lock(inbox.mutex);
       before = markerPoints(*inbox.nodes);
     }
-    call("step", 1);
+    call("frame", 1);
     ASSERT_TRUE(waitForPausedFrame(inbox, 3));
     std::lock_guard<std::mutex> lock(inbox.mutex);
     const std::vector<rc::Vec3> after = markerPoints(*inbox.nodes);
@@ -206,7 +227,7 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
   ASSERT_TRUE(waitForPausedFrame(inbox, 0));
   const std::vector<rc::Vec3> rest = markerPoints(*inbox.nodes);
   ASSERT_EQ(rest.size(), nodes);
-  call("step", 1);
+  call("frame", 1);
   ASSERT_TRUE(waitForPausedFrame(inbox, 1));
   const std::vector<rc::Vec3> free_frame = markerPoints(*inbox.nodes);
   call("reset");
@@ -222,7 +243,7 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
   ASSERT_TRUE(force.call(push));
   EXPECT_TRUE(push.response.success) << push.response.message;
   EXPECT_EQ(push.response.nodes, 1u);
-  call("step", 1);
+  call("frame", 1);
   ASSERT_TRUE(waitForPausedFrame(inbox, 1));
   const std::vector<rc::Vec3> pushed_frame = markerPoints(*inbox.nodes);
   ASSERT_EQ(pushed_frame.size(), free_frame.size());
@@ -292,7 +313,7 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
   refused(far_away, "no node within");
 
   // Still running: only the area force is active; one more frame applies it, then start.
-  call("step", 1);
+  call("frame", 1);
   ASSERT_TRUE(waitForPausedFrame(inbox, 2));
   EXPECT_EQ(inbox.stats.active_forces, 0u);
   EXPECT_TRUE(inbox.stats.error.empty()) << inbox.stats.error;

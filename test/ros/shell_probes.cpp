@@ -28,8 +28,8 @@ TEST(ShellProbes, TheNodePublishesTheScenesProbesWithEachFrame) {
   const ros::WallTime connect = ros::WallTime::now() + ros::WallDuration(10.0);
   while (sub.getNumPublishers() == 0 && ros::WallTime::now() < connect) ros::WallDuration(0.01).sleep();
   rc::callCommand(command, "reset");
-  ros::WallDuration(0.3).sleep();        // frames in flight, and the reset state published
-  rc::callCommand(command, "step", 30);  // 30 frames: 6 s of simulated time
+  ros::WallDuration(0.3).sleep();         // frames in flight, and the reset state published
+  rc::callCommand(command, "frame", 30);  // 30 frames: 6 s of simulated time
   const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(60.0);
   for (;;) {
     {

@@ -133,6 +133,17 @@ TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
   EXPECT_GT(stepped.dt, 0.0);
   EXPECT_FALSE(stepped.dt_limit.empty());
   EXPECT_TRUE(stepped.instability.empty()) << stepped.instability;
+  // One frame: at least the scene's frame time further, by at most one step more.
+  SimulationCommand frame;
+  frame.request.command = "frame";
+  frame.request.steps = 1;
+  ASSERT_TRUE(command.call(frame));
+  EXPECT_TRUE(frame.response.success) << frame.response.message;
+  const SphStats framed =
+      waitForStats(inbox, [&](const SphStats& m) { return !m.running && m.step > stepped.step; });
+  const double frame_time = scene.frame_time;
+  EXPECT_GE(framed.time, stepped.time + frame_time - 1e-12);
+  EXPECT_LT(framed.time, stepped.time + frame_time + 2.0 * framed.dt);
 
   // Reset to t = 0; unknown commands are refused.
   SimulationCommand reset;

@@ -177,6 +177,7 @@ TEST_F(BadInput, RejectsWithReasonKeepsStateAndRecovers) {
   ASSERT_TRUE(reset.waitForExistence(ros::Duration(5.0)));
   relaxed_connectivity::ResetAccumulation srv;
   ASSERT_TRUE(reset.call(srv));
+  EXPECT_TRUE(srv.response.success);
   EXPECT_EQ(srv.response.dropped_surfels, 900u);
   ASSERT_TRUE(reset.call(srv));
   EXPECT_EQ(srv.response.dropped_surfels, 0u);
