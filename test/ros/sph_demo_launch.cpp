@@ -134,11 +134,7 @@ TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
   EXPECT_FALSE(stepped.dt_limit.empty());
   EXPECT_TRUE(stepped.instability.empty()) << stepped.instability;
   // One frame: at least the scene's frame time further, by at most one step more.
-  SimulationCommand frame;
-  frame.request.command = "frame";
-  frame.request.steps = 1;
-  ASSERT_TRUE(command.call(frame));
-  EXPECT_TRUE(frame.response.success) << frame.response.message;
+  rc::callCommand(command, "frame", 1);
   const SphStats framed =
       waitForStats(inbox, [&](const SphStats& m) { return !m.running && m.step > stepped.step; });
   const double frame_time = scene.frame_time;
