@@ -5,6 +5,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/io/file_bytes.h"
 #include "relaxed_connectivity/io/io_error.h"
 #include "relaxed_connectivity/io/vtk_xml_writer.h"
 
@@ -131,6 +133,20 @@ SurfelCloud femNodesToCloud(const std::vector<FemBodyState>& bodies) {
     }
   }
   return cloud;
+}
+
+void writeFemState(const std::string& path, const std::vector<FemBodyState>& bodies) {
+  const std::string ext = lowerCaseExtension(path);
+  if (ext == ".vtu") {
+    writeFemVtu(path, bodies);
+  } else if (ext == ".obj") {
+    writeFemObj(path, bodies);
+  } else if (ext == ".ply" || ext == ".pcd" || ext == ".xyz") {
+    writeCloud(path, femNodesToCloud(bodies));
+  } else {
+    throw IoError(path,
+                  "unknown extension '" + ext + "' for an FEM state (supported: .vtu .obj .ply .pcd .xyz)");
+  }
 }
 
 }  // namespace rc

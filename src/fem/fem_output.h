@@ -41,4 +41,9 @@ SurfelCloud femNodesToCloud(const std::vector<FemBodyState>& bodies);
 /// Throws like writeFemVtu.
 void writeFemObj(const std::string& path, const std::vector<FemBodyState>& bodies);
 
+/// The current state in the format of the file's extension (fem_sim's ~save): .vtu (writeFemVtu), .obj
+/// (writeFemObj), .ply / .pcd / .xyz (femNodesToCloud). Throws IoError for another extension, naming the
+/// supported ones, and like the writers.
+void writeFemState(const std::string& path, const std::vector<FemBodyState>& bodies);
+
 }  // namespace rc

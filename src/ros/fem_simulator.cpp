@@ -103,6 +103,7 @@ FemSimulator::FemSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   cut_srv_ = private_nh_.advertiseService("cut", &FemSimulator::cutCallback, this);
   load_srv_ = private_nh_.advertiseService("load", &FemSimulator::loadCallback, this);
   hold_srv_ = private_nh_.advertiseService("hold", &FemSimulator::holdCallback, this);
+  save_srv_ = private_nh_.advertiseService("save", &FemSimulator::saveCallback, this);
   loop_.start(nh_, private_nh_, params_.rate);
 }
 
@@ -285,6 +286,22 @@ bool FemSimulator::loadCallback(relaxed_connectivity::FemLoad::Request& request,
   } catch (const std::exception& e) {
     response.message = e.what();
     ROS_WARN_STREAM("fem_sim: load refused: " << response.message);
+  }
+  return true;
+}
+
+bool FemSimulator::saveCallback(relaxed_connectivity::SaveState::Request& request,
+                                relaxed_connectivity::SaveState::Response& response) {
+  std::lock_guard<std::mutex> lock(loop_.mutex());
+  try {
+    writeFemState(request.path, simulation_->bodyStates());
+    response.success = true;
+    response.message = "saved " + std::to_string(simulation_->numBodies()) +
+                       " bodies at t = " + std::to_string(simulation_->time()) + " s to " + request.path;
+  } catch (const std::exception& e) {
+    response.success = false;
+    response.message = e.what();
+    ROS_WARN_STREAM("fem_sim: save failed: " << response.message);
   }
   return true;
 }

@@ -16,7 +16,8 @@
 //             (relaxed_connectivity/FemLoad: a constant force spread over the nodes in a box, or a traction
 //             on the boundary faces in it, added to the loads or replacing them, until reset), ~hold
 //             (relaxed_connectivity/FemHold: components of the nodes in a box held in place, at a
-//             displacement or along a path, added to the held regions or replacing them, until reset)
+//             displacement or along a path, added to the held regions or replacing them, until reset), ~save
+//             (relaxed_connectivity/SaveState: the bodies as .vtu, .obj or the nodes as .ply/.pcd/.xyz)
 // Parameters  (private) scene (file, required), frame_id, rate (frames per second), autostart,
 //             real_time_factor (simulated seconds per wall second), tf_timeout (s),
 //             planarity_tolerance (relative to the polygon's diameter); see config/fem_demo.yaml.
@@ -28,6 +29,7 @@
 #include <relaxed_connectivity/FemCut.h>
 #include <relaxed_connectivity/FemHold.h>
 #include <relaxed_connectivity/FemLoad.h>
+#include <relaxed_connectivity/SaveState.h>
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -85,6 +87,9 @@ class FemSimulator {
   void resetSimulation();
   bool loadCallback(relaxed_connectivity::FemLoad::Request& request,
                     relaxed_connectivity::FemLoad::Response& response);
+  /// ~save (relaxed_connectivity/SaveState): the current state to a file, the format by its extension.
+  bool saveCallback(relaxed_connectivity::SaveState::Request& request,
+                    relaxed_connectivity::SaveState::Response& response);
   bool holdCallback(relaxed_connectivity::FemHold::Request& request,
                     relaxed_connectivity::FemHold::Response& response);
   bool cutCallback(relaxed_connectivity::FemCut::Request& request,
@@ -103,7 +108,7 @@ class FemSimulator {
   int interactive_cuts_ = 0;
   double step_ms_ = 0.0;
   ros::Publisher surface_pub_, nodes_pub_, stats_pub_, probes_pub_;
-  ros::ServiceServer cut_srv_, load_srv_, hold_srv_;
+  ros::ServiceServer cut_srv_, load_srv_, hold_srv_, save_srv_;
 };
 
 }  // namespace rc

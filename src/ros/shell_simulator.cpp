@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <stdexcept>
 
+#include "relaxed_connectivity/io/cloud_io.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 #include "relaxed_connectivity/ros/simulation_loop.h"
 #include "relaxed_connectivity/shell/shell_probes.h"
@@ -129,6 +131,7 @@ ShellSimulator::ShellSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
                                        << simulation_->surfels().size() << " surfels");
   force_srv_ = private_nh_.advertiseService("apply_force", &ShellSimulator::forceCallback, this);
   hold_srv_ = private_nh_.advertiseService("hold", &ShellSimulator::holdCallback, this);
+  save_srv_ = private_nh_.advertiseService("save", &ShellSimulator::saveCallback, this);
   loop_.start(nh_, private_nh_, params_.rate);
 }
 
@@ -294,6 +297,33 @@ bool ShellSimulator::forceCallback(relaxed_connectivity::ShellForce::Request& re
     response.nodes = 0;
     response.message = e.what();
     ROS_WARN_STREAM("shell_sim: force refused: " << response.message);
+  }
+  return true;
+}
+
+bool ShellSimulator::saveCallback(relaxed_connectivity::SaveState::Request& request,
+                                  relaxed_connectivity::SaveState::Response& response) {
+  std::lock_guard<std::mutex> lock(loop_.mutex());
+  try {
+    const std::filesystem::path path(request.path);
+    const std::string ext = path.extension().string();
+    if (ext != ".ply" && ext != ".pcd" && ext != ".xyz")
+      throw std::invalid_argument(request.path + ": unknown extension '" + ext +
+                                  "' for shell surfels (supported: .ply .pcd .xyz)");
+    writeCloud(request.path, simulation_->surfels());
+    response.message = "saved " + std::to_string(simulation_->surfels().size()) + " surfels at frame " +
+                       std::to_string(simulation_->frame()) + " to " + request.path;
+    if (!simulation_->crackSurfels().empty()) {
+      const std::string cracks = (path.parent_path() / (path.stem().string() + "_cracks" + ext)).string();
+      writeCloud(cracks, simulation_->crackSurfels());
+      response.message +=
+          " and " + std::to_string(simulation_->crackSurfels().size()) + " crack surfels to " + cracks;
+    }
+    response.success = true;
+  } catch (const std::exception& e) {
+    response.success = false;
+    response.message = e.what();
+    ROS_WARN_STREAM("shell_sim: save failed: " << response.message);
   }
   return true;
 }

@@ -14,7 +14,8 @@
 //             forces), ~apply_force (relaxed_connectivity/ShellForce: a force on one node or on the nodes
 //             near a point for a simulated duration; bad input is refused with a message and changes
 //             nothing), ~hold (relaxed_connectivity/ShellHold: components of the nodes in a box held from now
-//             on, until reset)
+//             on, until reset), ~save (relaxed_connectivity/SaveState: the deformed surfels as
+//             .ply/.pcd/.xyz, crack surfels beside them)
 // Parameters  (private) scene (file, required), frame_id, rate (frames per wall second: one frame per tick),
 //             autostart, node_count (> 0 replaces the scene's node count, for speed); see
 //             config/shell_demo.yaml.
@@ -22,6 +23,7 @@
 // (ShellInstabilityError) resets the scene to t = 0, paused, and the stats' error says why.
 #pragma once
 
+#include <relaxed_connectivity/SaveState.h>
 #include <relaxed_connectivity/ShellForce.h>
 #include <relaxed_connectivity/ShellHold.h>
 #include <relaxed_connectivity/SimulationCommand.h>
@@ -83,6 +85,9 @@ class ShellSimulator {
   void resetSimulation();
   bool forceCallback(relaxed_connectivity::ShellForce::Request& request,
                      relaxed_connectivity::ShellForce::Response& response);
+  /// ~save (relaxed_connectivity/SaveState): the current state to a file, the format by its extension.
+  bool saveCallback(relaxed_connectivity::SaveState::Request& request,
+                    relaxed_connectivity::SaveState::Response& response);
   bool holdCallback(relaxed_connectivity::ShellHold::Request& request,
                     relaxed_connectivity::ShellHold::Response& response);
 
@@ -96,7 +101,7 @@ class ShellSimulator {
   ShellFrameReport last_frame_;
   double node_size_ = 0.0;  ///< marker size: a quarter of the mean rest fiber length
   ros::Publisher surfels_pub_, cracks_pub_, nodes_pub_, fibers_pub_, stats_pub_, probes_pub_;
-  ros::ServiceServer force_srv_, hold_srv_;
+  ros::ServiceServer force_srv_, hold_srv_, save_srv_;
 };
 
 }  // namespace rc

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 #include "relaxed_connectivity/ros/simulation_loop.h"
@@ -60,6 +61,7 @@ SphSimulator::SphSimulator(ros::NodeHandle nh, ros::NodeHandle private_nh)
     if (!load(params_.scene, params_.autostart, &message)) throw std::invalid_argument(message);
   }
   load_srv_ = private_nh_.advertiseService("load_scene", &SphSimulator::loadCallback, this);
+  save_srv_ = private_nh_.advertiseService("save", &SphSimulator::saveCallback, this);
   loop_.start(nh_, private_nh_, params_.rate);
 }
 
@@ -226,6 +228,33 @@ void SphSimulator::publish() {
     }
     probes_pub_.publish(probes);
   }
+}
+
+bool SphSimulator::saveCallback(relaxed_connectivity::SaveState::Request& request,
+                                relaxed_connectivity::SaveState::Response& response) {
+  std::lock_guard<std::mutex> lock(loop_.mutex());
+  response.success = false;
+  if (!simulation_) {
+    response.message = "no scene loaded";
+    return true;
+  }
+  try {
+    const SphParticles& particles = simulation_->solver().particles();
+    std::vector<double> temperatures;
+    if (simulation_->thermal()) {
+      temperatures = simulation_->thermal()->temperatures();
+      temperatures.resize(particles.size(), simulation_->thermal()->config().initial_temperature);
+    }
+    writeSphState(request.path, particles, simulation_->thermal() ? &temperatures : nullptr);
+    response.success = true;
+    response.message = "saved " + std::to_string(particles.size()) +
+                       " particles at t = " + std::to_string(simulation_->solver().time()) + " s to " +
+                       request.path;
+  } catch (const std::exception& e) {
+    response.message = e.what();
+    ROS_WARN_STREAM("sph_sim: save failed: " << response.message);
+  }
+  return true;
 }
 
 bool SphSimulator::loadCallback(relaxed_connectivity::LoadSphScene::Request& request,

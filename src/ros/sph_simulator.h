@@ -11,13 +11,15 @@
 //             in frame_id
 // Services    ~command (relaxed_connectivity/SimulationCommand: start | pause | step N (solver steps) |
 //             frame N (frame_time each) | reset),
-//             ~load_scene (relaxed_connectivity/LoadSphScene; a bad file is reported and changes nothing)
+//             ~load_scene (relaxed_connectivity/LoadSphScene; a bad file is reported and changes nothing),
+//             ~save (relaxed_connectivity/SaveState: the particles as .ply or .vtp)
 // Parameters  (private) scene (file; empty: wait for ~load_scene), frame_id, rate (frames per second),
 //             autostart, real_time_factor (simulated seconds per wall second), surface, surface_cell_size
 //             (0: h / 2), threads; see config/sph_demo.yaml.
 #pragma once
 
 #include <relaxed_connectivity/LoadSphScene.h>
+#include <relaxed_connectivity/SaveState.h>
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 
@@ -63,6 +65,9 @@ class SphSimulator {
   /// returns the instability that stopped it (empty: none).
   std::string advance(double duration, uint64_t steps);
   void publish();
+  /// ~save (relaxed_connectivity/SaveState): the current state to a file, the format by its extension.
+  bool saveCallback(relaxed_connectivity::SaveState::Request& request,
+                    relaxed_connectivity::SaveState::Response& response);
   bool loadCallback(relaxed_connectivity::LoadSphScene::Request& request,
                     relaxed_connectivity::LoadSphScene::Response& response);
 
@@ -73,7 +78,7 @@ class SphSimulator {
   std::unique_ptr<SphSimulation> simulation_;  // solver, temperature, phase changes, sources
   double step_ms_ = 0.0;
   ros::Publisher particles_pub_, surface_pub_, stats_pub_, probes_pub_;
-  ros::ServiceServer load_srv_;
+  ros::ServiceServer load_srv_, save_srv_;
 };
 
 }  // namespace rc

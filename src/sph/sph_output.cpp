@@ -3,6 +3,8 @@
 #include <cstdint>
 #include <utility>
 
+#include "relaxed_connectivity/io/file_bytes.h"
+#include "relaxed_connectivity/io/io_error.h"
 #include "relaxed_connectivity/io/ply_io.h"
 #include "relaxed_connectivity/io/vtk_xml_writer.h"
 
@@ -109,6 +111,17 @@ void writeSphVtp(const std::string& path, const SphParticles& particles, VtpEnco
        {"NumberOfPolys", "0"}},
       {point_data, {"Points", {}, {&arrays.points}}, {"Verts", {}, {&arrays.connectivity, &arrays.offsets}}},
       encoding == VtpEncoding::kAscii ? VtkXmlEncoding::kAscii : VtkXmlEncoding::kAppendedRaw);
+}
+
+void writeSphState(const std::string& path, const SphParticles& particles,
+                   const std::vector<double>* temperatures) {
+  const std::string ext = lowerCaseExtension(path);
+  if (ext == ".ply")
+    writeSphPly(path, particles, temperatures);
+  else if (ext == ".vtp")
+    writeSphVtp(path, particles, VtpEncoding::kAppendedRaw, temperatures);
+  else
+    throw IoError(path, "unknown extension '" + ext + "' for SPH particles (supported: .ply .vtp)");
 }
 
 }  // namespace rc

@@ -37,4 +37,9 @@ void writeSphVtp(const std::string& path, const SphParticles& particles,
                  const std::vector<double>* temperatures = nullptr,
                  const std::vector<uint32_t>* docked_points = nullptr);
 
+/// The particles in the format of the file's extension (sph_sim's ~save): .ply (writeSphPly) or .vtp
+/// (writeSphVtp). Throws IoError for another extension, naming the supported ones, and like the writers.
+void writeSphState(const std::string& path, const SphParticles& particles,
+                   const std::vector<double>* temperatures = nullptr);
+
 }  // namespace rc

@@ -21,6 +21,8 @@
 #include "relaxed_connectivity/fem/fem_simulation.h"
 #include "relaxed_connectivity/fem/plane_cut.h"
 #include "relaxed_connectivity/fem/tetgen_mesh.h"
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/io/io_error.h"
 
 namespace rc {
 namespace {
@@ -440,6 +442,31 @@ TEST(FemOutput, RunWritesSeriesFiles) {
   EXPECT_NE(pvd.find("file=\"series_0002.vtu\""), std::string::npos) << pvd;
   EXPECT_TRUE(std::filesystem::exists(options.out_dir + "/series_surface_0001.obj"));
   EXPECT_THROW(writeFemVtu(options.out_dir + "/x.vtu", {FemBodyState{}}), std::invalid_argument);
+}
+
+TEST(FemOutput, StateFilesFollowTheirExtension) {
+  // writeFemState (fem_sim's ~save): .vtu, .obj, point files of the nodes; other extensions are refused.
+  const FemScene scene = parseFemScene(std::string(kMinimal), "state.yaml");
+  FemSimulation sim(scene);
+  for (int s = 0; s < 3; ++s) sim.step();
+  const std::string dir = ::testing::TempDir() + "/fem_state";
+  std::filesystem::create_directories(dir);
+  writeFemState(dir + "/s.vtu", sim.bodyStates());
+  EXPECT_NE(readFile(dir + "/s.vtu").find("<UnstructuredGrid>"), std::string::npos);
+  writeFemState(dir + "/s.obj", sim.bodyStates());
+  EXPECT_NE(readFile(dir + "/s.obj").find("\nf "), std::string::npos);
+  writeFemState(dir + "/s.ply", sim.bodyStates());
+  const SurfelCloud nodes = readCloud(dir + "/s.ply");
+  ASSERT_EQ(nodes.size(), size_t(sim.numNodes()));
+  EXPECT_TRUE(nodes.attributes.find("displacement"));
+  EXPECT_NEAR((nodes.positions[3] - Vec3(sim.body(0).positions().segment<3>(9))).norm(), 0.0, 1e-6);
+  try {
+    writeFemState(dir + "/s.stl", sim.bodyStates());
+    ADD_FAILURE() << "an .stl state was written";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("supported: .vtu .obj .ply .pcd .xyz"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

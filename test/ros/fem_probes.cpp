@@ -8,7 +8,10 @@
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
 #include <mutex>
 #include <vector>
 
@@ -156,6 +159,8 @@ TEST(FemProbes, FrameAdvancesStepsPerFrameAndStepOneSolverStep) {
     std::lock_guard<std::mutex> lock(inbox.mutex);
     EXPECT_NEAR(inbox.received.back()->time, 0.07, 1e-12);
   }
+  // ~save writes the current state (the nodes as PLY: 45 of them); another extension is refused.
+  EXPECT_EQ(rc::savedPointCount(nh, "fem_sim/save", ".stl", "supported: .vtu .obj"), 45u);
   relaxed_connectivity::SimulationCommand unknown;
   unknown.request.command = "leap";
   ASSERT_TRUE(command.call(unknown));

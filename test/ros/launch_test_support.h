@@ -1,14 +1,19 @@
-// Shared by the demo launch rostests: waiting while spinning, and the check that an rviz config shows only
-// topics somebody publishes.
+// Shared by the demo launch rostests: waiting while spinning, simulator commands and ~save, and the check
+// that an rviz config shows only topics somebody publishes.
 #pragma once
 
 #include <gtest/gtest.h>
+#include <relaxed_connectivity/SaveState.h>
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <string>
+
+#include "relaxed_connectivity/io/cloud_io.h"
 
 namespace rc {
 
@@ -34,6 +39,28 @@ inline relaxed_connectivity::SimulationCommand::Response callCommand(ros::Servic
   EXPECT_TRUE(client.call(c)) << name;
   EXPECT_TRUE(c.response.success) << name << ": " << c.response.message;
   return c.response;
+}
+
+/// Calls a simulator's ~save (SaveState) for a .ply and returns the number of points read back from it (0 on
+/// a failure, reported); a file with extension `bad_extension` must be refused with a message containing
+/// `refusal_words`.
+inline size_t savedPointCount(ros::NodeHandle& nh, const std::string& service,
+                              const std::string& bad_extension, const std::string& refusal_words) {
+  ros::ServiceClient save = nh.serviceClient<relaxed_connectivity::SaveState>(service);
+  EXPECT_TRUE(save.waitForExistence(ros::Duration(10)));
+  const std::string stem = "/tmp/rc_save_state_" + std::to_string(::getpid());
+  relaxed_connectivity::SaveState state;
+  state.request.path = stem + bad_extension;
+  EXPECT_TRUE(save.call(state));
+  EXPECT_FALSE(state.response.success);
+  EXPECT_NE(state.response.message.find(refusal_words), std::string::npos) << state.response.message;
+  state.request.path = stem + ".ply";
+  EXPECT_TRUE(save.call(state));
+  EXPECT_TRUE(state.response.success) << state.response.message;
+  if (!state.response.success) return 0;
+  const size_t count = readCloud(state.request.path).size();
+  std::remove(state.request.path.c_str());
+  return count;
 }
 
 /// config/rviz/<name>.rviz has the fixed frame "world" and shows `expected_displays` PointCloud2/Marker

@@ -11,11 +11,13 @@
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <unistd.h>
 #include <visualization_msgs/Marker.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <mutex>
 #include <set>
@@ -177,6 +179,9 @@ TEST(ShellDemoLaunch, CloudMarkersCommandsAndForces) {
     EXPECT_GT(inbox.stats.time, time_before);
     EXPECT_LT(inbox.stats.time, time_before + scene.frame_time);
   }
+  // ~save: the deformed surfels as PLY (read back); another extension is refused.
+  EXPECT_EQ(rc::savedPointCount(nh, "shell_sim/save", ".vtu", "supported: .ply .pcd .xyz"),
+            scene.surfels.size());
 
   // ~hold: bad requests are refused and change nothing; holding every node keeps it where it is (the
   // balloon's pressure pushes, nothing moves); reset restores the scene's own (none).

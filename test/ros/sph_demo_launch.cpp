@@ -8,11 +8,13 @@
 #include <relaxed_connectivity/SphStats.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <unistd.h>
 #include <visualization_msgs/Marker.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <mutex>
@@ -140,6 +142,8 @@ TEST(SphDemoLaunch, ParticlesSurfaceAndServices) {
   const double frame_time = scene.frame_time;
   EXPECT_GE(framed.time, stepped.time + frame_time - 1e-12);
   EXPECT_LT(framed.time, stepped.time + frame_time + 2.0 * framed.dt);
+  // ~save: the particles as PLY (read back); another extension is refused.
+  EXPECT_EQ(rc::savedPointCount(nh, "sph_sim/save", ".stl", "supported: .ply .vtp"), framed.particles);
 
   // Reset to t = 0; unknown commands are refused.
   SimulationCommand reset;

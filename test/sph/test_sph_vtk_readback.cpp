@@ -1,12 +1,14 @@
 // The SPH's VTP files (writeSphVtp) read back with VTK's own XML reader, as ParaView does, in both encodings:
 // points, one vertex cell per particle and the point data. Built where VTK (its IOXML module) is found;
-// elsewhere the case skips, saying so.
+// elsewhere the case skips, saying so. writeSphState writes by extension.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "relaxed_connectivity/io/cloud_io.h"
+#include "relaxed_connectivity/io/io_error.h"
 #include "relaxed_connectivity/sph/sph_output.h"
 
 #if defined(RC_HAVE_VTK)
@@ -60,6 +62,23 @@ TEST(SphVtkReadback, VtpFilesReadBackWithVtk) {
     std::filesystem::remove(path);
   }
 #endif
+}
+
+TEST(SphVtkReadback, StateFilesFollowTheirExtension) {
+  // writeSphState (sph_sim's ~save): .ply and .vtp; other extensions are refused naming the supported ones.
+  SphParticles particles;
+  for (int i = 0; i < 10; ++i) particles.add(Vec3(i, 0, 0), Vec3(0, i, 0), 1.0, SphParticleKind::kFluid);
+  const std::string dir = ::testing::TempDir();
+  writeSphState(dir + "sph_state.ply", particles);
+  EXPECT_EQ(readCloud(dir + "sph_state.ply").size(), 10u);
+  writeSphState(dir + "sph_state.vtp", particles);
+  EXPECT_TRUE(std::filesystem::exists(dir + "sph_state.vtp"));
+  try {
+    writeSphState(dir + "sph_state.csv", particles);
+    ADD_FAILURE() << "a .csv state was written";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("supported: .ply .vtp"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
