@@ -127,6 +127,7 @@ SimulationLoopCallbacks FemSimulator::loopCallbacks() {
            std::to_string(simulation_->numNodes()) + " nodes";
   };
   c.publish = [this] { publish(); };
+  c.time = [this] { return simulation_->time(); };
   return c;
 }
 
@@ -162,7 +163,7 @@ std::string FemSimulator::advance(double duration, uint64_t steps) {
 
 void FemSimulator::publish() {
   std::lock_guard<std::mutex> lock(loop_.mutex());
-  const ros::Time stamp = ros::Time::now();
+  const ros::Time stamp = loop_.stamp();
   const std::vector<FemBodyState> bodies = simulation_->bodyStates();
   size_t triangles = 0;
   for (const FemBodyState& body : bodies) triangles += body.mesh->boundaryTriangles().size();

@@ -150,6 +150,7 @@ SimulationLoopCallbacks ShellSimulator::loopCallbacks() {
            std::to_string(simulation_->surfels().size()) + " surfels";
   };
   c.publish = [this] { publish(); };
+  c.time = [this] { return simulation_->solver().time(); };
   return c;
 }
 
@@ -195,7 +196,7 @@ std::string ShellSimulator::advance(int count, bool steps) {
 
 void ShellSimulator::publish() {
   std::lock_guard<std::mutex> lock(loop_.mutex());
-  const ros::Time stamp = ros::Time::now();
+  const ros::Time stamp = loop_.stamp();
   const ShellSolver& solver = simulation_->solver();
   if (surfels_pub_.getNumSubscribers() > 0) {
     SurfelCloud cloud = simulation_->surfels();

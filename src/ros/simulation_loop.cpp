@@ -1,5 +1,8 @@
 #include "relaxed_connectivity/ros/simulation_loop.h"
 
+#include <rosgraph_msgs/Clock.h>
+
+#include <algorithm>
 #include <stdexcept>
 
 #include "relaxed_connectivity/ros/simulation_commands.h"
@@ -9,13 +12,16 @@ namespace rc {
 SimulationLoop::SimulationLoop(std::string name, SimulationLoopCallbacks callbacks)
     : name_(std::move(name)), callbacks_(std::move(callbacks)) {
   if (!callbacks_.tick || !callbacks_.step || !callbacks_.frame || !callbacks_.where || !callbacks_.reset ||
-      !callbacks_.publish)
-    throw std::invalid_argument(name_ + ": SimulationLoop needs tick, step, frame, where, reset and publish");
+      !callbacks_.publish || !callbacks_.time)
+    throw std::invalid_argument(name_ +
+                                ": SimulationLoop needs tick, step, frame, where, reset, publish and time");
 }
 
 void SimulationLoop::start(ros::NodeHandle nh, ros::NodeHandle private_nh, double rate) {
   if (!(rate > 0)) throw std::invalid_argument(name_ + ": rate must be > 0 Hz");
   command_srv_ = private_nh.advertiseService("command", &SimulationLoop::commandCallback, this);
+  private_nh.param("publish_clock", publish_clock_, false);
+  if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
   timer_ = nh.createWallTimer(ros::WallDuration(1.0 / rate), &SimulationLoop::timerCallback, this);
 }
 
@@ -26,11 +32,25 @@ void SimulationLoop::setError(const std::string& error) {
   ROS_ERROR_STREAM(name_ << ": " << error);
 }
 
+ros::Time SimulationLoop::stamp() const {
+  if (!publish_clock_) return ros::Time::now();
+  const double t = callbacks_.ready && !callbacks_.ready() ? 0.0 : callbacks_.time();
+  return ros::Time(std::max(0.0, t));
+}
+
+void SimulationLoop::publishClock() {
+  if (!publish_clock_) return;
+  rosgraph_msgs::Clock clock;
+  clock.clock = stamp();
+  clock_pub_.publish(clock);
+}
+
 void SimulationLoop::timerCallback(const ros::WallTimerEvent&) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!running_ || (callbacks_.ready && !callbacks_.ready())) return;
     setError(callbacks_.tick());
+    publishClock();
   }
   callbacks_.publish();
 }
@@ -73,6 +93,7 @@ void SimulationLoop::command(const relaxed_connectivity::SimulationCommand::Requ
       return {true, callbacks_.reset()};
     };
     dispatchSimulationCommand(request, response, handlers);
+    publishClock();
   }
   callbacks_.publish();
 }

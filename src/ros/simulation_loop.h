@@ -33,8 +33,10 @@ struct SimulationLoopCallbacks {
   std::function<std::string()> where;
   /// Back to the scene's start; returns the message ("reset to t = 0: 8 bodies").
   std::function<std::string()> reset;
-  /// Publishes the state (after a tick and after every command).
+  /// Publishes the state (after a tick and after every command); stamps with SimulationLoop::stamp().
   std::function<void()> publish;
+  /// Simulated seconds since the scene's start (for ~publish_clock and stamp()); called with the mutex held.
+  std::function<double()> time;
   /// true: after an error the state is kept for inspection and start / step refuse until a reset (SPH
   /// instability); false: the node has already reset the simulation and start / step clear the error.
   bool error_needs_reset = false;
@@ -45,8 +47,15 @@ class SimulationLoop {
   /// `name`: the node's name in log lines.
   SimulationLoop(std::string name, SimulationLoopCallbacks callbacks);
 
-  /// Advertises ~command on `private_nh` and starts the wall timer at `rate` ticks per second (> 0).
+  /// Advertises ~command on `private_nh` and starts the wall timer at `rate` ticks per second (> 0). With the
+  /// private parameter publish_clock (default false) the simulated time goes out on /clock
+  /// (rosgraph_msgs/Clock) after every tick and command, and stamp() gives it, so a recorded simulation
+  /// replays in simulated time.
   void start(ros::NodeHandle nh, ros::NodeHandle private_nh, double rate);
+  /// The stamp of published messages: the simulated time with publish_clock, else the ROS time now. Call
+  /// with the mutex held.
+  ros::Time stamp() const;
+  bool publishesClock() const { return publish_clock_; }
 
   std::mutex& mutex() { return mutex_; }
   bool running() const { return running_; }
@@ -70,7 +79,10 @@ class SimulationLoop {
   std::mutex mutex_;
   bool running_ = false;
   std::string error_;
+  void publishClock();  // with the mutex held
   ros::ServiceServer command_srv_;
+  bool publish_clock_ = false;
+  ros::Publisher clock_pub_;
   ros::WallTimer timer_;
 };
 

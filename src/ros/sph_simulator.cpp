@@ -86,6 +86,7 @@ SimulationLoopCallbacks SphSimulator::loopCallbacks() {
     return std::string("reset to t = 0");
   };
   c.publish = [this] { publish(); };
+  c.time = [this] { return simulation_->solver().time(); };
   c.error_needs_reset = true;  // the unstable state stays for inspection
   return c;
 }
@@ -138,7 +139,7 @@ std::string SphSimulator::advance(double duration, uint64_t steps) {
 void SphSimulator::publish() {
   std::lock_guard<std::mutex> lock(loop_.mutex());
   if (!simulation_) return;
-  const ros::Time stamp = ros::Time::now();
+  const ros::Time stamp = loop_.stamp();
   const SphParticles& particles = simulation_->solver().particles();
   if (particles_pub_.getNumSubscribers() > 0) {
     const SphThermalModel* thermal = simulation_->thermal().get();

@@ -7,9 +7,11 @@
 #include <relaxed_connectivity/FemProbes.h>
 #include <relaxed_connectivity/SimulationCommand.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
 
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
@@ -143,6 +145,9 @@ TEST(FemProbes, ALoadByServiceHoldsTheBlockAgainstGravity) {
 TEST(FemProbes, FrameAdvancesStepsPerFrameAndStepOneSolverStep) {
   // dropped_block_probes: dt 0.01, 3 steps per frame: "frame 2" ends at t = 0.06, then "step 1" at 0.07.
   ros::NodeHandle nh;
+  std::atomic<double> clock{-1.0};
+  ros::Subscriber clock_sub = nh.subscribe<rosgraph_msgs::Clock>(
+      "/clock", 10, [&](const rosgraph_msgs::ClockConstPtr& m) { clock = m->clock.toSec(); });
   ProbeInbox inbox(nh);
   ros::ServiceClient command = pausedAtStart(nh);
   inbox.waitForPublisher();
@@ -158,7 +163,13 @@ TEST(FemProbes, FrameAdvancesStepsPerFrameAndStepOneSolverStep) {
   {
     std::lock_guard<std::mutex> lock(inbox.mutex);
     EXPECT_NEAR(inbox.received.back()->time, 0.07, 1e-12);
+    // publish_clock (fem_probes.test): the messages carry the simulated time as their stamp ...
+    EXPECT_NEAR(inbox.received.back()->header.stamp.toSec(), 0.07, 1e-9);
   }
+  // ... and /clock follows it.
+  const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(10.0);
+  while (!(clock.load() > 0.065) && ros::WallTime::now() < end) ros::WallDuration(0.01).sleep();
+  EXPECT_NEAR(clock.load(), 0.07, 1e-9);
   // ~save writes the current state (the nodes as PLY: 45 of them); another extension is refused.
   EXPECT_EQ(rc::savedPointCount(nh, "fem_sim/save", ".stl", "supported: .vtu .obj"), 45u);
   relaxed_connectivity::SimulationCommand unknown;
