@@ -1,10 +1,12 @@
 #include "relaxed_connectivity/ros/haptic_driver.h"
 
+#include <diagnostic_msgs/DiagnosticStatus.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <relaxed_connectivity/HapticButtons.h>
 #include <relaxed_connectivity/HapticLoopStats.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -104,6 +106,7 @@ HapticDriver::HapticDriver(ros::NodeHandle nh, ros::NodeHandle private_nh, Hapti
       device_(makeDevice(params_, private_nh_, brush)),
       law_(BrushSkeleton(brush).handleOffsets(), params_.law),
       low_pass_(params_.filter_window, int(std::ceil(params_.filter_window * params_.rate)) + 64),
+      diagnostics_(nh, private_nh, "haptic_driver"),
       ring_(kRingSize),
       loop_(loopOptions(params_, *device_)) {
   pending_contact_.handles.reserve(size_t(law_.handleCount()));
@@ -121,6 +124,10 @@ HapticDriver::HapticDriver(ros::NodeHandle nh, ros::NodeHandle private_nh, Hapti
     pose_sub_ = nh_.subscribe(d + "/pose", 100, &HapticDriver::poseCallback, this, no_delay);
   }
   contact_sub_ = nh_.subscribe("brush_contact", 10, &HapticDriver::contactCallback, this, no_delay);
+  diagnostics_.addTask("force loop",
+                       [this](diagnostic_updater::DiagnosticStatusWrapper& s) { reportLoop(s); });
+  if (pose_sub_) diagnostics_.addInput(pose_sub_.getTopic(), 1.0);
+  diagnostics_.addInput(contact_sub_.getTopic(), 5.0);
 
   geometry_msgs::TransformStamped base;
   base.header.stamp = ros::Time::now();
@@ -182,8 +189,10 @@ void HapticDriver::poseCallback(const geometry_msgs::PoseStampedConstPtr& msg) {
     ++dropped_poses_;
     ROS_WARN_STREAM_THROTTLE(
         1.0, "haptic_driver: dropped pose (" << problem << "), " << dropped_poses_.load() << " so far");
+    diagnostics_.rejected(pose_sub_.getTopic(), problem);
     return;
   }
+  diagnostics_.accepted(pose_sub_.getTopic());
   // Seconds since the first pose: epoch seconds in a double resolve only ~240 ns, 2.4e-4 of a 1 ms pose
   // interval.
   if (stamp_origin_.isZero()) stamp_origin_ = msg->header.stamp;
@@ -212,8 +221,10 @@ void HapticDriver::contactCallback(const relaxed_connectivity::BrushContactConst
     ++dropped_contacts_;
     ROS_WARN_STREAM_THROTTLE(1.0, "haptic_driver: dropped brush contact ("
                                       << problem << "), " << dropped_contacts_.load() << " so far");
+    diagnostics_.rejected(contact_sub_.getTopic(), problem);
     return;
   }
+  diagnostics_.accepted(contact_sub_.getTopic());
   std::lock_guard<std::mutex> lock(contact_mutex_);
   pending_contact_ = c;
   contact_pending_ = true;
@@ -340,6 +351,35 @@ void HapticDriver::publishStats(const TickOutput& last) {
     stats.unpublished_ticks = unpublished_ticks_;
   }
   stats_pub_.publish(stats);
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  last_stats_ = stats;
+}
+
+void HapticDriver::reportLoop(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  const relaxed_connectivity::HapticLoopStats& s = last_stats_;
+  status.add("rate [Hz]", s.rate);
+  status.add("ticks", s.ticks);
+  status.add("missed ticks", s.missed_ticks);
+  status.add("jitter p99 [ms]", 1e3 * s.jitter_p99);
+  status.add("jitter max [ms]", 1e3 * s.jitter_max);
+  status.add("dropped poses", s.dropped_poses);
+  status.add("dropped contacts", s.dropped_contacts);
+  status.add("contact stale", s.contact_stale);
+  const uint64_t missed = s.missed_ticks - std::min(s.missed_ticks, reported_missed_ticks_);
+  reported_missed_ticks_ = s.missed_ticks;
+  const double bound = 0.2 / s.rate;  // a fifth of the period (0.2 ms at 1 kHz)
+  if (s.ticks == 0)
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "starting");
+  else if (missed > 0)
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%llu ticks missed since the last report",
+                    static_cast<unsigned long long>(missed));
+  else if (s.jitter_p99 > bound)
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "jitter p99 %.3f ms above %.3f ms",
+                    1e3 * s.jitter_p99, 1e3 * bound);
+  else
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "%.0f Hz, jitter p99 %.3f ms", s.rate,
+                    1e3 * s.jitter_p99);
 }
 
 }  // namespace rc

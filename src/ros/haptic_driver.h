@@ -7,7 +7,8 @@
 // Publishes   <device>/force_feedback (geometry_msgs/WrenchStamped, N and N m, base_frame, every tick),
 //             <device>/pose and <device>/button (relaxed_connectivity/HapticButtons, on change) for the
 //             simulated devices (replay, marker), <device>/stats (relaxed_connectivity/HapticLoopStats, 1
-//             Hz), the static tf world_frame -> base_frame.
+//             Hz), the static tf world_frame -> base_frame, /diagnostics (the loop's timing, the inputs'
+//             rates and dropped messages).
 // Parameters  (private) device (replay | marker | topic), device_name, brush (preset file, required), stroke
 //             (replay), real_time (replay), rate, filter_window, depth_mode (plane | constant),
 //             stale_timeout, fade_time, add_bristle_force, base_frame, world_frame, base_pose ([x, y, z,
@@ -16,6 +17,7 @@
 
 #include <geometry_msgs/PoseStamped.h>
 #include <relaxed_connectivity/BrushContact.h>
+#include <relaxed_connectivity/HapticLoopStats.h>
 #include <ros/ros.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
@@ -32,6 +34,7 @@
 #include "relaxed_connectivity/paint/force_low_pass.h"
 #include "relaxed_connectivity/paint/haptic_force_law.h"
 #include "relaxed_connectivity/ros/haptic_device.h"
+#include "relaxed_connectivity/ros/node_diagnostics.h"
 
 namespace rc {
 
@@ -88,6 +91,9 @@ class HapticDriver {
   bool tick(uint64_t k, double t);
   void publishLoop();
   void publishStats(const TickOutput& last);
+  // /diagnostics: the force loop's timing of the latest stats window (WARN on missed ticks or a p99 jitter
+  // above a fifth of the period, the target at 1 kHz) and the dropped input counts.
+  void reportLoop(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ros::NodeHandle nh_, private_nh_;
   HapticDriverParams params_;
@@ -109,6 +115,10 @@ class HapticDriver {
   ContactParameters pending_contact_;
   bool contact_pending_ = false;
   std::atomic<uint64_t> dropped_poses_{0}, dropped_contacts_{0};
+  std::mutex stats_mutex_;
+  relaxed_connectivity::HapticLoopStats last_stats_;  // of the latest window (stats_mutex_)
+  uint64_t reported_missed_ticks_ = 0;                // at the previous diagnostics report
+  NodeDiagnostics diagnostics_;
 
   // The ring of tick outputs between the loop and the publisher thread.
   std::mutex ring_mutex_;

@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/ros/simulation_loop.h"
 
+#include <diagnostic_msgs/DiagnosticStatus.h>
 #include <rosgraph_msgs/Clock.h>
 
 #include <algorithm>
@@ -22,6 +23,21 @@ void SimulationLoop::start(ros::NodeHandle nh, ros::NodeHandle private_nh, doubl
   command_srv_ = private_nh.advertiseService("command", &SimulationLoop::commandCallback, this);
   private_nh.param("publish_clock", publish_clock_, false);
   if (publish_clock_) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  diagnostics_ = std::make_unique<NodeDiagnostics>(nh, private_nh, name_);
+  diagnostics_->addTask("simulation", [this](diagnostic_updater::DiagnosticStatusWrapper& status) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (callbacks_.ready && !callbacks_.ready()) {
+      status.summary(diagnostic_msgs::DiagnosticStatus::OK, callbacks_.not_ready_message);
+      return;
+    }
+    status.add("where", callbacks_.where());
+    status.add("running", running_);
+    if (!error_.empty())
+      status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, error_);
+    else
+      status.summary(diagnostic_msgs::DiagnosticStatus::OK,
+                     (running_ ? "running, " : "paused, ") + callbacks_.where());
+  });
   timer_ = nh.createWallTimer(ros::WallDuration(1.0 / rate), &SimulationLoop::timerCallback, this);
 }
 

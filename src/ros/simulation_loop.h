@@ -9,10 +9,12 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <string>
 
 #include "relaxed_connectivity/SimulationCommand.h"
+#include "relaxed_connectivity/ros/node_diagnostics.h"
 
 namespace rc {
 
@@ -50,7 +52,8 @@ class SimulationLoop {
   /// Advertises ~command on `private_nh` and starts the wall timer at `rate` ticks per second (> 0). With the
   /// private parameter publish_clock (default false) the simulated time goes out on /clock
   /// (rosgraph_msgs/Clock) after every tick and command, and stamp() gives it, so a recorded simulation
-  /// replays in simulated time.
+  /// replays in simulated time. Reports the simulation on /diagnostics (running or paused and where; ERROR
+  /// with the error that stopped a run).
   void start(ros::NodeHandle nh, ros::NodeHandle private_nh, double rate);
   /// The stamp of published messages: the simulated time with publish_clock, else the ROS time now. Call
   /// with the mutex held.
@@ -83,6 +86,7 @@ class SimulationLoop {
   ros::ServiceServer command_srv_;
   bool publish_clock_ = false;
   ros::Publisher clock_pub_;
+  std::unique_ptr<NodeDiagnostics> diagnostics_;
   ros::WallTimer timer_;
 };
 

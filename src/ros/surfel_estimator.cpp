@@ -62,6 +62,7 @@ SurfelEstimator::SurfelEstimator(ros::NodeHandle nh, ros::NodeHandle private_nh)
       private_nh_(private_nh),
       params_(readSurfelEstimatorParams(private_nh)),
       tf_listener_(tf_buffer_, nh),
+      diagnostics_(nh, private_nh, "surfel_estimator"),
       accumulator_(params_.accumulation_voxel, static_cast<size_t>(params_.max_accumulated_points)) {
   surfels_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("surfels", 2);
   accumulated_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("surfels_accumulated", 1, /*latch=*/true);
@@ -69,6 +70,7 @@ SurfelEstimator::SurfelEstimator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   reset_srv_ = private_nh_.advertiseService("reset_accumulation", &SurfelEstimator::resetAccumulation, this);
   save_srv_ = private_nh_.advertiseService("save", &SurfelEstimator::save, this);
   cloud_sub_ = nh_.subscribe("points", 2, &SurfelEstimator::cloudCallback, this);
+  diagnostics_.addInput(cloud_sub_.getTopic(), 5.0);
   ROS_INFO_STREAM("surfel_estimator: listening on " << cloud_sub_.getTopic() << ", fixed frame '"
                                                     << params_.fixed_frame << "', accumulation voxel "
                                                     << params_.accumulation_voxel << " m, MLS smoothing "
@@ -85,6 +87,7 @@ void SurfelEstimator::reject(const sensor_msgs::PointCloud2& msg, const std::str
     ROS_WARN_STREAM("surfel_estimator: " << text);
   ++rejected_messages_;
   last_error_ = text;
+  diagnostics_.rejected(cloud_sub_.getTopic(), reason);
   stats.output_surfels = 0;
 }
 
@@ -133,6 +136,7 @@ void SurfelEstimator::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg)
 
     accumulated_dirty_ = accumulator_.add(surfels) > 0 || accumulated_dirty_;
     publishAccumulated(ros::WallTime::now());
+    diagnostics_.accepted(cloud_sub_.getTopic());
   } catch (const std::invalid_argument& e) {  // data problems: empty, NaN-only, too few points
     reject(*msg, e.what(), false, stats);
   } catch (const std::exception& e) {  // malformed message, unknown frame, core failures

@@ -3,7 +3,8 @@
 //
 // Subscribes  points (sensor_msgs/PointCloud2, any frame with a tf2 path to fixed_frame)
 // Publishes   surfels (PointCloud2, pcl::PointSurfel layout, fixed_frame), surfels_accumulated (latched),
-//             ~stats (relaxed_connectivity/SurfelStats, one per input message, accepted or rejected)
+//             ~stats (relaxed_connectivity/SurfelStats, one per input message, accepted or rejected),
+//             /diagnostics (the input's rate, accepted and rejected messages, NodeDiagnostics)
 // Services    ~reset_accumulation (relaxed_connectivity/ResetAccumulation),
 //             ~save (relaxed_connectivity/SaveSurfels: accumulated surfels to .ply/.pcd/.xyz)
 // Parameters  (private) fixed_frame, tf_timeout, normal_k, radius_k, radius_scale, max_radius, min_points,
@@ -23,6 +24,7 @@
 #include <mutex>
 #include <string>
 
+#include "relaxed_connectivity/ros/node_diagnostics.h"
 #include "relaxed_connectivity/scan/surfel_accumulator.h"
 #include "relaxed_connectivity/scan/surfel_estimation_pipeline.h"
 
@@ -73,6 +75,7 @@ class SurfelEstimator {
   ros::Subscriber cloud_sub_;
   ros::Publisher surfels_pub_, accumulated_pub_, stats_pub_;
   ros::ServiceServer reset_srv_, save_srv_;
+  NodeDiagnostics diagnostics_;
 
   std::mutex mutex_;  // guards everything below (nodelet managers call back from several threads)
   SurfelAccumulator accumulator_;

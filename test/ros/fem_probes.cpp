@@ -1,6 +1,7 @@
 // fem_sim's ~probes (relaxed_connectivity/FemProbes) for config/fem/dropped_block_probes.yaml: the probe
 // names and node counts of the scene, and before the block lands (t < 0.4 s) the exact implicit Euler free
 // fall of its mass-weighted mean displacement and momentum; ~load and ~hold change the run as they say.
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/FemHold.h>
 #include <relaxed_connectivity/FemLoad.h>
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include "launch_test_support.h"
@@ -170,6 +172,25 @@ TEST(FemProbes, FrameAdvancesStepsPerFrameAndStepOneSolverStep) {
   const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(10.0);
   while (!(clock.load() > 0.065) && ros::WallTime::now() < end) ros::WallDuration(0.01).sleep();
   EXPECT_NEAR(clock.load(), 0.07, 1e-9);
+  // /diagnostics: the simulation paused where the step left it.
+  std::mutex diagnostics_mutex;
+  std::string simulation_status;
+  ros::Subscriber diagnostics_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
+        for (const auto& status : m->status)
+          if (status.name == "fem_sim: simulation") {
+            std::lock_guard<std::mutex> lock(diagnostics_mutex);
+            simulation_status = status.message;
+          }
+      });
+  const ros::WallTime diagnostics_end = ros::WallTime::now() + ros::WallDuration(5.0);
+  auto statusSoFar = [&] {
+    std::lock_guard<std::mutex> lock(diagnostics_mutex);
+    return simulation_status;
+  };
+  while (statusSoFar().rfind("paused, step 7,", 0) != 0 && ros::WallTime::now() < diagnostics_end)
+    ros::WallDuration(0.02).sleep();
+  EXPECT_EQ(statusSoFar().rfind("paused, step 7,", 0), 0u) << statusSoFar();
   // ~save writes the current state (the nodes as PLY: 45 of them); another extension is refused.
   EXPECT_EQ(rc::savedPointCount(nh, "fem_sim/save", ".stl", "supported: .vtu .obj"), 45u);
   relaxed_connectivity::SimulationCommand unknown;

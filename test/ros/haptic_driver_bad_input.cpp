@@ -3,6 +3,7 @@
 // (no step between two force messages larger than F0 * (stamp difference) / fade_time * (1 + g / T): the fade
 // is linear, and the 1/60 s box filter over held ticks steepens it by at most the longest tick gap g over T),
 // and the loop keeps publishing.
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <gtest/gtest.h>
@@ -11,6 +12,8 @@
 #include <ros/ros.h>
 
 #include <cmath>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "launch_test_support.h"
@@ -54,6 +57,11 @@ TEST(HapticDriverBadInput, DropsCountsFadesAndKeepsPublishing) {
       "haptic/force_feedback", 10000, [&](const geometry_msgs::WrenchStampedConstPtr& m) {
         forces.push_back({m->header.stamp.toSec(), m->wrench.force.z});
       });
+  std::map<std::string, diagnostic_msgs::DiagnosticStatus> diagnostics;  // latest per status name
+  ros::Subscriber diagnostics_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 100, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
+        for (const auto& status : m->status) diagnostics[status.name] = status;
+      });
   std::vector<relaxed_connectivity::HapticLoopStats> stats;
   ros::Subscriber stats_sub = nh.subscribe<relaxed_connectivity::HapticLoopStats>(
       "haptic/stats", 100,
@@ -84,6 +92,26 @@ TEST(HapticDriverBadInput, DropsCountsFadesAndKeepsPublishing) {
   EXPECT_EQ(stats.back().dropped_poses, 2u);
   EXPECT_EQ(stats.back().dropped_contacts, 2u);
   EXPECT_FALSE(stats.back().contact_stale);
+  // /diagnostics: the loop's timing with its counts, and each input with its rejections.
+  ASSERT_TRUE(waitFor(
+      [&] {
+        return diagnostics.count("haptic_driver: force loop") > 0 &&
+               diagnostics["haptic_driver: force loop"].values.size() >= 8;
+      },
+      5.0));
+  const diagnostic_msgs::DiagnosticStatus& loop = diagnostics["haptic_driver: force loop"];
+  std::map<std::string, std::string> values;
+  for (const auto& kv : loop.values) values[kv.key] = kv.value;
+  EXPECT_EQ(values["rate [Hz]"], "1000");
+  EXPECT_EQ(values["dropped poses"], "2");
+  EXPECT_EQ(values["dropped contacts"], "2");
+  EXPECT_TRUE(values.count("jitter p99 [ms]"));
+  EXPECT_LE(loop.level, diagnostic_msgs::DiagnosticStatus::WARN);  // timing warnings depend on the machine
+  ASSERT_TRUE(diagnostics.count("haptic_driver: input /brush_contact"));
+  std::string contact_rejected;
+  for (const auto& kv : diagnostics["haptic_driver: input /brush_contact"].values)
+    if (kv.key == "rejected") contact_rejected = kv.value;
+  EXPECT_EQ(contact_rejected, "2");
   EXPECT_NEAR(forces.back().fz, full, 1e-9);
 
   // Stale: no more contacts. The force fades to exactly zero, never jumping.

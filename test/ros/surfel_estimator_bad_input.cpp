@@ -1,4 +1,5 @@
 // surfel_estimator must reject bad clouds with a named reason, keep its accumulated surfels and keep running.
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/ResetAccumulation.h>
@@ -12,6 +13,9 @@
 #include <cstring>
 #include <limits>
 #include <mutex>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
@@ -32,6 +36,14 @@ class BadInput : public ::testing::Test {
       std::lock_guard<std::mutex> lock(mutex_);
       surfels_.push_back(m);
     });
+    diagnostics_sub_ =
+        nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 50, [this](const auto& m) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          for (const auto& status : m->status) {
+            seen_names_.insert(status.name);
+            if (status.name == "surfel_estimator: input /points") input_status_.push_back(status);
+          }
+        });
     // The sensor frame: 1 m, 2 m, 3 m from the world origin, not rotated.
     geometry_msgs::TransformStamped tf;
     tf.header.stamp = ros::Time::now();
@@ -51,6 +63,35 @@ class BadInput : public ::testing::Test {
     }
     ASSERT_GT(pub_.getNumSubscribers(), 0u) << "surfel_estimator is not running";
     ros::WallDuration(0.5).sleep();  // let the estimator's tf listener receive the static transform
+  }
+
+  /// Waits (spinning, up to 5 s) for a /diagnostics status of the estimator's input at `level`; returns it
+  /// (an empty status with a failure after the wait).
+  diagnostic_msgs::DiagnosticStatus waitForInputStatus(uint8_t level) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(5.0);
+    while (ros::WallTime::now() < end) {
+      ros::spinOnce();
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (auto it = input_status_.rbegin(); it != input_status_.rend(); ++it)
+          if (it->level == level) {
+            const diagnostic_msgs::DiagnosticStatus found = *it;
+            input_status_.clear();
+            return found;
+          }
+      }
+      ros::WallDuration(0.02).sleep();
+    }
+    std::string names = " (" + std::to_string(diagnostics_sub_.getNumPublishers()) + " publishers)";
+    for (const std::string& name : seen_names_) names += " '" + name + "'";
+    ADD_FAILURE() << "no input status at level " << int(level)
+                  << " on /diagnostics within 5 s; seen:" << names;
+    return {};
+  }
+  static std::string value(const diagnostic_msgs::DiagnosticStatus& status, const std::string& key) {
+    for (const auto& kv : status.values)
+      if (kv.key == key) return kv.value;
+    return "(missing)";
   }
 
   /// Publishes `msg` and waits for the stats message it causes.
@@ -90,7 +131,9 @@ class BadInput : public ::testing::Test {
   std::vector<SurfelStats> stats_;
   std::vector<sensor_msgs::PointCloud2ConstPtr> surfels_;
   ros::Publisher pub_;
-  ros::Subscriber stats_sub_, surfels_sub_;
+  ros::Subscriber stats_sub_, surfels_sub_, diagnostics_sub_;
+  std::vector<diagnostic_msgs::DiagnosticStatus> input_status_;
+  std::set<std::string> seen_names_;
   tf2_ros::StaticTransformBroadcaster tf_broadcaster_;
 };
 
@@ -158,6 +201,12 @@ TEST_F(BadInput, RejectsWithReasonKeepsStateAndRecovers) {
   EXPECT_NE(s.last_error.find("no transform from 'no_such_frame' to 'world'"), std::string::npos)
       << s.last_error;
   EXPECT_EQ(s.accumulated_surfels, 900u);
+  // /diagnostics reports the input with a warning naming the last rejection and the counts.
+  const diagnostic_msgs::DiagnosticStatus warned =
+      waitForInputStatus(diagnostic_msgs::DiagnosticStatus::WARN);
+  EXPECT_NE(warned.message.find("rejected"), std::string::npos) << warned.message;
+  EXPECT_NE(warned.message.find("no transform"), std::string::npos) << warned.message;
+  EXPECT_EQ(value(warned, "rejected"), "4");
 
   // 6. Still alive: a good cloud is processed; the same surfaces fall into the same voxels.
   s = send(planeCloud("test_sensor"));
@@ -169,6 +218,9 @@ TEST_F(BadInput, RejectsWithReasonKeepsStateAndRecovers) {
     std::lock_guard<std::mutex> lock(mutex_);
     EXPECT_EQ(surfels_.size(), 2u);
   }
+  // Without new rejections the input's status is OK again.
+  const diagnostic_msgs::DiagnosticStatus ok = waitForInputStatus(diagnostic_msgs::DiagnosticStatus::OK);
+  EXPECT_EQ(value(ok, "accepted"), "2");
 
   // 7. Reset returns how many were dropped.
   ros::NodeHandle nh;
