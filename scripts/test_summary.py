@@ -6,7 +6,8 @@ Usage: test_summary.py [--ctest-junit FILE --gtest-dir DIR] [--rostest-dir DIR] 
 --ctest-junit: ctest --output-junit FILE (one entry per registered test program, with its exit status);
 --gtest-dir:   the folder GTEST_OUTPUT=xml:DIR/ filled (one file per gtest program, one entry per case);
 --rostest-dir: catkin's test_results folder (rosunit-*.xml: the cases of each rostest's gtest node;
-               rostest-*.xml: one wrapper entry per .test file, failed when the launch or the node failed);
+               rostest-*.xml: one wrapper entry per .test file, failed when the launch or the node failed;
+               gtest-*.xml: the catkin gtests that need no master);
 --validation-junit: scripts/validate --junit FILE (one case per benchmark, resolution and quantity; a missing file
                counts as one failed case).
 
@@ -106,7 +107,19 @@ def ros_tally(result_dir):
         if (wrapper_failed or not cases) and not any(state == "failed" for _, state, _ in cases):
             msg = next((why for _, state, why in wrapper_cases if state == "failed"), "")
             tally.add(name + ".test", "failed", msg or "no test cases ran")
-    return tally, len(wrappers)
+    # catkin_add_gtest programs (no master, test/ros/nomaster): gtest-<name>.xml, or MISSING-gtest-<name>.xml
+    # (one failed case) when the program produced no results.
+    programs = sorted(glob.glob(os.path.join(result_dir, "**", "gtest-*.xml"), recursive=True) +
+                      glob.glob(os.path.join(result_dir, "**", "MISSING-gtest-*.xml"), recursive=True))
+    for program in programs:
+        base = os.path.basename(program)
+        name = base[base.index("gtest-") + len("gtest-"):-len(".xml")]
+        cases = gtest_cases(program)
+        for case, state, why in cases:
+            tally.add("%s: %s" % (name, case), state, why)
+        if not cases:
+            tally.add(name, "failed", "no test cases ran")
+    return tally, (len(wrappers), len(programs))
 
 
 def validation_tally(path):
@@ -134,8 +147,8 @@ def main():
         tally, programs = core_tally(args.ctest_junit, args.gtest_dir or "")
         tallies.append((tally, "%d programs" % programs))
     if args.rostest_dir:
-        tally, launches = ros_tally(args.rostest_dir)
-        tallies.append((tally, "%d launch files" % launches))
+        tally, (launches, programs) = ros_tally(args.rostest_dir)
+        tallies.append((tally, "%d launch files and %d gtest programs without a master" % (launches, programs)))
     if args.validation_junit:
         tally, quantities = validation_tally(args.validation_junit)
         tallies.append((tally, "%d quantities" % quantities))
