@@ -23,8 +23,8 @@ rc_build_core() {
 # rc_build_core must have built first): build/ros, devel space in build/ros/devel (RC_TARGETS: only these targets).
 rc_build_ros() {
   cmake -S "$RC_ROOT" -B "$RC_ROOT/build/ros" -DRC_WITH_ROS=ON -DCMAKE_BUILD_TYPE=Release \
-    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DRC_CORE_BUILD_DIR="$RC_ROOT/build/core" "${rc_launcher[@]}" "$@" \
-    >/dev/null
+    -DPYTHON_EXECUTABLE=/usr/bin/python3 -DRC_CORE_BUILD_DIR="$RC_ROOT/build/core" \
+    -DCMAKE_INSTALL_PREFIX="$RC_ROOT/build/ros_install" "${rc_launcher[@]}" "$@" >/dev/null
   cmake --build "$RC_ROOT/build/ros" -j "$RC_JOBS" ${RC_TARGETS:+--target $RC_TARGETS}
 }
 

@@ -2,6 +2,7 @@
 """Counts test cases (not programs) from JUnit XML results and prints one summary line.
 
 Usage: test_summary.py [--ctest-junit FILE --gtest-dir DIR] [--rostest-dir DIR] [--validation-junit FILE]
+                       [--install-junit FILE]
 
 --ctest-junit: ctest --output-junit FILE (one entry per registered test program, with its exit status);
 --gtest-dir:   the folder GTEST_OUTPUT=xml:DIR/ filled (one file per gtest program, one entry per case);
@@ -122,10 +123,11 @@ def ros_tally(result_dir):
     return tally, (len(wrappers), len(programs))
 
 
-def validation_tally(path):
-    tally = Tally("validation (scripts/validate --quick)")
+def junit_tally(path, name, program):
+    """The cases of a JUnit file a script wrote (a missing file is one failed case)."""
+    tally = Tally(name)
     if not os.path.exists(path):
-        tally.add("scripts/validate", "failed", "no results (%s)" % path)
+        tally.add(program, "failed", "no results (%s)" % path)
         return tally, 0
     cases = gtest_cases(path)
     for case, state, why in cases:
@@ -139,6 +141,7 @@ def main():
     parser.add_argument("--gtest-dir")
     parser.add_argument("--rostest-dir")
     parser.add_argument("--validation-junit")
+    parser.add_argument("--install-junit")
     parser.add_argument("--expect-shared-data", action="store_true",
                         help="a case skipped for missing ../shared/data counts as failed (CI has the data)")
     args = parser.parse_args()
@@ -150,8 +153,13 @@ def main():
         tally, (launches, programs) = ros_tally(args.rostest_dir)
         tallies.append((tally, "%d launch files and %d gtest programs without a master" % (launches, programs)))
     if args.validation_junit:
-        tally, quantities = validation_tally(args.validation_junit)
+        tally, quantities = junit_tally(args.validation_junit, "validation (scripts/validate --quick)",
+                                        "scripts/validate")
         tallies.append((tally, "%d quantities" % quantities))
+    if args.install_junit:
+        tally, checks = junit_tally(args.install_junit, "install space (scripts/check_install)",
+                                    "scripts/check_install")
+        tallies.append((tally, "%d checks" % checks))
     for tally, unit in tallies:
         if args.expect_shared_data:
             missing = [(case, why) for case, why in tally.skipped if SHARED_DATA_MARK in why]
