@@ -16,8 +16,7 @@ void SurfelEstimatorParams::validate() const {
   if (fixed_frame.empty()) fail("fixed_frame must not be empty");
   if (!fixed_frame.empty() && fixed_frame[0] == '/')
     fail("fixed_frame '" + fixed_frame + "' must not start with '/'");
-  if (!(tf_timeout >= 0) || !std::isfinite(tf_timeout))
-    fail("tf_timeout must be >= 0 seconds (got " + std::to_string(tf_timeout) + ")");
+  if (tf_queue_size < 1) fail("tf_queue_size must be >= 1 (got " + std::to_string(tf_queue_size) + ")");
   if (!(accumulation_voxel > 0) || !std::isfinite(accumulation_voxel))
     fail("accumulation_voxel must be a positive length (got " + std::to_string(accumulation_voxel) + ")");
   if (max_accumulated_points < 1)
@@ -31,7 +30,7 @@ void SurfelEstimatorParams::validate() const {
 SurfelEstimatorParams readSurfelEstimatorParams(const ros::NodeHandle& pnh) {
   SurfelEstimatorParams p;
   pnh.param("fixed_frame", p.fixed_frame, p.fixed_frame);
-  pnh.param("tf_timeout", p.tf_timeout, p.tf_timeout);
+  pnh.param("tf_queue_size", p.tf_queue_size, p.tf_queue_size);
   pnh.param("accumulation_voxel", p.accumulation_voxel, p.accumulation_voxel);
   pnh.param("max_accumulated_points", p.max_accumulated_points, p.max_accumulated_points);
   pnh.param("accumulated_publish_period", p.accumulated_publish_period, p.accumulated_publish_period);
@@ -69,9 +68,17 @@ SurfelEstimator::SurfelEstimator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::SurfelStats>("stats", 10);
   reset_srv_ = private_nh_.advertiseService("reset_accumulation", &SurfelEstimator::resetAccumulation, this);
   save_srv_ = private_nh_.advertiseService("save", &SurfelEstimator::save, this);
-  cloud_sub_ = nh_.subscribe("points", 2, &SurfelEstimator::cloudCallback, this);
-  diagnostics_.addInput(cloud_sub_.getTopic(), 5.0);
-  ROS_INFO_STREAM("surfel_estimator: listening on " << cloud_sub_.getTopic() << ", fixed frame '"
+  // Clouds wait for the transform of their stamp in a tf2_ros::MessageFilter (no lookup blocks a callback).
+  cloud_sub_.subscribe(nh_, "points", 2);
+  tf_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
+      cloud_sub_, tf_buffer_, params_.fixed_frame, uint32_t(params_.tf_queue_size), nh_);
+  tf_filter_->registerCallback(&SurfelEstimator::cloudCallback, this);
+  tf_filter_->registerFailureCallback(
+      [this](const sensor_msgs::PointCloud2ConstPtr& msg,
+             tf2_ros::filter_failure_reasons::FilterFailureReason why) { transformFailed(msg, why); });
+  input_topic_ = cloud_sub_.getTopic();
+  diagnostics_.addInput(input_topic_, 5.0);
+  ROS_INFO_STREAM("surfel_estimator: listening on " << input_topic_ << ", fixed frame '"
                                                     << params_.fixed_frame << "', accumulation voxel "
                                                     << params_.accumulation_voxel << " m, MLS smoothing "
                                                     << (params_.estimation.mls_smoothing ? "on" : "off"));
@@ -87,8 +94,34 @@ void SurfelEstimator::reject(const sensor_msgs::PointCloud2& msg, const std::str
     ROS_WARN_STREAM("surfel_estimator: " << text);
   ++rejected_messages_;
   last_error_ = text;
-  diagnostics_.rejected(cloud_sub_.getTopic(), reason);
+  diagnostics_.rejected(input_topic_, reason);
   stats.output_surfels = 0;
+}
+
+void SurfelEstimator::transformFailed(const sensor_msgs::PointCloud2ConstPtr& msg,
+                                      tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+  std::string reason;
+  switch (why) {
+    case tf2_ros::filter_failure_reasons::EmptyFrameID:
+      reason = "header.frame_id is empty";
+      break;
+    case tf2_ros::filter_failure_reasons::OutTheBack:
+      reason = "no transform from '" + msg->header.frame_id + "' to '" + params_.fixed_frame +
+               "': the stamp is older than the transforms kept";
+      break;
+    default:
+      reason = "no transform from '" + msg->header.frame_id + "' to '" + params_.fixed_frame + "' while " +
+               std::to_string(params_.tf_queue_size) + " newer clouds arrived (tf2_ros::MessageFilter queue)";
+  }
+  relaxed_connectivity::SurfelStats stats;
+  stats.header = msg->header;
+  stats.input_points = msg->width * msg->height;
+  std::lock_guard<std::mutex> lock(mutex_);
+  reject(*msg, reason, true, stats);
+  stats.accumulated_surfels = static_cast<uint32_t>(accumulator_.size());
+  stats.rejected_messages = rejected_messages_;
+  stats.last_error = last_error_;
+  stats_pub_.publish(stats);
 }
 
 void SurfelEstimator::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
@@ -116,8 +149,9 @@ void SurfelEstimator::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg)
 
     Eigen::Isometry3d sensor_to_fixed;
     try {
-      const auto tf = tf_buffer_.lookupTransform(params_.fixed_frame, msg->header.frame_id, msg->header.stamp,
-                                                 ros::Duration(params_.tf_timeout));
+      // (the message filter has seen it transformable)
+      const auto tf =
+          tf_buffer_.lookupTransform(params_.fixed_frame, msg->header.frame_id, msg->header.stamp);
       sensor_to_fixed = tf2::transformToEigen(tf);
     } catch (const tf2::TransformException& e) {
       throw std::runtime_error("no transform from '" + msg->header.frame_id + "' to '" + params_.fixed_frame +
@@ -136,7 +170,7 @@ void SurfelEstimator::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& msg)
 
     accumulated_dirty_ = accumulator_.add(surfels) > 0 || accumulated_dirty_;
     publishAccumulated(ros::WallTime::now());
-    diagnostics_.accepted(cloud_sub_.getTopic());
+    diagnostics_.accepted(input_topic_);
   } catch (const std::invalid_argument& e) {  // data problems: empty, NaN-only, too few points
     reject(*msg, e.what(), false, stats);
   } catch (const std::exception& e) {  // malformed message, unknown frame, core failures

@@ -7,17 +7,19 @@
 //             /diagnostics (the input's rate, accepted and rejected messages, NodeDiagnostics)
 // Services    ~reset_accumulation (relaxed_connectivity/ResetAccumulation),
 //             ~save (relaxed_connectivity/SaveSurfels: accumulated surfels to .ply/.pcd/.xyz)
-// Parameters  (private) fixed_frame, tf_timeout, normal_k, radius_k, radius_scale, max_radius, min_points,
+// Parameters  (private) fixed_frame, tf_queue_size, normal_k, radius_k, radius_scale, max_radius, min_points,
 //             mls_smoothing, mls_support_radius, mls_fit, accumulation_voxel, max_accumulated_points,
 //             accumulated_publish_period, save_path (written on shutdown); see config/scan.yaml.
 #pragma once
 
+#include <message_filters/subscriber.h>
 #include <relaxed_connectivity/ResetAccumulation.h>
 #include <relaxed_connectivity/SaveSurfels.h>
 #include <relaxed_connectivity/SurfelStats.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
@@ -32,7 +34,9 @@ namespace rc {
 
 struct SurfelEstimatorParams {
   std::string fixed_frame = "world";
-  double tf_timeout = 0.2;                  ///< seconds to wait for the transform of a cloud's stamp
+  /// Clouds waiting for the transform of their stamp (tf2_ros::MessageFilter); one pushed out of this queue
+  /// by newer clouds, still without its transform, is rejected naming its frame.
+  int tf_queue_size = 10;
   double accumulation_voxel = 0.005;        ///< metres; one accumulated surfel per voxel
   int max_accumulated_points = 1000000;     ///< cap of the accumulated cloud
   double accumulated_publish_period = 0.5;  ///< seconds between publications of the accumulated cloud
@@ -66,13 +70,16 @@ class SurfelEstimator {
  private:
   void reject(const sensor_msgs::PointCloud2& msg, const std::string& reason, bool is_error,
               relaxed_connectivity::SurfelStats& stats);
+  // A cloud the message filter gave up on (empty frame, no transform in time): rejected with its reason.
+  void transformFailed(const sensor_msgs::PointCloud2ConstPtr& msg,
+                       tf2_ros::filter_failure_reasons::FilterFailureReason why);
   void publishAccumulated(const ros::WallTime& now);
 
   ros::NodeHandle nh_, private_nh_;
   SurfelEstimatorParams params_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  ros::Subscriber cloud_sub_;
+  std::string input_topic_;
   ros::Publisher surfels_pub_, accumulated_pub_, stats_pub_;
   ros::ServiceServer reset_srv_, save_srv_;
   NodeDiagnostics diagnostics_;
@@ -83,6 +90,10 @@ class SurfelEstimator {
   std::string last_error_;
   ros::WallTime last_accumulated_publish_;
   bool accumulated_dirty_ = false;
+
+  // The input: clouds through a tf2_ros::MessageFilter to the fixed frame (last: stopped first).
+  message_filters::Subscriber<sensor_msgs::PointCloud2> cloud_sub_;
+  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>> tf_filter_;
 };
 
 }  // namespace rc
