@@ -48,8 +48,7 @@ void CsgRendererParams::validate() const {
     fail("no input: use_surfels_topic is false and patch_topics is empty");
   for (size_t i = 0; i < patch_topics.size(); ++i)
     if (patch_topics[i].empty()) fail("patch_topics[" + std::to_string(i) + "] is empty");
-  if (!(tf_timeout >= 0) || !std::isfinite(tf_timeout))
-    fail("tf_timeout must be >= 0 seconds (got " + std::to_string(tf_timeout) + ")");
+  if (tf_queue_size < 1) fail("tf_queue_size must be >= 1 (got " + std::to_string(tf_queue_size) + ")");
   if (!finitePositive(max_rate)) fail("max_rate must be > 0 Hz (got " + std::to_string(max_rate) + ")");
   if (!(pose_tolerance >= 0) || !std::isfinite(pose_tolerance))
     fail("pose_tolerance must be >= 0 (got " + std::to_string(pose_tolerance) + ")");
@@ -111,7 +110,7 @@ CsgRendererParams readCsgRendererParams(const ros::NodeHandle& pnh) {
   }
   pnh.param("patch_topics", p.patch_topics, p.patch_topics);
   pnh.param("use_surfels_topic", p.use_surfels_topic, p.use_surfels_topic);
-  pnh.param("tf_timeout", p.tf_timeout, p.tf_timeout);
+  pnh.param("tf_queue_size", p.tf_queue_size, p.tf_queue_size);
   pnh.param("max_rate", p.max_rate, p.max_rate);
   pnh.param("pose_tolerance", p.pose_tolerance, p.pose_tolerance);
   pnh.param("partner_method", p.partner_method, p.partner_method);
@@ -153,14 +152,31 @@ CsgRenderer::CsgRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
   info_pub_ = private_nh_.advertise<sensor_msgs::CameraInfo>("camera_info", 1, /*latch=*/true);
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::CsgRenderStats>("stats", 10);
   set_tree_srv_ = private_nh_.advertiseService("set_csg_tree", &CsgRenderer::setCsgTree, this);
-  if (params_.use_surfels_topic)
-    cloud_subs_.push_back(nh_.subscribe("surfels", 2, &CsgRenderer::surfelsCallback, this));
-  for (size_t i = 0; i < params_.patch_topics.size(); ++i) {
-    const int patch = int(i);
-    cloud_subs_.push_back(nh_.subscribe<sensor_msgs::PointCloud2>(
-        params_.patch_topics[i], 2,
-        [this, patch](const sensor_msgs::PointCloud2ConstPtr& msg) { patchCallback(patch, msg); }));
-  }
+  // Each input through a tf2_ros::MessageFilter: a cloud comes on once the transform of its stamp is known.
+  auto addInput = [this](const std::string& topic, int patch) {
+    cloud_subs_.push_back(
+        std::make_unique<message_filters::Subscriber<sensor_msgs::PointCloud2>>(nh_, topic, 2));
+    tf_filters_.push_back(std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
+        *cloud_subs_.back(), tf_buffer_, params_.fixed_frame, uint32_t(params_.tf_queue_size), nh_));
+    tf_filters_.back()->registerCallback([this, patch](const sensor_msgs::PointCloud2ConstPtr& msg) {
+      if (patch < 0)
+        surfelsCallback(msg);
+      else
+        patchCallback(patch, msg);
+    });
+    tf_filters_.back()->registerFailureCallback(
+        [this, topic](const sensor_msgs::PointCloud2ConstPtr& msg,
+                      tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+          reject("cloud on " + topic + " (frame '" + msg->header.frame_id + "', stamp " +
+                     std::to_string(msg->header.stamp.toSec()) + ")",
+                 why == tf2_ros::filter_failure_reasons::EmptyFrameID
+                     ? std::string("header.frame_id is empty")
+                     : "no transform from '" + msg->header.frame_id + "' to '" + params_.fixed_frame +
+                           "' in time (tf2_ros::MessageFilter)");
+        });
+  };
+  if (params_.use_surfels_topic) addInput("surfels", -1);
+  for (size_t i = 0; i < params_.patch_topics.size(); ++i) addInput(params_.patch_topics[i], int(i));
   timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.max_rate), &CsgRenderer::timerCallback, this);
   ROS_INFO_STREAM("csg_renderer: " << (params_.use_surfels_topic ? "surfels" : "") << " + "
                                    << params_.patch_topics.size() << " patch topics, camera '"
@@ -203,8 +219,8 @@ void CsgRenderer::acceptCloud(size_t source, int patch, const sensor_msgs::Point
     if (msg->header.frame_id != params_.fixed_frame) {
       geometry_msgs::TransformStamped tf;
       try {
-        tf = tf_buffer_.lookupTransform(params_.fixed_frame, msg->header.frame_id, msg->header.stamp,
-                                        ros::Duration(params_.tf_timeout));
+        // (the message filter has seen it transformable)
+        tf = tf_buffer_.lookupTransform(params_.fixed_frame, msg->header.frame_id, msg->header.stamp);
       } catch (const tf2::TransformException& e) {
         throw std::runtime_error("no transform from '" + msg->header.frame_id + "' to '" +
                                  params_.fixed_frame + "': " + e.what());

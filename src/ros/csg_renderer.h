@@ -10,7 +10,7 @@
 //             stamp), ~stats (relaxed_connectivity/CsgRenderStats, one per rendered frame).
 // Services    ~set_csg_tree (relaxed_connectivity/SetCsgTree): a bad expression is rejected with the parser's
 //             message and the previous tree is kept.
-// Parameters  (private) fixed_frame, camera_frame, csg, patch_topics, use_surfels_topic, tf_timeout,
+// Parameters  (private) fixed_frame, camera_frame, csg, patch_topics, use_surfels_topic, tf_queue_size,
 //             max_rate, width, height, horizontal_fov (degrees), fx fy cx cy (override the fov when fx > 0),
 //             orthographic, ortho_view_width, near_clip, far_clip, pose_tolerance, partner_method,
 //             ewa_filter, lowpass_variance, cutoff_radius, depth_tolerance_scale, shading, backface_culling
@@ -23,11 +23,13 @@
 // stays.
 #pragma once
 
+#include <message_filters/subscriber.h>
 #include <relaxed_connectivity/CsgRenderStats.h>
 #include <relaxed_connectivity/SetCsgTree.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
@@ -52,9 +54,11 @@ struct CsgRendererParams {
   std::string csg;                          ///< initial CSG expression; empty: all patches, unclipped
   std::vector<std::string> patch_topics;    ///< patch i comes from topic i
   bool use_surfels_topic = true;            ///< subscribe to `surfels` (clouds with a patch_id field)
-  double tf_timeout = 0.1;                  ///< seconds to wait for the transform of a cloud's stamp
-  double max_rate = 10.0;                   ///< frames per second at most
-  double pose_tolerance = 1e-6;             ///< camera motion (metres / radians) that triggers a new frame
+  /// Clouds of each input waiting for the transform of their stamp (tf2_ros::MessageFilter); one pushed out
+  /// still without it is rejected naming its frame.
+  int tf_queue_size = 5;
+  double max_rate = 10.0;        ///< frames per second at most
+  double pose_tolerance = 1e-6;  ///< camera motion (metres / radians) that triggers a new frame
   std::string partner_method =
       "spatial_index";  ///< spatial_index (faster, bench_clip_partners) | clip_buffer (Algorithm 4.1)
   // Intrinsics
@@ -107,7 +111,6 @@ class CsgRenderer {
   CsgRendererParams params_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  std::vector<ros::Subscriber> cloud_subs_;
   ros::Publisher image_pub_, depth_pub_, patch_pub_, info_pub_, stats_pub_;
   ros::ServiceServer set_tree_srv_;
   ros::WallTimer timer_;
@@ -126,6 +129,11 @@ class CsgRenderer {
   std::optional<Eigen::Isometry3d> last_pose_;
   RenderImages images_;
   uint32_t rendered_frames_ = 0;
+
+  // The inputs (`surfels`, then the patch topics), each through a tf2_ros::MessageFilter to fixed_frame
+  // (last: stopped first).
+  std::vector<std::unique_ptr<message_filters::Subscriber<sensor_msgs::PointCloud2>>> cloud_subs_;
+  std::vector<std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>> tf_filters_;
 };
 
 }  // namespace rc

@@ -18,6 +18,7 @@
 #include <functional>
 #include <limits>
 #include <mutex>
+#include <string>
 
 #include "relaxed_connectivity/render/csg/analytic_csg.h"
 #include "relaxed_connectivity/render/csg/patch_sampling.h"
@@ -156,9 +157,10 @@ class CsgRendererNode : public ::testing::Test {
   }
 
   ros::Time publish(ros::Publisher& pub, const rc::SurfelCloud& cloud,
-                    rc::PointCloud2Layout layout = rc::PointCloud2Layout::kPointSurfel) {
+                    rc::PointCloud2Layout layout = rc::PointCloud2Layout::kPointSurfel,
+                    const std::string& frame = "world") {
     rc::SurfelCloud c = cloud;
-    c.frame_id = "world";
+    c.frame_id = frame;
     ros::Time stamp = ros::Time::now();
     if (stamp <= last_stamp_) stamp = last_stamp_ + ros::Duration(0, 1000);
     last_stamp_ = stamp;
@@ -310,9 +312,8 @@ TEST_F(CsgRendererNode, RendersTreesRejectsBadInputAndIdles) {
     EXPECT_NEAR(depthAt(*f3.depth, cu, cv), carved, 0.01);
   }
 
-  // 4. Bad clouds: no normals (patch topic), no patch_id (surfels topic), a NaN position. Each is rejected
-  // with
-  //    its reason; the last good clouds stay.
+  // 4. Bad clouds: no normals (patch topic), no patch_id (surfels topic), a NaN position, an unknown frame.
+  //    Each is rejected with its reason; the last good clouds stay.
   rc::SurfelCloud no_normals;  // sent in the compact layout, which has no normal fields at all
   no_normals.positions = sphere_a_.positions;
   no_normals.radii = sphere_a_.radii;
@@ -324,15 +325,21 @@ TEST_F(CsgRendererNode, RendersTreesRejectsBadInputAndIdles) {
     const rc::SurfelCloud* cloud;
     rc::PointCloud2Layout layout;
     const char* reason;
+    std::string frame = "world";
   };
+  // An unknown frame: the cloud waits in the tf message filter (tf_queue_size 1, the .test) until the next
+  // such cloud pushes it out.
   const BadCase bad_cases[] = {
       {&pub_a_, &no_normals, rc::PointCloud2Layout::kCompact, "no normals"},
       {&pub_surfels_, &no_patch_id, rc::PointCloud2Layout::kPointSurfel, "no patch_id"},
-      {&pub_a_, &with_nan, rc::PointCloud2Layout::kPointSurfel, "non-finite positions"}};
+      {&pub_a_, &with_nan, rc::PointCloud2Layout::kPointSurfel, "non-finite positions"},
+      {&pub_a_, &sphere_a_, rc::PointCloud2Layout::kPointSurfel, "no transform from 'no_such_frame'",
+       "no_such_frame"}};
   uint32_t rejected = 1;
   for (const BadCase& bad : bad_cases) {
     before = frameCount();
-    publish(*bad.pub, *bad.cloud, bad.layout);
+    publish(*bad.pub, *bad.cloud, bad.layout, bad.frame);
+    if (bad.frame != "world") publish(*bad.pub, *bad.cloud, bad.layout, bad.frame);
     ros::WallDuration(0.2).sleep();
     const ros::Time trigger = publish(pub_b_, sphere_b_);  // a good cloud: a new frame with the kept state
     Frame f = waitForFrame(before, [&](const CsgRenderStats& s) { return s.header.stamp == trigger; });
