@@ -177,6 +177,10 @@ CsgRenderer::CsgRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
   };
   if (params_.use_surfels_topic) addInput("surfels", -1);
   for (size_t i = 0; i < params_.patch_topics.size(); ++i) addInput(params_.patch_topics[i], int(i));
+  reconfigure_server_ =
+      std::make_unique<dynamic_reconfigure::Server<relaxed_connectivity::SplatConfig>>(private_nh_);
+  reconfigure_server_->setCallback(
+      [this](relaxed_connectivity::SplatConfig& config, uint32_t level) { reconfigure(config, level); });
   timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.max_rate), &CsgRenderer::timerCallback, this);
   ROS_INFO_STREAM("csg_renderer: " << (params_.use_surfels_topic ? "surfels" : "") << " + "
                                    << params_.patch_topics.size() << " patch topics, camera '"
@@ -259,6 +263,49 @@ bool CsgRenderer::setCsgTree(relaxed_connectivity::SetCsgTree::Request& request,
   return true;
 }
 
+void CsgRenderer::reconfigure(relaxed_connectivity::SplatConfig& config, uint32_t) {
+  std::string refused;  // reported after the lock (reject() takes it)
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    SplatConfig splat = pending_splat_ ? *pending_splat_ : params_.splat;
+    if (config.backface_culling && tree_ && tree_->hasComplementedPatches()) {
+      refused = "backface_culling with a difference or complement in the tree renders wrongly";
+      config.backface_culling = splat.backface_culling;
+    }
+    splat.ewa_filter = config.ewa_filter;
+    splat.lowpass_variance = config.lowpass_variance;
+    splat.cutoff_radius = config.cutoff_radius;
+    splat.depth_tolerance_scale = config.depth_tolerance_scale;
+    splat.exact_footprint = config.exact_footprint;
+    splat.backface_culling = config.backface_culling;
+    splat.shading = config.shading;
+    splat.ambient = config.ambient;
+    splat.diffuse = config.diffuse;
+    splat.specular = config.specular;
+    splat.shininess = config.shininess;
+    try {
+      SurfelRenderer check(splat);  // validates
+      pending_splat_ = splat;
+      inputs_changed_ = true;            // re-render with them
+    } catch (const std::exception& e) {  // answer with the settings that stay
+      refused = e.what();
+      const SplatConfig& kept = pending_splat_ ? *pending_splat_ : params_.splat;
+      config.ewa_filter = kept.ewa_filter;
+      config.lowpass_variance = kept.lowpass_variance;
+      config.cutoff_radius = kept.cutoff_radius;
+      config.depth_tolerance_scale = kept.depth_tolerance_scale;
+      config.exact_footprint = kept.exact_footprint;
+      config.backface_culling = kept.backface_culling;
+      config.shading = kept.shading;
+      config.ambient = kept.ambient;
+      config.diffuse = kept.diffuse;
+      config.specular = kept.specular;
+      config.shininess = kept.shininess;
+    }
+  }
+  if (!refused.empty()) reject("reconfigure", refused);
+}
+
 void CsgRenderer::renderBackground(const Camera& camera) {
   const size_t pixels = size_t(camera.width) * camera.height;
   images_.width = camera.width;
@@ -309,6 +356,11 @@ bool CsgRenderer::renderIfChanged() {
     sources = sources_;
     tree = tree_;
     expression = expression_;
+    if (pending_splat_) {
+      params_.splat = *pending_splat_;
+      renderer_ = SurfelRenderer(params_.splat);
+      pending_splat_.reset();
+    }
   }
 
   const Clock::time_point start_prepare = Clock::now();

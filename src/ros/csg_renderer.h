@@ -9,7 +9,8 @@
 //             background), ~camera_info (all latched, header frame = camera_frame, stamp = latest cloud/tf
 //             stamp), ~stats (relaxed_connectivity/CsgRenderStats, one per rendered frame).
 // Services    ~set_csg_tree (relaxed_connectivity/SetCsgTree): a bad expression is rejected with the parser's
-//             message and the previous tree is kept.
+//             message and the previous tree is kept; dynamic_reconfigure (~set_parameters,
+//             config/dynamic_reconfigure/Splat.cfg): the splat settings, applied from the next frame.
 // Parameters  (private) fixed_frame, camera_frame, csg, patch_topics, use_surfels_topic, tf_queue_size,
 //             max_rate, width, height, horizontal_fov (degrees), fx fy cx cy (override the fov when fx > 0),
 //             orthographic, ortho_view_width, near_clip, far_clip, pose_tolerance, partner_method,
@@ -23,9 +24,11 @@
 // stays.
 #pragma once
 
+#include <dynamic_reconfigure/server.h>
 #include <message_filters/subscriber.h>
 #include <relaxed_connectivity/CsgRenderStats.h>
 #include <relaxed_connectivity/SetCsgTree.h>
+#include <relaxed_connectivity/SplatConfig.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
@@ -92,6 +95,10 @@ class CsgRenderer {
   void patchCallback(int patch, const sensor_msgs::PointCloud2ConstPtr& msg);
   bool setCsgTree(relaxed_connectivity::SetCsgTree::Request& request,
                   relaxed_connectivity::SetCsgTree::Response& response);
+  /// dynamic_reconfigure (config/dynamic_reconfigure/Splat.cfg): new splat settings for the next frame (a
+  /// re-render); settings the renderer refuses (back-face culling with a difference in the tree) are put
+  /// back in `config`, which the reconfigure service answers with.
+  void reconfigure(relaxed_connectivity::SplatConfig& config, uint32_t level);
   /// Looks up the camera, and renders and publishes a frame if anything changed. Returns true if it did.
   bool renderIfChanged();
 
@@ -123,6 +130,7 @@ class CsgRenderer {
   bool inputs_changed_ = true;  // a cloud or the tree changed since the last frame
   uint32_t rejected_inputs_ = 0;
   std::string last_error_;
+  std::optional<SplatConfig> pending_splat_;  // from reconfigure(), taken by the next frame
 
   // Render state (timer thread only)
   std::unique_ptr<PatchCloudSet> patches_;  // merged inputs of the tree's patches and their clipper
@@ -130,6 +138,8 @@ class CsgRenderer {
   RenderImages images_;
   uint32_t rendered_frames_ = 0;
 
+  // ~set_parameters etc. (dynamic_reconfigure), started after everything it touches.
+  std::unique_ptr<dynamic_reconfigure::Server<relaxed_connectivity::SplatConfig>> reconfigure_server_;
   // The inputs (`surfels`, then the patch topics), each through a tf2_ros::MessageFilter to fixed_frame
   // (last: stopped first).
   std::vector<std::unique_ptr<message_filters::Subscriber<sensor_msgs::PointCloud2>>> cloud_subs_;

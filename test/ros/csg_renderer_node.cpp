@@ -2,6 +2,7 @@
 // (analytic_csg.h): the tree selects patches, "0 - 1" carves patch 1 into patch 0 at the analytic depth, bad
 // expressions and bad clouds are rejected with a reason while the last good state keeps rendering, and
 // nothing is re-rendered while nothing changes; a second node with back-face culling refuses differences.
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/CsgRenderStats.h>
@@ -371,6 +372,41 @@ TEST_F(CsgRendererNode, RendersTreesRejectsBadInputAndIdles) {
     std::lock_guard<std::mutex> lock(mutex_);
     EXPECT_EQ(images_.size(), stats_.size());
   }
+
+  // 7. dynamic_reconfigure (Splat.cfg): new splat settings re-render once with nothing else changed, and the
+  //    answer carries them; back-face culling with the difference "0 - 1" is refused and answered as off.
+  ros::NodeHandle nh;
+  ros::ServiceClient reconfigure =
+      nh.serviceClient<dynamic_reconfigure::Reconfigure>("csg_renderer/set_parameters");
+  ASSERT_TRUE(reconfigure.waitForExistence(ros::Duration(10)));
+  dynamic_reconfigure::Reconfigure wider;
+  dynamic_reconfigure::DoubleParameter variance;
+  variance.name = "lowpass_variance";
+  variance.value = 1.0;
+  wider.request.config.doubles.push_back(variance);
+  before = frameCount();
+  ASSERT_TRUE(reconfigure.call(wider));
+  auto doubleOf = [](const dynamic_reconfigure::Config& c, const std::string& name) {
+    for (const auto& d : c.doubles)
+      if (d.name == name) return d.value;
+    return -1.0;
+  };
+  auto boolOf = [](const dynamic_reconfigure::Config& c, const std::string& name) {
+    for (const auto& b : c.bools)
+      if (b.name == name) return int(b.value);
+    return -1;
+  };
+  EXPECT_EQ(doubleOf(wider.response.config, "lowpass_variance"), 1.0);
+  waitForFrame(before, [](const CsgRenderStats&) { return true; });
+  waitFor([] { return false; }, 0.5);
+  EXPECT_EQ(frameCount(), before + 1) << "one frame for the new settings";
+  dynamic_reconfigure::Reconfigure culling;
+  dynamic_reconfigure::BoolParameter cull;
+  cull.name = "backface_culling";
+  cull.value = true;
+  culling.request.config.bools.push_back(cull);
+  ASSERT_TRUE(reconfigure.call(culling));
+  EXPECT_EQ(boolOf(culling.response.config, "backface_culling"), 0) << "culling with a difference accepted";
 }
 
 }  // namespace
