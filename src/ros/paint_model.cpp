@@ -108,7 +108,18 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
         std::make_unique<PaintSurface>(std::move(cloud)),
         "from " + params_.object + (dropped ? " (" + std::to_string(dropped) + " non-finite dropped)" : ""));
   }
-  surfels_sub_ = nh_.subscribe("surfels", 1, &PaintModel::surfelsCallback, this);
+  // The object waits for the transform of its stamp in a message filter (no lookup blocks the callback).
+  surfels_sub_.subscribe(nh_, "surfels", 1);
+  surfels_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
+      surfels_sub_, tf_buffer_, params_.world_frame, 5, nh_);
+  surfels_filter_->registerCallback(&PaintModel::surfelsCallback, this);
+  surfels_filter_->registerFailureCallback([this](const sensor_msgs::PointCloud2ConstPtr& msg,
+                                                  tf2_ros::filter_failure_reasons::FilterFailureReason) {
+    ++rejected_;
+    ROS_ERROR_STREAM("paint_model: rejected surfels (frame '"
+                     << msg->header.frame_id << "'): no transform to '" << params_.world_frame
+                     << "' for their stamp (tf2_ros::MessageFilter); the current object stays");
+  });
   pose_sub_ = nh_.subscribe(params_.device + "/pose", 10, &PaintModel::poseCallback, this,
                             ros::TransportHints().tcpNoDelay());
   services_.push_back(private_nh_.advertiseService("undo", &PaintModel::undo, this));
@@ -197,9 +208,9 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
     if (!cloud.hasNormals())
       throw std::invalid_argument("the cloud has no normals (normal_x/y/z): run it through surfel_estimator");
     if (msg->header.frame_id != params_.world_frame) {
-      // (waits a little: at start-up the object's frame may not be broadcast yet)
-      const auto tf = tf_buffer_.lookupTransform(params_.world_frame, msg->header.frame_id, ros::Time(0),
-                                                 ros::Duration(2.0));
+      // (the message filter has seen it transformable at the cloud's stamp)
+      const auto tf =
+          tf_buffer_.lookupTransform(params_.world_frame, msg->header.frame_id, msg->header.stamp);
       cloud.transform(tf2::transformToEigen(tf));
     }
     cloud.frame_id = params_.world_frame;

@@ -38,12 +38,14 @@
 
 #include <actionlib/server/simple_action_server.h>
 #include <geometry_msgs/PoseStamped.h>
+#include <message_filters/subscriber.h>
 #include <relaxed_connectivity/LoadPaintedStateAction.h>
 #include <relaxed_connectivity/PaintCommand.h>
 #include <relaxed_connectivity/PaintFile.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
+#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <atomic>
@@ -165,7 +167,10 @@ class PaintModel {
   std::atomic<unsigned long> rejected_{0};  // also counted by the pose callback
   unsigned long dropped_surfels_ = 0;
   double brush_s_ = 0, transfer_s_ = 0, background_s_ = 0, publish_s_ = 0;
-  ros::Subscriber surfels_sub_, pose_sub_;
+  ros::Subscriber pose_sub_;
+  // The object: clouds on `surfels` through a tf2_ros::MessageFilter to world_frame.
+  message_filters::Subscriber<sensor_msgs::PointCloud2> surfels_sub_;
+  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>> surfels_filter_;
   ros::Publisher contact_pub_, skeleton_pub_, skin_pub_, painted_pub_, delta_pub_, stats_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::WallTimer timer_;

@@ -68,10 +68,11 @@ SurfelEstimator::SurfelEstimator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::SurfelStats>("stats", 10);
   reset_srv_ = private_nh_.advertiseService("reset_accumulation", &SurfelEstimator::resetAccumulation, this);
   save_srv_ = private_nh_.advertiseService("save", &SurfelEstimator::save, this);
-  // Clouds wait for the transform of their stamp in a tf2_ros::MessageFilter (no lookup blocks a callback).
-  cloud_sub_.subscribe(nh_, "points", 2);
+  // Malformed clouds are rejected at once (inputCallback); the others wait for the transform of their stamp
+  // in a tf2_ros::MessageFilter (no lookup blocks a callback).
   tf_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
-      cloud_sub_, tf_buffer_, params_.fixed_frame, uint32_t(params_.tf_queue_size), nh_);
+      tf_buffer_, params_.fixed_frame, uint32_t(params_.tf_queue_size), nh_);
+  cloud_sub_ = nh_.subscribe("points", 2, &SurfelEstimator::inputCallback, this);
   tf_filter_->registerCallback(&SurfelEstimator::cloudCallback, this);
   tf_filter_->registerFailureCallback(
       [this](const sensor_msgs::PointCloud2ConstPtr& msg,
@@ -96,6 +97,29 @@ void SurfelEstimator::reject(const sensor_msgs::PointCloud2& msg, const std::str
   last_error_ = text;
   diagnostics_.rejected(input_topic_, reason);
   stats.output_surfels = 0;
+}
+
+void SurfelEstimator::inputCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
+  std::string problem;
+  try {
+    PointCloud2Converter::checkMessage(*msg);  // the layout, without touching the points
+    if (msg->width == 0 || msg->height == 0) problem = "empty cloud (0 points)";
+  } catch (const std::exception& e) {
+    problem = e.what();
+  }
+  if (problem.empty()) {
+    tf_filter_->add(msg);
+    return;
+  }
+  relaxed_connectivity::SurfelStats stats;
+  stats.header = msg->header;
+  stats.input_points = msg->width * msg->height;
+  std::lock_guard<std::mutex> lock(mutex_);
+  reject(*msg, problem, problem.rfind("empty cloud", 0) != 0, stats);
+  stats.accumulated_surfels = static_cast<uint32_t>(accumulator_.size());
+  stats.rejected_messages = rejected_messages_;
+  stats.last_error = last_error_;
+  stats_pub_.publish(stats);
 }
 
 void SurfelEstimator::transformFailed(const sensor_msgs::PointCloud2ConstPtr& msg,

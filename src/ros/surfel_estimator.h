@@ -12,7 +12,6 @@
 //             accumulated_publish_period, save_path (written on shutdown); see config/scan.yaml.
 #pragma once
 
-#include <message_filters/subscriber.h>
 #include <relaxed_connectivity/ResetAccumulation.h>
 #include <relaxed_connectivity/SaveSurfels.h>
 #include <relaxed_connectivity/SurfelStats.h>
@@ -70,6 +69,8 @@ class SurfelEstimator {
  private:
   void reject(const sensor_msgs::PointCloud2& msg, const std::string& reason, bool is_error,
               relaxed_connectivity::SurfelStats& stats);
+  // A cloud as it comes: a malformed layout or no points is rejected at once, the others go to tf_filter_.
+  void inputCallback(const sensor_msgs::PointCloud2ConstPtr& msg);
   // A cloud the message filter gave up on (empty frame, no transform in time): rejected with its reason.
   void transformFailed(const sensor_msgs::PointCloud2ConstPtr& msg,
                        tf2_ros::filter_failure_reasons::FilterFailureReason why);
@@ -91,9 +92,9 @@ class SurfelEstimator {
   ros::WallTime last_accumulated_publish_;
   bool accumulated_dirty_ = false;
 
-  // The input: clouds through a tf2_ros::MessageFilter to the fixed frame (last: stopped first).
-  message_filters::Subscriber<sensor_msgs::PointCloud2> cloud_sub_;
+  // The input: checked clouds through a tf2_ros::MessageFilter to the fixed frame (last: stopped first).
   std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>> tf_filter_;
+  ros::Subscriber cloud_sub_;
 };
 
 }  // namespace rc
