@@ -155,7 +155,7 @@ CsgRenderer::CsgRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
   // Each input through a tf2_ros::MessageFilter: a cloud comes on once the transform of its stamp is known.
   auto addInput = [this](const std::string& topic, int patch) {
     cloud_subs_.push_back(
-        std::make_unique<message_filters::Subscriber<sensor_msgs::PointCloud2>>(nh_, topic, 2));
+        std::make_unique<message_filters::Subscriber<sensor_msgs::PointCloud2>>(nh_, topic, 5));
     tf_filters_.push_back(std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
         *cloud_subs_.back(), tf_buffer_, params_.fixed_frame, uint32_t(params_.tf_queue_size), nh_));
     tf_filters_.back()->registerCallback([this, patch](const sensor_msgs::PointCloud2ConstPtr& msg) {

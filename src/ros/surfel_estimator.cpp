@@ -72,7 +72,7 @@ SurfelEstimator::SurfelEstimator(ros::NodeHandle nh, ros::NodeHandle private_nh)
   // in a tf2_ros::MessageFilter (no lookup blocks a callback).
   tf_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
       tf_buffer_, params_.fixed_frame, uint32_t(params_.tf_queue_size), nh_);
-  cloud_sub_ = nh_.subscribe("points", 2, &SurfelEstimator::inputCallback, this);
+  cloud_sub_ = nh_.subscribe("points", 10, &SurfelEstimator::inputCallback, this);
   tf_filter_->registerCallback(&SurfelEstimator::cloudCallback, this);
   tf_filter_->registerFailureCallback(
       [this](const sensor_msgs::PointCloud2ConstPtr& msg,

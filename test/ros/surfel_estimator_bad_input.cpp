@@ -65,16 +65,17 @@ class BadInput : public ::testing::Test {
     ros::WallDuration(0.5).sleep();  // let the estimator's tf listener receive the static transform
   }
 
-  /// Waits (spinning, up to 5 s) for a /diagnostics status of the estimator's input at `level`; returns it
-  /// (an empty status with a failure after the wait).
-  diagnostic_msgs::DiagnosticStatus waitForInputStatus(uint8_t level) {
+  /// Waits (spinning, up to 5 s) for a /diagnostics status of the estimator's input at `level` whose value
+  /// `key` is `value`; returns it (an empty status with a failure after the wait).
+  diagnostic_msgs::DiagnosticStatus waitForInputStatus(uint8_t level, const std::string& key,
+                                                       const std::string& value) {
     const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(5.0);
     while (ros::WallTime::now() < end) {
       ros::spinOnce();
       {
         std::lock_guard<std::mutex> lock(mutex_);
         for (auto it = input_status_.rbegin(); it != input_status_.rend(); ++it)
-          if (it->level == level) {
+          if (it->level == level && BadInput::value(*it, key) == value) {
             const diagnostic_msgs::DiagnosticStatus found = *it;
             input_status_.clear();
             return found;
@@ -207,7 +208,7 @@ TEST_F(BadInput, RejectsWithReasonKeepsStateAndRecovers) {
   EXPECT_EQ(s.accumulated_surfels, 900u);
   // /diagnostics reports the input with a warning naming the last rejection and the counts.
   const diagnostic_msgs::DiagnosticStatus warned =
-      waitForInputStatus(diagnostic_msgs::DiagnosticStatus::WARN);
+      waitForInputStatus(diagnostic_msgs::DiagnosticStatus::WARN, "rejected", "4");
   EXPECT_NE(warned.message.find("rejected"), std::string::npos) << warned.message;
   EXPECT_NE(warned.message.find("no transform"), std::string::npos) << warned.message;
   EXPECT_EQ(value(warned, "rejected"), "4");
@@ -223,7 +224,8 @@ TEST_F(BadInput, RejectsWithReasonKeepsStateAndRecovers) {
     EXPECT_EQ(surfels_.size(), 2u);
   }
   // Without new rejections the input's status is OK again.
-  const diagnostic_msgs::DiagnosticStatus ok = waitForInputStatus(diagnostic_msgs::DiagnosticStatus::OK);
+  const diagnostic_msgs::DiagnosticStatus ok =
+      waitForInputStatus(diagnostic_msgs::DiagnosticStatus::OK, "accepted", "2");
   EXPECT_EQ(value(ok, "accepted"), "2");
 
   // 7. Reset returns how many were dropped.
