@@ -141,6 +141,7 @@ CsgRenderer::CsgRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
       params_(readCsgRendererParams(private_nh)),
       tf_listener_(tf_buffer_, nh),
       renderer_(params_.splat),
+      diagnostics_(nh, private_nh, "csg_renderer"),
       sources_(1 + params_.patch_topics.size()) {
   if (!params_.csg.empty()) {
     tree_ = CsgTree::parse(params_.csg);
@@ -167,6 +168,7 @@ CsgRenderer::CsgRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
     tf_filters_.back()->registerFailureCallback(
         [this, topic](const sensor_msgs::PointCloud2ConstPtr& msg,
                       tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+          diagnostics_.rejected(topic, "no transform of frame '" + msg->header.frame_id + "'");
           reject("cloud on " + topic + " (frame '" + msg->header.frame_id + "', stamp " +
                      std::to_string(msg->header.stamp.toSec()) + ")",
                  why == tf2_ros::filter_failure_reasons::EmptyFrameID
@@ -176,6 +178,8 @@ CsgRenderer::CsgRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
         });
   };
   if (params_.use_surfels_topic) addInput("surfels", -1);
+  if (params_.use_surfels_topic) diagnostics_.addInput("surfels", 0.0);  // latched scenes: never stale
+  for (const std::string& topic : params_.patch_topics) diagnostics_.addInput(topic, 0.0);
   for (size_t i = 0; i < params_.patch_topics.size(); ++i) addInput(params_.patch_topics[i], int(i));
   reconfigure_server_ =
       std::make_unique<dynamic_reconfigure::Server<relaxed_connectivity::SplatConfig>>(private_nh_);
@@ -236,7 +240,9 @@ void CsgRenderer::acceptCloud(size_t source, int patch, const sensor_msgs::Point
     sources_[source].cloud = std::move(cloud);
     sources_[source].stamp = msg->header.stamp;
     inputs_changed_ = true;
+    diagnostics_.accepted(patch < 0 ? std::string("surfels") : params_.patch_topics[size_t(patch)]);
   } catch (const std::exception& e) {
+    diagnostics_.rejected(patch < 0 ? std::string("surfels") : params_.patch_topics[size_t(patch)], e.what());
     reject(what, e.what());
   }
 }

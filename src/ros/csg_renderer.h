@@ -46,6 +46,7 @@
 #include "relaxed_connectivity/render/csg/patch_cloud_set.h"
 #include "relaxed_connectivity/render/splat/camera.h"
 #include "relaxed_connectivity/render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/ros/node_diagnostics.h"
 
 namespace rc {
 
@@ -122,6 +123,7 @@ class CsgRenderer {
   ros::ServiceServer set_tree_srv_;
   ros::WallTimer timer_;
   SurfelRenderer renderer_;
+  NodeDiagnostics diagnostics_;  // per input topic: rate, accepted, rejected
 
   std::mutex mutex_;  // guards the input state below (nodelet managers call back from several threads)
   std::vector<Source> sources_;  // [0]: `surfels`, [1 + i]: patch_topics[i]

@@ -68,7 +68,7 @@ void NodeDiagnostics::reportInput(const std::string& topic,
                     static_cast<unsigned long long>(new_rejected), in.last_rejection.c_str());
   else if (!started)
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "waiting for the first message");
-  else if (idle > in.stale_seconds)
+  else if (in.stale_seconds > 0 && idle > in.stale_seconds)
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "no message for %.1f s", idle);
   else
     status.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "%.1f messages/s", rate);

@@ -23,7 +23,8 @@ class NodeDiagnostics {
 
   /// An input topic's status: OK while messages arrive and none was rejected since the last report; WARN
   /// after a rejection (the reason is in the report) or when nothing came for stale_seconds after the first
-  /// message (an input that never delivered is OK: "waiting").
+  /// message (an input that never delivered is OK: "waiting"; stale_seconds 0: never stale, for latched
+  /// inputs that come once).
   void addInput(const std::string& topic, double stale_seconds);
   /// Thread-safe; unknown topics are added with a stale time of 10 s.
   void accepted(const std::string& topic);

@@ -81,7 +81,9 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : nh_(nh),
       private_nh_(private_nh),
       params_(readPaintModelParams(private_nh)),
-      tf_listener_(tf_buffer_, nh) {
+      tf_listener_(tf_buffer_, nh),
+      diagnostics_(nh, private_nh, "paint_model") {
+  diagnostics_.addInput("surfels", 0.0);  // the object comes once (latched)
   brush_ = std::make_unique<Brush>(readBrushPreset(params_.brush), params_.brush_options);
   contact_pub_ = nh_.advertise<relaxed_connectivity::BrushContact>("brush_contact", 10);
   skeleton_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("brush/skeleton", 2);
@@ -116,12 +118,14 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   surfels_filter_->registerFailureCallback([this](const sensor_msgs::PointCloud2ConstPtr& msg,
                                                   tf2_ros::filter_failure_reasons::FilterFailureReason) {
     ++rejected_;
+    diagnostics_.rejected("surfels", "no transform of frame '" + msg->header.frame_id + "'");
     ROS_ERROR_STREAM("paint_model: rejected surfels (frame '"
                      << msg->header.frame_id << "'): no transform to '" << params_.world_frame
                      << "' for their stamp (tf2_ros::MessageFilter); the current object stays");
   });
   pose_sub_ = nh_.subscribe(params_.device + "/pose", 10, &PaintModel::poseCallback, this,
                             ros::TransportHints().tcpNoDelay());
+  diagnostics_.addInput(pose_sub_.getTopic(), 2.0);
   services_.push_back(private_nh_.advertiseService("undo", &PaintModel::undo, this));
   services_.push_back(private_nh_.advertiseService("redo", &PaintModel::redo, this));
   services_.push_back(private_nh_.advertiseService("clear", &PaintModel::clear, this));
@@ -234,11 +238,13 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
                         std::to_string(surface->originalCount() - object_size) + " surfels)"
                   : "");
     installSurface(std::move(surface), what);
+    diagnostics_.accepted("surfels");
     object_hash_ = hash;
     object_frame_ = msg->header.frame_id;
     dropped_surfels_ += dropped;
   } catch (const std::exception& e) {  // keep the current object
     ++rejected_;
+    diagnostics_.rejected("surfels", e.what());
     ROS_ERROR_STREAM("paint_model: rejected surfels (frame '" << msg->header.frame_id << "', "
                                                               << msg->width * msg->height
                                                               << " points): " << e.what());
@@ -252,12 +258,14 @@ void PaintModel::poseCallback(const geometry_msgs::PoseStampedConstPtr& msg) {
   if (!std::isfinite(p.position.x) || !std::isfinite(p.position.y) || !std::isfinite(p.position.z) ||
       !std::isfinite(q_norm) || std::abs(q_norm - 1) > 1e-3) {
     ++rejected_;
+    diagnostics_.rejected(pose_sub_.getTopic(), "a non-finite position or a non-unit quaternion");
     ROS_WARN_STREAM_THROTTLE(1.0,
                              "paint_model: dropped a device pose with a non-finite position or a non-unit "
                              "quaternion (|q| = "
                                  << q_norm << ")");
     return;
   }
+  diagnostics_.accepted(pose_sub_.getTopic());
   std::lock_guard<std::mutex> lock(input_mutex_);
   latest_pose_ = msg;
 }

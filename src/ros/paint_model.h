@@ -61,6 +61,7 @@
 #include "relaxed_connectivity/paint/paint_transfer.h"
 #include "relaxed_connectivity/paint/painted_surface_io.h"
 #include "relaxed_connectivity/paint/surface_diffusion.h"
+#include "relaxed_connectivity/ros/node_diagnostics.h"
 
 namespace rc {
 
@@ -138,7 +139,8 @@ class PaintModel {
   PaintModelParams params_;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
-  std::mutex input_mutex_;  // latest_pose_ (callbacks) against tick()
+  NodeDiagnostics diagnostics_;  // the object and pose inputs on /diagnostics
+  std::mutex input_mutex_;       // latest_pose_ (callbacks) against tick()
   geometry_msgs::PoseStampedConstPtr latest_pose_;
   // The model: tick(), the services and surfelsCallback (to install an object) under model_mutex_.
   std::mutex model_mutex_;

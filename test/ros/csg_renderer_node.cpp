@@ -2,6 +2,7 @@
 // (analytic_csg.h): the tree selects patches, "0 - 1" carves patch 1 into patch 0 at the analytic depth, bad
 // expressions and bad clouds are rejected with a reason while the last good state keeps rendering, and
 // nothing is re-rendered while nothing changes; a second node with back-face culling refuses differences.
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <string>
 
@@ -351,6 +353,25 @@ TEST_F(CsgRendererNode, RendersTreesRejectsBadInputAndIdles) {
     if (f.depth) {
       EXPECT_NEAR(depthAt(*f.depth, cu, cv), carved, 0.01);
     }
+  }
+
+  // /diagnostics counts the rejections per input: three on patch_a, one on surfels.
+  {
+    ros::NodeHandle nh;
+    std::map<std::string, std::string> rejected;  // status name -> its "rejected" value
+    ros::Subscriber diagnostics = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 20, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
+          for (const auto& status : m->status)
+            for (const auto& kv : status.values)
+              if (kv.key == "rejected") rejected[status.name] = kv.value;
+        });
+    EXPECT_TRUE(waitFor(
+        [&] {
+          return rejected["csg_renderer: input patch_a"] == "3" &&
+                 rejected["csg_renderer: input surfels"] == "1";
+        },
+        5.0))
+        << rejected["csg_renderer: input patch_a"] << " / " << rejected["csg_renderer: input surfels"];
   }
 
   // 5. Nothing changes: no frame over a quiet second.

@@ -3,7 +3,11 @@
 // rows longer than the data) and 10 paint deltas cut short, all while the brush paints. Every one is refused
 // and counted by the node it reaches; the session keeps painting (as much as the clean bag paints) and
 // rendering, and the renderer's copy stays equal to the model.
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <relaxed_connectivity/SurfelStats.h>
+
+#include <map>
+#include <string>
 
 #include "paint_session_support.h"
 
@@ -19,6 +23,12 @@ TEST(PaintSessionCorrupt, BadMessagesAreRefusedAndTheSessionGoesOn) {
       nh.subscribe<relaxed_connectivity::SurfelStats>("surfel_estimator/stats", 100, [&](const auto& m) {
         scanner_stats = *m;
         ++scanner_messages;
+      });
+  std::map<std::string, std::map<std::string, std::string>> diagnostics;  // status name -> key -> value
+  ros::Subscriber diagnostics_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 100, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
+        for (const auto& status : m->status)
+          for (const auto& kv : status.values) diagnostics[status.name][kv.key] = kv.value;
       });
   ASSERT_TRUE(session.waitForTheEnd(90.0))
       << session.pose_count << " poses, " << session.delta_count << " deltas";
@@ -36,6 +46,15 @@ TEST(PaintSessionCorrupt, BadMessagesAreRefusedAndTheSessionGoesOn) {
   EXPECT_EQ(scanner_stats.rejected_messages, 10u);      // the clouds
   EXPECT_EQ(scanner_messages, 16u);                     // one stats message per cloud, good or bad
   EXPECT_EQ(r.rejected_messages, 10u) << r.last_error;  // the deltas
+  // /diagnostics counts them per input as well.
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return diagnostics["paint_model: input /haptic/pose"]["rejected"] == "30" &&
+               diagnostics["surfel_estimator: input /points"]["rejected"] == "10";
+      },
+      5))
+      << "pose input: " << diagnostics["paint_model: input /haptic/pose"]["rejected"]
+      << " rejected, cloud input: " << diagnostics["surfel_estimator: input /points"]["rejected"];
   // Painting went on through them (the clean bag: about 4100 children, 850 red surfels) ...
   EXPECT_GT(p.children, 3000u);
   EXPECT_GT(p.wet_surfels, 500u);
