@@ -144,6 +144,10 @@ PaintRenderer::PaintRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
                              ros::TransportHints().tcpNoDelay());
   if (params_.draw_brush) skin_sub_ = nh_.subscribe("brush/skin", 2, &PaintRenderer::skinCallback, this);
   last_stats_ = last_frame_ = ros::WallTime::now();
+  reconfigure_server_ =
+      std::make_unique<dynamic_reconfigure::Server<relaxed_connectivity::SplatConfig>>(private_nh_);
+  reconfigure_server_->setCallback(
+      [this](relaxed_connectivity::SplatConfig& config, uint32_t level) { reconfigure(config, level); });
   timer_ =
       nh_.createWallTimer(ros::WallDuration(0.25 / params_.max_rate), &PaintRenderer::timerCallback, this);
   ROS_INFO_STREAM("paint_renderer: camera '" << params_.camera_frame << "' in '" << params_.fixed_frame
@@ -291,6 +295,47 @@ bool PaintRenderer::saveImage(relaxed_connectivity::PaintFile::Request& request,
     response.message = e.what();
   }
   return true;
+}
+
+void PaintRenderer::reconfigure(relaxed_connectivity::SplatConfig& config, uint32_t) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  SplatConfig splat = renderer_.config().splat;
+  splat.ewa_filter = config.ewa_filter;
+  splat.lowpass_variance = config.lowpass_variance;
+  splat.cutoff_radius = config.cutoff_radius;
+  splat.depth_tolerance_scale = config.depth_tolerance_scale;
+  splat.exact_footprint = config.exact_footprint;
+  splat.backface_culling = config.backface_culling;
+  splat.shading = config.shading;
+  splat.ambient = config.ambient;
+  splat.diffuse = config.diffuse;
+  splat.specular = config.specular;
+  splat.shininess = config.shininess;
+  const SplatConfig& now = renderer_.config().splat;
+  if (splat.ewa_filter == now.ewa_filter && splat.lowpass_variance == now.lowpass_variance &&
+      splat.cutoff_radius == now.cutoff_radius && splat.depth_tolerance_scale == now.depth_tolerance_scale &&
+      splat.exact_footprint == now.exact_footprint && splat.backface_culling == now.backface_culling &&
+      splat.shading == now.shading && splat.ambient == now.ambient && splat.diffuse == now.diffuse &&
+      splat.specular == now.specular && splat.shininess == now.shininess)
+    return;  // e.g. the server's first call: the settings as they are
+  try {
+    renderer_.setSplatConfig(splat);
+    dirty_ = true;
+  } catch (const std::exception& e) {  // answer with the settings that stay
+    ROS_ERROR_STREAM("paint_renderer: refused splat settings: " << e.what());
+    const SplatConfig& kept = renderer_.config().splat;
+    config.ewa_filter = kept.ewa_filter;
+    config.lowpass_variance = kept.lowpass_variance;
+    config.cutoff_radius = kept.cutoff_radius;
+    config.depth_tolerance_scale = kept.depth_tolerance_scale;
+    config.exact_footprint = kept.exact_footprint;
+    config.backface_culling = kept.backface_culling;
+    config.shading = kept.shading;
+    config.ambient = kept.ambient;
+    config.diffuse = kept.diffuse;
+    config.specular = kept.specular;
+    config.shininess = kept.shininess;
+  }
 }
 
 void PaintRenderer::timerCallback(const ros::WallTimerEvent&) {

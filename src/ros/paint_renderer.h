@@ -28,8 +28,10 @@
 // counted and rejected; the image and the copy stay as they were.
 #pragma once
 
+#include <dynamic_reconfigure/server.h>
 #include <relaxed_connectivity/PaintDelta.h>
 #include <relaxed_connectivity/PaintFile.h>
+#include <relaxed_connectivity/SplatConfig.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
@@ -103,6 +105,9 @@ class PaintRenderer {
   /// A cloud of a message in fixed_frame (throws naming the problem).
   SurfelCloud cloudOf(const sensor_msgs::PointCloud2& msg, const char* what) const;
   void timerCallback(const ros::WallTimerEvent&);
+  /// dynamic_reconfigure: new splat settings, a full update next ("settings"); refused settings are answered
+  /// back with the ones that stay.
+  void reconfigure(relaxed_connectivity::SplatConfig& config, uint32_t level);
   /// Renders if something changed and the last frame is at least 1 / max_rate old (one thread at a time).
   void renderWhenDue();
   void publishStats(const ros::WallTime& now);
@@ -149,6 +154,9 @@ class PaintRenderer {
   std::vector<double> latencies_ms_;
   LatencyHistogram session_latency_;  ///< since start
   std::string last_reason_ = "none", last_error_;
+
+  // dynamic_reconfigure (config/dynamic_reconfigure/Splat.cfg), started last and stopped first.
+  std::unique_ptr<dynamic_reconfigure::Server<relaxed_connectivity::SplatConfig>> reconfigure_server_;
 };
 
 }  // namespace rc

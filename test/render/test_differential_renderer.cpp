@@ -126,6 +126,33 @@ TEST(DifferentialRenderer, FirstUpdateIsFullAndEqualsTheRenderer) {
   EXPECT_GT(stats.full.splats, 2000u);
 }
 
+TEST(DifferentialRenderer, NewSplatSettingsRenderInFullAndEqualAFreshRenderer) {
+  // setSplatConfig (paint_renderer's dynamic_reconfigure): the next update is full, for "settings", and
+  // equals a renderer built with those settings; settings the renderer refuses throw and change nothing.
+  SphereScene scene;
+  auto& [state, camera, config, renderer] = scene;
+  SplatConfig wider = config.splat;
+  wider.lowpass_variance = 1.0;
+  wider.shading = false;
+  wider.outputs = kOutputAll;  // not taken: the renderer keeps its outputs
+  renderer.setSplatConfig(wider);
+  EXPECT_EQ(renderer.config().splat.outputs, config.splat.outputs);
+  DifferentialStats stats;
+  renderer.update(toCloud(state), SurfelCloud(), SurfelCloud(), camera, &stats);
+  EXPECT_EQ(stats.update, RenderUpdate::kFull);
+  EXPECT_EQ(stats.reason, FullUpdateReason::kSettings);
+  DifferentialRenderConfig fresh = config;
+  fresh.splat.lowpass_variance = 1.0;
+  fresh.splat.shading = false;
+  EXPECT_EQ(renderer.images().color, fullRender(fresh, state, camera).color);
+  EXPECT_NE(renderer.images().color, fullRender(config, state, camera).color);
+  SplatConfig bad = wider;
+  bad.cutoff_radius = -1.0;
+  EXPECT_THROW(renderer.setSplatConfig(bad), std::invalid_argument);
+  EXPECT_EQ(renderer.config().splat.cutoff_radius, wider.cutoff_radius);
+  EXPECT_TRUE(renderer.valid());  // the refused settings cost no full update
+}
+
 // Recolouring (the most common paint delta) un-splats and splats the same geometry: the images equal a full
 // render of the final state up to float rounding of the sums (at most one 8-bit level).
 void checkRecolourDeltas(bool wide_simd) {

@@ -3,6 +3,7 @@
 // with a full update; the camera's interactive marker (camera_mover, dragged as rviz sends it) moves the
 // view, a non-finite drag is refused; the painted object converts to a textured mesh (mesh_converter).
 #include <actionlib/client/simple_action_client.h>
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <relaxed_connectivity/ConvertSurfelsAction.h>
 #include <tf2_eigen/tf2_eigen.h>
@@ -81,6 +82,25 @@ TEST(PaintSessionLaunch, ScansPaintsRendersAndFollowsTheObject) {
   drag.publish(feedback);
   waitFor([] { return false; }, 1.0);
   EXPECT_LT((camera().translation() - dragged.translation()).norm(), 1e-9);
+
+  // dynamic_reconfigure of the renderer's splat settings: a full update for "settings".
+  ros::ServiceClient reconfigure =
+      nh.serviceClient<dynamic_reconfigure::Reconfigure>("paint_renderer/set_parameters");
+  ASSERT_TRUE(reconfigure.waitForExistence(ros::Duration(10)));
+  dynamic_reconfigure::Reconfigure wider;
+  dynamic_reconfigure::DoubleParameter variance;
+  variance.name = "lowpass_variance";
+  variance.value = 1.0;
+  wider.request.config.doubles.push_back(variance);
+  const uint32_t full_before_settings = session.full_updates;
+  ASSERT_TRUE(reconfigure.call(wider));
+  EXPECT_TRUE(waitFor(
+      [&] {
+        return session.full_updates > full_before_settings &&
+               session.render_stats.last_full_update_reason == "settings";
+      },
+      10))
+      << session.render_stats.last_full_update_reason;
 }
 
 TEST(PaintSessionLaunch, ThePaintedObjectConvertsToATexturedMesh) {

@@ -80,6 +80,8 @@ const char* fullUpdateReasonName(FullUpdateReason reason) {
       return "large_delta";
     case FullUpdateReason::kPrecision:
       return "precision";
+    case FullUpdateReason::kSettings:
+      return "settings";
   }
   return "unknown";
 }
@@ -90,6 +92,18 @@ DifferentialSurfelRenderer::DifferentialSurfelRenderer(const DifferentialRenderC
 }
 
 DifferentialSurfelRenderer::~DifferentialSurfelRenderer() = default;
+
+void DifferentialSurfelRenderer::setSplatConfig(SplatConfig splat) {
+  splat.outputs = config_.splat.outputs;
+  splat.environment = config_.splat.environment;
+  DifferentialRenderConfig changed = config_;
+  changed.splat = splat;
+  changed.validate();
+  renderer_ = SurfelRenderer(splat);  // validates the splatting settings
+  config_ = changed;
+  valid_ = false;
+  settings_changed_ = true;
+}
 
 void DifferentialSurfelRenderer::renderFull(const SurfelCloud& cloud, const Camera& camera,
                                             DifferentialStats* stats, FullUpdateReason reason) {
@@ -123,7 +137,12 @@ bool DifferentialSurfelRenderer::cameraMoved(const Camera& camera) const {
 void DifferentialSurfelRenderer::update(const SurfelCloud& cloud, const SurfelCloud& removed,
                                         const SurfelCloud& added, const Camera& camera,
                                         DifferentialStats* stats) {
-  if (!valid_) return renderFull(cloud, camera, stats, FullUpdateReason::kFirstFrame);
+  if (!valid_) {
+    const FullUpdateReason reason =
+        settings_changed_ ? FullUpdateReason::kSettings : FullUpdateReason::kFirstFrame;
+    settings_changed_ = false;
+    return renderFull(cloud, camera, stats, reason);
+  }
   camera.validate();
   if (cameraMoved(camera)) return renderFull(cloud, camera, stats, FullUpdateReason::kCameraMoved);
   if (removed.size() + added.size() > config_.max_delta_surfels)

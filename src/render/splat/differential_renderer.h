@@ -45,7 +45,15 @@ struct DifferentialRenderConfig {
 };
 
 enum class RenderUpdate { kNone, kDifferential, kFull };
-enum class FullUpdateReason { kNone, kFirstFrame, kRequested, kCameraMoved, kLargeDelta, kPrecision };
+enum class FullUpdateReason {
+  kNone,
+  kFirstFrame,
+  kRequested,
+  kCameraMoved,
+  kLargeDelta,
+  kPrecision,
+  kSettings
+};
 const char* fullUpdateReasonName(FullUpdateReason reason);
 
 struct DifferentialStats {
@@ -75,6 +83,9 @@ class DifferentialSurfelRenderer {
               const Camera& camera, DifferentialStats* stats = nullptr);
   /// The next update renders in full.
   void invalidate() { valid_ = false; }
+  /// New splat settings (outputs and environment kept); the next update renders in full (reason kSettings).
+  /// Throws std::invalid_argument for settings the renderer refuses, keeping the old ones.
+  void setSplatConfig(SplatConfig splat);
   bool valid() const { return valid_; }
 
   const RenderImages& images() const { return images_; }
@@ -92,6 +103,7 @@ class DifferentialSurfelRenderer {
   std::unique_ptr<CameraFrame> frame_;
   std::vector<uint32_t> tile_updates_;  ///< splats into each tile since the last full render
   bool valid_ = false;
+  bool settings_changed_ = false;  ///< the next full update is for new settings
 };
 
 }  // namespace rc
