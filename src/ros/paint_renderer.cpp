@@ -133,7 +133,8 @@ PaintRenderer::PaintRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
       tf_listener_(tf_buffer_, nh),
       environment_(makeEnvironment(params_.environment)),
       renderer_(withEnvironment(params_.render, environment_.get())),
-      compositor_(params_.brush) {
+      compositor_(params_.brush),
+      diagnostics_(nh, private_nh, "paint_renderer") {
   image_pub_ = private_nh_.advertise<sensor_msgs::Image>("image", 1);
   depth_pub_ = private_nh_.advertise<sensor_msgs::Image>("depth", 1);
   info_pub_ = private_nh_.advertise<sensor_msgs::CameraInfo>("camera_info", 1, /*latch=*/true);
@@ -143,6 +144,8 @@ PaintRenderer::PaintRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
   delta_sub_ = nh_.subscribe("surfels/painted_delta", 100, &PaintRenderer::deltaCallback, this,
                              ros::TransportHints().tcpNoDelay());
   if (params_.draw_brush) skin_sub_ = nh_.subscribe("brush/skin", 2, &PaintRenderer::skinCallback, this);
+  diagnostics_.addInput(painted_sub_.getTopic(), 0.0);  // latched, comes now and then
+  diagnostics_.addInput(delta_sub_.getTopic(), 0.0);    // only while painting
   last_stats_ = last_frame_ = ros::WallTime::now();
   reconfigure_server_ =
       std::make_unique<dynamic_reconfigure::Server<relaxed_connectivity::SplatConfig>>(private_nh_);
@@ -190,6 +193,7 @@ void PaintRenderer::paintedCallback(const sensor_msgs::PointCloud2ConstPtr& msg)
       if (!waiting_ && have_object_ && !gap_ && last_delta_stamp_ > stamp) return;
     }
     const SurfelCloud cloud = cloudOf(*msg, "full cloud");
+    diagnostics_.accepted(painted_sub_.getTopic());  // well-formed
     std::lock_guard<std::mutex> lock(mutex_);
     if (waiting_) {  // deltas of a new object wait for its first full cloud; an older cloud is the old object
       if (stamp < waiting_stamp_) return;
@@ -207,6 +211,7 @@ void PaintRenderer::paintedCallback(const sensor_msgs::PointCloud2ConstPtr& msg)
     }
     resync(cloud, stamp);
   } catch (const std::exception& e) {
+    diagnostics_.rejected(painted_sub_.getTopic(), e.what());
     reject("full cloud (stamp " + std::to_string(msg->header.stamp.toSec()) + ")", e.what());
   }
 }
@@ -238,6 +243,7 @@ void PaintRenderer::applyDelta(const std::vector<uint32_t>& originals, const Sur
 void PaintRenderer::deltaCallback(const relaxed_connectivity::PaintDeltaConstPtr& msg) {
   try {
     SurfelCloud surfels = cloudOf(msg->surfels, "delta");
+    diagnostics_.accepted(delta_sub_.getTopic());
     std::lock_guard<std::mutex> lock(mutex_);
     if (last_sequence_ != 0 && msg->sequence != last_sequence_ + 1) {
       gap_ = true;
@@ -264,6 +270,7 @@ void PaintRenderer::deltaCallback(const relaxed_connectivity::PaintDeltaConstPtr
     recent_deltas_.push_back({msg->header.stamp, msg->object_generation, msg->originals, std::move(surfels)});
     if (recent_deltas_.size() > kRecentDeltas) recent_deltas_.pop_front();
   } catch (const std::exception& e) {
+    diagnostics_.rejected(delta_sub_.getTopic(), e.what());
     reject("delta " + std::to_string(msg->sequence), e.what());
   }
   renderWhenDue();  // the paint on screen as soon as a frame is due (end-to-end latency)

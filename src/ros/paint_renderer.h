@@ -51,6 +51,7 @@
 #include "relaxed_connectivity/render/splat/differential_renderer.h"
 #include "relaxed_connectivity/render/splat/environment_map.h"
 #include "relaxed_connectivity/render/splat/overlay_compositor.h"
+#include "relaxed_connectivity/ros/node_diagnostics.h"
 
 namespace rc {
 
@@ -155,6 +156,7 @@ class PaintRenderer {
   LatencyHistogram session_latency_;  ///< since start
   std::string last_reason_ = "none", last_error_;
 
+  NodeDiagnostics diagnostics_;  // the painted-cloud and delta inputs on /diagnostics
   // dynamic_reconfigure (config/dynamic_reconfigure/Splat.cfg), started last and stopped first.
   std::unique_ptr<dynamic_reconfigure::Server<relaxed_connectivity::SplatConfig>> reconfigure_server_;
 };

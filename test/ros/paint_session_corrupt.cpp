@@ -50,11 +50,13 @@ TEST(PaintSessionCorrupt, BadMessagesAreRefusedAndTheSessionGoesOn) {
   EXPECT_TRUE(waitFor(
       [&] {
         return diagnostics["paint_model: input /haptic/pose"]["rejected"] == "30" &&
-               diagnostics["surfel_estimator: input /points"]["rejected"] == "10";
+               diagnostics["surfel_estimator: input /points"]["rejected"] == "10" &&
+               diagnostics["paint_renderer: input /surfels/painted_delta"]["rejected"] == "10";
       },
       5))
       << "pose input: " << diagnostics["paint_model: input /haptic/pose"]["rejected"]
-      << " rejected, cloud input: " << diagnostics["surfel_estimator: input /points"]["rejected"];
+      << " rejected, cloud input: " << diagnostics["surfel_estimator: input /points"]["rejected"]
+      << ", delta input: " << diagnostics["paint_renderer: input /surfels/painted_delta"]["rejected"];
   // Painting went on through them (the clean bag: about 4100 children, 850 red surfels) ...
   EXPECT_GT(p.children, 3000u);
   EXPECT_GT(p.wet_surfels, 500u);
