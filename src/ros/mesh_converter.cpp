@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/ros/mesh_converter.h"
 
+#include <diagnostic_msgs/DiagnosticStatus.h>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -111,10 +112,25 @@ visualization_msgs::Marker meshMarker(const TexturedMesh& mesh, const std::strin
 }
 
 MeshConverter::MeshConverter(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), private_nh_(private_nh), params_(readMeshConverterParams(private_nh)) {
+    : nh_(nh),
+      private_nh_(private_nh),
+      params_(readMeshConverterParams(private_nh)),
+      diagnostics_(nh, private_nh, "mesh_converter") {
   if (!meshGenerationAvailable())
     ROS_WARN("mesh_converter: this build has no CGAL (libcgal-dev): every goal will be aborted");
   surfels_sub_ = nh_.subscribe("surfels", 1, &MeshConverter::surfelsCallback, this);
+  diagnostics_.addInput(surfels_sub_.getTopic(), 0.0);  // a latched cloud, converted on request
+  diagnostics_.addTask("conversion", [this](diagnostic_updater::DiagnosticStatusWrapper& status) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    status.add("goals succeeded", goals_succeeded_);
+    status.add("goals aborted", goals_aborted_);
+    status.add("last abort", last_abort_);
+    if (!meshGenerationAvailable())
+      status.summary(diagnostic_msgs::DiagnosticStatus::ERROR, "this build has no CGAL: every goal aborts");
+    else
+      status.summaryf(diagnostic_msgs::DiagnosticStatus::OK, "%u goals converted, %u aborted",
+                      goals_succeeded_, goals_aborted_);
+  });
   marker_pub_ = private_nh_.advertise<visualization_msgs::Marker>("converted", 1, true);
   server_ = std::make_unique<Server>(
       private_nh_, "convert", [this](const auto& goal) { convert(goal); }, false);
@@ -126,6 +142,7 @@ MeshConverter::MeshConverter(ros::NodeHandle nh, ros::NodeHandle private_nh)
 }
 
 void MeshConverter::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
+  diagnostics_.accepted(surfels_sub_.getTopic());
   std::lock_guard<std::mutex> lock(mutex_);
   latest_ = msg;
 }
@@ -181,6 +198,11 @@ void MeshConverter::convert(const relaxed_connectivity::ConvertSurfelsGoalConstP
     result.success = false;
     result.message = message;
     ROS_WARN_STREAM("mesh_converter: goal aborted: " << message);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++goals_aborted_;
+      last_abort_ = message;
+    }
     server_->setAborted(result, message);
   };
   try {
@@ -252,6 +274,10 @@ void MeshConverter::convert(const relaxed_connectivity::ConvertSurfelsGoalConstP
     marker_pub_.publish(meshMarker(r.textured, frame_id.empty() ? "world" : frame_id));
     feedback("writing", 1, 1);
     ROS_INFO_STREAM("mesh_converter: " << summary << " -> " << prefix);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++goals_succeeded_;
+    }
     server_->setSucceeded(result, result.message);
   } catch (const ConversionCancelled& e) {
     result.success = false;

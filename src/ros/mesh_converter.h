@@ -30,6 +30,7 @@
 #include <string>
 
 #include "relaxed_connectivity/convert/surfel_conversion.h"
+#include "relaxed_connectivity/ros/node_diagnostics.h"
 
 namespace rc {
 
@@ -68,8 +69,11 @@ class MeshConverter {
   ros::Subscriber surfels_sub_;
   ros::Publisher marker_pub_;
   std::unique_ptr<Server> server_;
-  std::mutex mutex_;  // guards latest_
+  std::mutex mutex_;  // guards latest_ and the goal counts
   sensor_msgs::PointCloud2ConstPtr latest_;
+  unsigned goals_succeeded_ = 0, goals_aborted_ = 0;
+  std::string last_abort_;
+  NodeDiagnostics diagnostics_;  // the surfels input and the goals on /diagnostics
 };
 
 }  // namespace rc

@@ -2,6 +2,7 @@
 // and the latest cloud on `surfels`, with stage feedback, files, errors and the latched marker; cancellation
 // in each stage; bad goals aborted with a clear message while the node keeps serving.
 #include <actionlib/client/simple_action_client.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <relaxed_connectivity/ConvertSurfelsAction.h>
 #include <ros/ros.h>
@@ -9,6 +10,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -168,6 +170,31 @@ TEST_F(MeshConverterAction, BadGoalsAreAbortedClearlyAndTheNodeKeepsServing) {
     EXPECT_FALSE(client_.getResult()->success);
     EXPECT_NE(client_.getResult()->message.find(words), std::string::npos) << client_.getResult()->message;
   };
+  // /diagnostics counts the aborted goals ("mesh_converter: conversion").
+  std::mutex diagnostics_mutex;
+  int aborted_goals = -1;
+  ros::NodeHandle nh;
+  ros::Subscriber diagnostics = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 10, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
+        for (const auto& status : m->status)
+          for (const auto& kv : status.values)
+            if (status.name == "mesh_converter: conversion" && kv.key == "goals aborted") {
+              std::lock_guard<std::mutex> lock(diagnostics_mutex);
+              aborted_goals = std::stoi(kv.value);
+            }
+      });
+  auto abortedGoals = [&](int at_least) {  // waits up to 5 s for the count to reach at_least
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(5.0);
+    for (;;) {
+      {
+        std::lock_guard<std::mutex> lock(diagnostics_mutex);
+        if (aborted_goals >= at_least || ros::WallTime::now() > end) return aborted_goals;
+      }
+      ros::WallDuration(0.02).sleep();
+    }
+  };
+  const int aborted_before = abortedGoals(0);
+  ASSERT_GE(aborted_before, 0) << "no conversion status on /diagnostics";
   SurfelCloud no_normals = paintedSphere(1000);
   no_normals.normals.clear();
   Goal goal;
@@ -185,6 +212,7 @@ TEST_F(MeshConverterAction, BadGoalsAreAbortedClearlyAndTheNodeKeepsServing) {
   negative.cloud = toCloud(paintedSphere(1000));
   negative.color_error = -1;
   expectAborted(negative, "error parameters");
+  EXPECT_EQ(abortedGoals(aborted_before + 5), aborted_before + 5);
   // Still serving.
   Goal good;
   good.cloud = toCloud(paintedSphere(2000));
