@@ -3,7 +3,10 @@ export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
 export PYTHON_EXECUTABLE=/usr/bin/python3
 RC_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 RC_JOBS=${RC_JOBS:-$(nproc)}
-export RC_ROOT RC_JOBS
+# The install space of the catkin package (scripts/check_install): outside the checkout, since roslaunch and
+# rostest look for launch files anywhere below the package's folder (a copy there would be a second one).
+RC_INSTALL_PREFIX=${RC_INSTALL_PREFIX:-/tmp/relaxed_connectivity_install_$(echo "$RC_ROOT" | md5sum | cut -c1-8)}
+export RC_ROOT RC_JOBS RC_INSTALL_PREFIX
 # ccache (installed by scripts/setup) keeps objects across branch switches and reconfigurations; the sloppiness
 # lets it cache sources compiled with the precompiled headers.
 rc_launcher=()
@@ -24,7 +27,7 @@ rc_build_core() {
 rc_build_ros() {
   cmake -S "$RC_ROOT" -B "$RC_ROOT/build/ros" -DRC_WITH_ROS=ON -DCMAKE_BUILD_TYPE=Release \
     -DPYTHON_EXECUTABLE=/usr/bin/python3 -DRC_CORE_BUILD_DIR="$RC_ROOT/build/core" \
-    -DCMAKE_INSTALL_PREFIX="$RC_ROOT/build/ros_install" "${rc_launcher[@]}" "$@" >/dev/null
+    -DCMAKE_INSTALL_PREFIX="$RC_INSTALL_PREFIX" "${rc_launcher[@]}" "$@" >/dev/null
   cmake --build "$RC_ROOT/build/ros" -j "$RC_JOBS" ${RC_TARGETS:+--target $RC_TARGETS}
 }
 
