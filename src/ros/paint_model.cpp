@@ -114,14 +114,24 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   surfels_sub_.subscribe(nh_, "surfels", 1);
   surfels_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
       surfels_sub_, tf_buffer_, params_.world_frame, 5, nh_);
-  surfels_filter_->registerCallback(&PaintModel::surfelsCallback, this);
+  surfels_filter_->registerCallback(
+      [this](const sensor_msgs::PointCloud2ConstPtr& msg) { surfelsCallback(msg, msg->header.stamp); });
+  // An object stamped before the transforms kept (e.g. a latched scan older than the object's frame) is
+  // placed with the latest transform, as a static object is; without any, it is refused.
   surfels_filter_->registerFailureCallback([this](const sensor_msgs::PointCloud2ConstPtr& msg,
                                                   tf2_ros::filter_failure_reasons::FilterFailureReason) {
+    if (!msg->header.frame_id.empty() &&
+        tf_buffer_.canTransform(params_.world_frame, msg->header.frame_id, ros::Time(0))) {
+      ROS_WARN_STREAM("paint_model: surfels (frame '"
+                      << msg->header.frame_id << "') older than the transforms to '" << params_.world_frame
+                      << "': placed with the latest one");
+      return surfelsCallback(msg, ros::Time(0));
+    }
     ++rejected_;
     diagnostics_.rejected("surfels", "no transform of frame '" + msg->header.frame_id + "'");
     ROS_ERROR_STREAM("paint_model: rejected surfels (frame '"
                      << msg->header.frame_id << "'): no transform to '" << params_.world_frame
-                     << "' for their stamp (tf2_ros::MessageFilter); the current object stays");
+                     << "' (tf2_ros::MessageFilter); the current object stays");
   });
   pose_sub_ = nh_.subscribe(params_.device + "/pose", 10, &PaintModel::poseCallback, this,
                             ros::TransportHints().tcpNoDelay());
@@ -198,7 +208,7 @@ void PaintModel::installSurface(std::unique_ptr<PaintSurface> surface, const std
                                             << surface_->childCount() << " children), " << what);
 }
 
-void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
+void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg, ros::Time tf_time) {
   // The same object again (a latched topic re-sent, a reconnect): nothing to do.
   const size_t hash = std::hash<std::string_view>()(
       std::string_view(reinterpret_cast<const char*>(msg->data.data()), msg->data.size()));
@@ -212,9 +222,7 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
     if (!cloud.hasNormals())
       throw std::invalid_argument("the cloud has no normals (normal_x/y/z): run it through surfel_estimator");
     if (msg->header.frame_id != params_.world_frame) {
-      // (the message filter has seen it transformable at the cloud's stamp)
-      const auto tf =
-          tf_buffer_.lookupTransform(params_.world_frame, msg->header.frame_id, msg->header.stamp);
+      const auto tf = tf_buffer_.lookupTransform(params_.world_frame, msg->header.frame_id, tf_time);
       cloud.transform(tf2::transformToEigen(tf));
     }
     cloud.frame_id = params_.world_frame;

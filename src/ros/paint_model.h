@@ -103,7 +103,10 @@ class PaintModel {
   PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh);
   ~PaintModel();
 
-  void surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg);
+  /// A new object; its transform to world_frame is taken at `tf_time` (the cloud's stamp, which the message
+  /// filter has seen transformable, or ros::Time(0): the latest, for a cloud stamped before the transforms
+  /// kept).
+  void surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg, ros::Time tf_time);
   void poseCallback(const geometry_msgs::PoseStampedConstPtr& msg);
   /// One main-loop tick: advances the brush to the latest pose, paints, runs the background work, publishes.
   void tick(const ros::WallTimerEvent& event);
