@@ -215,6 +215,9 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg, ro
   {
     std::lock_guard<std::mutex> lock(model_mutex_);
     if (surface_ && hash == object_hash_ && msg->header.frame_id == object_frame_) return;
+    if (surface_ && object_hash_ != 0 && !msg->header.stamp.isZero() &&
+        msg->header.stamp < object_cloud_stamp_)
+      return;  // older than the current object (a message filter's late failure)
   }
   try {
     SurfelCloud cloud = PointCloud2Converter::fromMessage(*msg);
@@ -248,6 +251,7 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg, ro
     installSurface(std::move(surface), what);
     diagnostics_.accepted("surfels");
     object_hash_ = hash;
+    object_cloud_stamp_ = msg->header.stamp;
     object_frame_ = msg->header.frame_id;
     dropped_surfels_ += dropped;
   } catch (const std::exception& e) {  // keep the current object

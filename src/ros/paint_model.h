@@ -150,6 +150,7 @@ class PaintModel {
   std::unique_ptr<PaintSurface> surface_;
   size_t object_hash_ = 0;  // of the surfels message surface_ came from (0: loaded from a file)
   std::string object_frame_;
+  ros::Time object_cloud_stamp_;  // of that message: an older one (a late message filter failure) is ignored
   std::unique_ptr<PaintJournal> journal_;  // observes surface_ (destroyed before it)
   std::unique_ptr<PaintType> paint_type_;
   std::unique_ptr<PaletteSpec> palette_;
