@@ -64,7 +64,7 @@ TEST(FemSceneHeld, ATractionOnRollersGivesTheExactUniaxialStateOnEveryMesh) {
     const double nodal_error = uniaxialError(nodal, solveFemStatic(nodal), p);
     std::printf("top traction vs equal nodal forces: %.2e vs %.2e of %.2e\n",
                 uniaxialError(traction, result, p), nodal_error, exact_top);
-    EXPECT_GT(nodal_error, 0.01 * exact_top);
+    EXPECT_GT(nodal_error, 0.2 * exact_top);  // measured 23-59 %
   }
 }
 
