@@ -87,7 +87,10 @@ TEST_F(MeshConverterAction, AGoalsCloudBecomesFilesWithItsErrorsAndAMarker) {
   const std::vector<std::string> expected_stages = {
       "reading", "reconstruction", "simplification", "geometric error", "textures", "packing", "writing"};
   EXPECT_EQ(stages_, expected_stages);
-  EXPECT_NEAR(last_progress_, 1.0f, 1e-6f);
+  // The final feedback (progress 1) travels on another topic than the result and may come after it, when
+  // the client no longer reports feedback: the last one seen is at least the start of "writing".
+  EXPECT_GE(last_progress_, 0.9f);
+  EXPECT_LE(last_progress_, 1.0f + 1e-6f);
   // OBJ, MTL, colour and normal pages, glb
   EXPECT_EQ(result->files.size(), 2 + 2 * result->texture_pages + 1);
   for (const std::string& f : result->files) EXPECT_TRUE(std::filesystem::exists(f)) << f;
