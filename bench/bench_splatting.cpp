@@ -14,7 +14,8 @@
 //    (Mesa llvmpipe under Xvfb on machines without a GPU), only when an X display is usable (run under
 //    `xvfb-run -a`); otherwise a skip line is printed.
 // Then the cost of the EWA filter and of the depth tolerance against quality (holes inside the analytic
-// silhouette, seam angle between neighbouring pixels).
+// silhouette, seam angle between neighbouring pixels), and of exact silhouettes against the filtered
+// footprint.
 //   bench_splatting [--frames N] [--quick]
 #include <fcntl.h>
 #include <omp.h>
@@ -630,6 +631,42 @@ int main(int argc, char** argv) {
       std::printf("| %.2f | %s | %s | %zu | %.4f |\n", scale, ewa ? "on" : "off", spreadText(t.total).c_str(),
                   holes, seam);
     }
+  std::printf(
+      "\nExact silhouettes vs the filtered footprint (SplatConfig::exact_silhouettes; 100k and 1M surfels, 2 "
+      "threads, all outputs, the settings alternated 3 times, median of the medians; silhouette offset: the "
+      "radius of the covered disc minus the analytic silhouette, %.2f px)\n\n",
+      silhouette_px);
+  std::printf(
+      "| surfels | exact_silhouettes | total ms | visibility ms | silhouette offset [px] | holes |\n"
+      "|---|---|---|---|---|---|\n");
+  for (int count : {100000, 1000000}) {
+    const rc::SurfelCloud sphere = sampleSphere(1.0, count);
+    std::vector<double> total[2], visibility[2];
+    rc::RenderImages images[2];
+    for (int round = 0; round < 3; ++round)
+      for (int exact = 1; exact >= 0; --exact) {
+        rc::SplatConfig config;
+        config.threads = 2;
+        config.exact_silhouettes = exact != 0;
+        const Timing t =
+            medianOf(rc::SurfelRenderer(config), sphere, camera, &images[exact], std::min(frames, 5));
+        total[exact].push_back(t.total.median);
+        visibility[exact].push_back(t.visibility);
+      }
+    for (int exact = 1; exact >= 0; --exact) {
+      size_t holes;
+      double seam;
+      quality(images[exact], camera, silhouette_px, &holes, &seam);
+      const double radius = std::sqrt(double(coveredPixels(images[exact].depth)) / M_PI);
+      auto median = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v[v.size() / 2];
+      };
+      std::printf("| %s | %s | %.1f | %.1f | %+.2f | %zu |\n", count == 100000 ? "100k" : "1M",
+                  exact ? "on" : "off", median(total[exact]), median(visibility[exact]),
+                  radius - silhouette_px, holes);
+    }
+  }
   std::printf("\nload average at end: %s\n", loadAverage().c_str());
   return 0;
 }

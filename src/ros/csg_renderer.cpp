@@ -278,35 +278,14 @@ void CsgRenderer::reconfigure(relaxed_connectivity::SplatConfig& config, uint32_
       refused = "backface_culling with a difference or complement in the tree renders wrongly";
       config.backface_culling = splat.backface_culling;
     }
-    splat.ewa_filter = config.ewa_filter;
-    splat.lowpass_variance = config.lowpass_variance;
-    splat.cutoff_radius = config.cutoff_radius;
-    splat.depth_tolerance_scale = config.depth_tolerance_scale;
-    splat.exact_footprint = config.exact_footprint;
-    splat.backface_culling = config.backface_culling;
-    splat.shading = config.shading;
-    splat.ambient = config.ambient;
-    splat.diffuse = config.diffuse;
-    splat.specular = config.specular;
-    splat.shininess = config.shininess;
+    applySplatReconfigure(config, &splat);
     try {
       SurfelRenderer check(splat);  // validates
       pending_splat_ = splat;
       inputs_changed_ = true;            // re-render with them
     } catch (const std::exception& e) {  // answer with the settings that stay
       refused = e.what();
-      const SplatConfig& kept = pending_splat_ ? *pending_splat_ : params_.splat;
-      config.ewa_filter = kept.ewa_filter;
-      config.lowpass_variance = kept.lowpass_variance;
-      config.cutoff_radius = kept.cutoff_radius;
-      config.depth_tolerance_scale = kept.depth_tolerance_scale;
-      config.exact_footprint = kept.exact_footprint;
-      config.backface_culling = kept.backface_culling;
-      config.shading = kept.shading;
-      config.ambient = kept.ambient;
-      config.diffuse = kept.diffuse;
-      config.specular = kept.specular;
-      config.shininess = kept.shininess;
+      writeSplatReconfigure(pending_splat_ ? *pending_splat_ : params_.splat, &config);
     }
   }
   if (!refused.empty()) reject("reconfigure", refused);

@@ -14,9 +14,9 @@
 // Parameters  (private) fixed_frame, camera_frame, csg, patch_topics, use_surfels_topic, tf_queue_size,
 //             max_rate, width, height, horizontal_fov (degrees), fx fy cx cy (override the fov when fx > 0),
 //             orthographic, ortho_view_width, near_clip, far_clip, pose_tolerance, partner_method,
-//             ewa_filter, lowpass_variance, cutoff_radius, depth_tolerance_scale, shading, backface_culling
-//             (leave off for CSG: cavity walls are back faces), background [r g b], threads; see
-//             config/csg_demo.yaml.
+//             ewa_filter, lowpass_variance, cutoff_radius, depth_tolerance_scale, exact_footprint,
+//             exact_silhouettes, shading, backface_culling (leave off for CSG: cavity walls are back
+//             faces), background [r g b], threads; see config/csg_demo.yaml.
 //
 // A frame is rendered only when something changed (a new cloud, a new tree, the camera moved by more than
 // pose_tolerance), at most max_rate times per second. Bad input (malformed cloud, missing patch_id, normals

@@ -307,41 +307,15 @@ bool PaintRenderer::saveImage(relaxed_connectivity::PaintFile::Request& request,
 void PaintRenderer::reconfigure(relaxed_connectivity::SplatConfig& config, uint32_t) {
   std::lock_guard<std::mutex> lock(mutex_);
   SplatConfig splat = renderer_.config().splat;
-  splat.ewa_filter = config.ewa_filter;
-  splat.lowpass_variance = config.lowpass_variance;
-  splat.cutoff_radius = config.cutoff_radius;
-  splat.depth_tolerance_scale = config.depth_tolerance_scale;
-  splat.exact_footprint = config.exact_footprint;
-  splat.backface_culling = config.backface_culling;
-  splat.shading = config.shading;
-  splat.ambient = config.ambient;
-  splat.diffuse = config.diffuse;
-  splat.specular = config.specular;
-  splat.shininess = config.shininess;
-  const SplatConfig& now = renderer_.config().splat;
-  if (splat.ewa_filter == now.ewa_filter && splat.lowpass_variance == now.lowpass_variance &&
-      splat.cutoff_radius == now.cutoff_radius && splat.depth_tolerance_scale == now.depth_tolerance_scale &&
-      splat.exact_footprint == now.exact_footprint && splat.backface_culling == now.backface_culling &&
-      splat.shading == now.shading && splat.ambient == now.ambient && splat.diffuse == now.diffuse &&
-      splat.specular == now.specular && splat.shininess == now.shininess)
+  applySplatReconfigure(config, &splat);
+  if (sameSplatReconfigure(splat, renderer_.config().splat))
     return;  // e.g. the server's first call: the settings as they are
   try {
     renderer_.setSplatConfig(splat);
     dirty_ = true;
   } catch (const std::exception& e) {  // answer with the settings that stay
     ROS_ERROR_STREAM("paint_renderer: refused splat settings: " << e.what());
-    const SplatConfig& kept = renderer_.config().splat;
-    config.ewa_filter = kept.ewa_filter;
-    config.lowpass_variance = kept.lowpass_variance;
-    config.cutoff_radius = kept.cutoff_radius;
-    config.depth_tolerance_scale = kept.depth_tolerance_scale;
-    config.exact_footprint = kept.exact_footprint;
-    config.backface_culling = kept.backface_culling;
-    config.shading = kept.shading;
-    config.ambient = kept.ambient;
-    config.diffuse = kept.diffuse;
-    config.specular = kept.specular;
-    config.shininess = kept.shininess;
+    writeSplatReconfigure(renderer_.config().splat, &config);
   }
 }
 

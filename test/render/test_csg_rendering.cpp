@@ -139,21 +139,22 @@ TEST(CsgRendering, CubeWithOneTwentyFiveAndNineHundredSurfelFaces) {
 }
 
 TEST(CsgRendering, ThinSpikesOfASphereMinusSpheres) {
-  // 0.12% more than 1 px off (was 0.63% with a low-pass variance of 1 px^2, which widened every splat by
-  // 2 px beyond its disc and dilated silhouettes and edges).
-  expectMatchesAnalytic("spikes");
+  // 0.009% more than 1 px off with exact silhouettes (0.12% with the filtered footprint, whose low-pass
+  // filter dilated silhouettes by up to 1 px; 0.63% with a low-pass variance of 1 px^2).
+  expectMatchesAnalytic("spikes", 0, {0.0005, 0.0005});
 }
 
 TEST(CsgRendering, EllipsoidMinusTwoSpheres) {
-  // 0.15% more than 1 px off (was 1.17% with the 2 px wider splats of a 1 px^2 low-pass: a dilated
-  // silhouette, and tangent planes of grazing surfels extrapolated in front of the surface).
-  expectMatchesAnalytic("femur");
+  // 0.014% more than 1 px off with exact silhouettes (0.15% with the filtered footprint; 1.17% with the 2 px
+  // wider splats of a 1 px^2 low-pass: a dilated silhouette, and tangent planes of grazing surfels
+  // extrapolated in front of the surface).
+  expectMatchesAnalytic("femur", 0, {0.0005, 0.0005});
 }
 
 // Back-face culling is correct for intersections and unions (all surfaces face out) and refused for
 // differences: the walls of a subtracted solid are complemented patches, and culling them by their reversed
 // normal still left the rims wrong (measured before the refusal: 5.5 % of the pixels of spikes more than 1 px
-// off, 1.3 % of femur's, against 0.12 % and 0.15 % two-sided).
+// off, 1.3 % of femur's, against 0.12 % and 0.15 % two-sided, then with the filtered footprint).
 TEST(CsgRendering, BackFaceCullingWorksForIntersectionsAndIsRefusedForDifferences) {
   expectMatchesAnalytic("cube_densities", 0, {}, true);
   for (const char* name : {"spikes", "femur", "orbit"}) {

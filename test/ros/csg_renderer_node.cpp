@@ -23,6 +23,7 @@
 #include <mutex>
 #include <string>
 
+#include "reconfigure_support.h"
 #include "relaxed_connectivity/render/csg/analytic_csg.h"
 #include "relaxed_connectivity/render/csg/patch_sampling.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
@@ -400,34 +401,17 @@ TEST_F(CsgRendererNode, RendersTreesRejectsBadInputAndIdles) {
   ros::ServiceClient reconfigure =
       nh.serviceClient<dynamic_reconfigure::Reconfigure>("csg_renderer/set_parameters");
   ASSERT_TRUE(reconfigure.waitForExistence(ros::Duration(10)));
-  dynamic_reconfigure::Reconfigure wider;
-  dynamic_reconfigure::DoubleParameter variance;
-  variance.name = "lowpass_variance";
-  variance.value = 1.0;
-  wider.request.config.doubles.push_back(variance);
+  dynamic_reconfigure::Reconfigure wider = rc::reconfigureRequest({{"lowpass_variance", 1.0}});
   before = frameCount();
   ASSERT_TRUE(reconfigure.call(wider));
-  auto doubleOf = [](const dynamic_reconfigure::Config& c, const std::string& name) {
-    for (const auto& d : c.doubles)
-      if (d.name == name) return d.value;
-    return -1.0;
-  };
-  auto boolOf = [](const dynamic_reconfigure::Config& c, const std::string& name) {
-    for (const auto& b : c.bools)
-      if (b.name == name) return int(b.value);
-    return -1;
-  };
-  EXPECT_EQ(doubleOf(wider.response.config, "lowpass_variance"), 1.0);
+  EXPECT_EQ(rc::doubleOf(wider.response.config, "lowpass_variance"), 1.0);
   waitForFrame(before, [](const CsgRenderStats&) { return true; });
   waitFor([] { return false; }, 0.5);
   EXPECT_EQ(frameCount(), before + 1) << "one frame for the new settings";
-  dynamic_reconfigure::Reconfigure culling;
-  dynamic_reconfigure::BoolParameter cull;
-  cull.name = "backface_culling";
-  cull.value = true;
-  culling.request.config.bools.push_back(cull);
+  dynamic_reconfigure::Reconfigure culling = rc::reconfigureRequest({}, {}, {{"backface_culling", true}});
   ASSERT_TRUE(reconfigure.call(culling));
-  EXPECT_EQ(boolOf(culling.response.config, "backface_culling"), 0) << "culling with a difference accepted";
+  EXPECT_EQ(rc::boolOf(culling.response.config, "backface_culling"), 0)
+      << "culling with a difference accepted";
 }
 
 }  // namespace

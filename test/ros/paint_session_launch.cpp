@@ -16,6 +16,7 @@
 
 #include "launch_test_support.h"
 #include "paint_session_support.h"
+#include "reconfigure_support.h"
 
 namespace rc {
 namespace {
@@ -87,11 +88,7 @@ TEST(PaintSessionLaunch, ScansPaintsRendersAndFollowsTheObject) {
   ros::ServiceClient reconfigure =
       nh.serviceClient<dynamic_reconfigure::Reconfigure>("paint_renderer/set_parameters");
   ASSERT_TRUE(reconfigure.waitForExistence(ros::Duration(10)));
-  dynamic_reconfigure::Reconfigure wider;
-  dynamic_reconfigure::DoubleParameter variance;
-  variance.name = "lowpass_variance";
-  variance.value = 1.0;
-  wider.request.config.doubles.push_back(variance);
+  dynamic_reconfigure::Reconfigure wider = reconfigureRequest({{"lowpass_variance", 1.0}});
   const uint32_t full_before_settings = session.full_updates;
   ASSERT_TRUE(reconfigure.call(wider));
   EXPECT_TRUE(waitFor(

@@ -232,6 +232,13 @@ void DifferentialSurfelRenderer::update(const SurfelCloud& cloud, const SurfelCl
   // What rounding leaves of a pixel's weight once all its fragments are gone: far below one fragment's.
   const float residual = 0.01f * add_table[kWeightTableSteps];
   const bool wide = sc.wide_simd && avx2TilePassesAvailable();
+  // exact_silhouettes: the full render's test of fragments nearer than the front (a removed surfel takes
+  // back what it added; an added one in front of the kept front shows where its own disc covers).
+  const double cutoff_sigmas = sc.cutoff_radius / kKernelSigmaPerRadius;
+  const double coverage_filter = cutoff_sigmas * cutoff_sigmas * sc.lowpass_variance;
+  auto nearerFilter = [&](const SplatRaster& s) {
+    return sc.exact_silhouettes ? conicFilterVariance(s, sc.ewa_filter, coverage_filter) : -1.0;
+  };
   const DeferredShader shader(sc, *frame_);
   static const int32_t kNoPatch[kTileBufferSize] = {};
   SplatAccumulation& acc = accumulation_;
@@ -262,14 +269,16 @@ void DifferentialSurfelRenderer::update(const SurfelCloud& cloud, const SurfelCl
         const DeltaSplat& d = splats[items[item]];
         const float* table = d.remove ? remove_table.data() : add_table.data();
         if (wide) {
-          fragments +=
-              accumulateSplatAvx2(d.raster, rect, bound, front, d.blend, table, kWeightTableSteps, sums);
+          fragments += accumulateSplatAvx2(d.raster, rect, bound, front, d.blend, table, kWeightTableSteps,
+                                           sums, nearerFilter(d.raster));
           continue;
         }
         const float tolerance = d.raster.depth_tolerance;
+        NearerFragmentTest nearer(d.raster, nearerFilter(d.raster));
         rasterizeSplat(d.raster, rect, [&](int x, int y, float r2, float z) {
           const int i = (y - rect.y0) * kTileStride + x - rect.x0;
           if (z > bound[i] || z - tolerance > front[i]) return;
+          if (nearer.active() && z + tolerance < front[i] && !nearer.covers(x, y)) return;
           const int step = std::min(kWeightTableSteps, int(std::max(r2, 0.0f) * kWeightTableSteps + 0.5f));
           const float w = table[step];
           weight[i] += w;

@@ -110,6 +110,18 @@ SplatSetup setupCircularEwaSplat(const Vec3& center, const Vec3& normal, double 
                                  const CameraFrame& camera, const EwaParams& params, SplatRaster* raster,
                                  float* unit_normal = nullptr);
 
+/// The footprint of a set-up splat without the EWA low-pass filter (SplatConfig::exact_silhouettes): a copy
+/// of `filtered` whose conic, (V + v I)^-1 in cut-off units, becomes V^-1 (V the projected reconstruction
+/// kernel, v = `filter_variance` = cutoff_sigmas^2 lowpass_variance). False if no area is left (an edge-on
+/// disc thinner than float precision resolves): the splat covers no pixel centre.
+bool unfilteredFootprint(const SplatRaster& filtered, double filter_variance, SplatRaster* footprint);
+
+/// The filter variance in the conic of `s` for unfilteredFootprint: `filter` (cutoff_sigmas^2
+/// lowpass_variance) where the set-up added it (ewa_filter, or an edge-on splat), else 0.
+inline double conicFilterVariance(const SplatRaster& s, bool ewa_filter, double filter) {
+  return ewa_filter || (s.flags & SplatRaster::kEdgeOn) ? filter : 0.0;
+}
+
 /// World point on the surfel plane seen through pixel (u, v): the exact ray/plane intersection (for edge-on
 /// surfels clamped to the cut-off ellipse; the regularised affine inverse where the ray misses the plane).
 Vec3 fragmentWorldPoint(const SplatGeometry& geometry, const CameraFrame& camera, double u, double v);

@@ -38,6 +38,12 @@ struct SplatConfig {
   /// at the centre for every splat (EWA as published; large oblique splats fall short of their far side: 43 %
   /// of a grazing floor of nine discs left empty in test_large_splats).
   bool exact_footprint = true;
+  /// A pixel counts as covered by a surface only where its centre lies inside a splat's own (unfiltered)
+  /// footprint: silhouettes without the low-pass filter's dilation (up to 1 px at the default variance).
+  /// The filtered kernels still blend inside the covered pixels (anti-aliasing as EWA). Needs discs that
+  /// overlap in object space; off: the filtered footprint covers (EWA as published), which also closes
+  /// sub-pixel gaps between discs that do not overlap, at the price of the dilated silhouettes.
+  bool exact_silhouettes = true;
   int threads = 0;  ///< 0: all cores
   /// Surfels facing away from the camera are drawn too (two-sided, shaded with the flipped normal) unless
   /// this is set; culling them halves the work for closed models. Refused (std::invalid_argument) with a CSG

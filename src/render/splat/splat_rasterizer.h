@@ -84,7 +84,59 @@ inline void rasterizeSplat(const SplatRaster& s, const TileRect& tile, Visit&& v
   }
 }
 
+/// True if the centre of pixel (x, y) lies inside the cut-off ellipse of `s` (rasterizeSplat's arithmetic).
+inline bool coversPixel(const SplatRaster& s, int x, int y) {
+  const float dv = float(y) - s.center_v, du = float(x) - s.center_u;
+  const float r2_row = s.conic_c * dv * dv, r2_cross = 2.0f * s.conic_b * dv;
+  return (s.conic_a * du + r2_cross) * du + r2_row <= 1.0f;
+}
+
+/// Pass 2 with SplatConfig::exact_silhouettes: a fragment nearer than the pixel's front by more than its
+/// depth tolerance lies outside the footprints that cover the pixel; it blends only where its own splat
+/// covers the pixel (possible only for the differential renderer's later surfels, 5.7; a full render has
+/// none). The unfiltered footprint is derived on first need (such fragments are rare).
+class NearerFragmentTest {
+ public:
+  /// filter_variance: unfilteredFootprint's for this splat (0: the splat is unfiltered); < 0: no test.
+  NearerFragmentTest(const SplatRaster& s, double filter_variance) : s_(s), filter_(filter_variance) {}
+  bool active() const { return filter_ >= 0; }
+  /// The splat's own footprint, or null if it covers no pixel centre.
+  const SplatRaster* footprint() {
+    if (state_ == kUnknown) {
+      if (filter_ > 0) {
+        state_ = unfilteredFootprint(s_, filter_, &footprint_) ? kCovers : kEmpty;
+      } else {
+        footprint_ = s_;
+        state_ = kCovers;
+      }
+    }
+    return state_ == kCovers ? &footprint_ : nullptr;
+  }
+  bool covers(int x, int y) {
+    const SplatRaster* f = footprint();
+    return f && coversPixel(*f, x, y);
+  }
+
+ private:
+  enum State { kUnknown, kCovers, kEmpty };
+  const SplatRaster& s_;
+  double filter_;
+  State state_ = kUnknown;
+  SplatRaster footprint_;
+};
+
 #if defined(__SSE2__)
+/// coversPixel for the four pixels (x..x+3, y): all-ones lanes where covered.
+inline __m128 coversPixels4(const SplatRaster& s, int x, int y) {
+  const float dv = float(y) - s.center_v;
+  const __m128 row = _mm_set1_ps(s.conic_c * dv * dv), cross = _mm_set1_ps(2.0f * s.conic_b * dv);
+  const __m128 du =
+      _mm_sub_ps(_mm_add_ps(_mm_set1_ps(float(x)), _mm_setr_ps(0, 1, 2, 3)), _mm_set1_ps(s.center_u));
+  const __m128 r2 =
+      _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(s.conic_a), du), cross), du), row);
+  return _mm_cmple_ps(r2, _mm_set1_ps(1.0f));
+}
+
 inline __m128 select(__m128 mask, __m128 if_true, __m128 if_false) {
   return _mm_or_ps(_mm_and_ps(mask, if_true), _mm_andnot_ps(mask, if_false));
 }

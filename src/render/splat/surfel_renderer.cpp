@@ -438,6 +438,10 @@ struct TilePassOptions {
   bool separate_color_weight;  ///< colour-only clipping: the colour weight differs from the weight
   AccumulatedSums sums_needed;
   bool wide;  ///< AVX2 passes for unclipped splats
+  /// SplatConfig::exact_silhouettes: pass 1 counts only fragments inside a splat's unfiltered footprint.
+  bool exact_silhouettes;
+  bool ewa_filter;
+  double coverage_filter;  ///< the low-pass variance in the conic's cut-off units (cutoff_sigmas^2 v)
 };
 
 TilePassOptions tilePassOptions(const RenderFrameState& f) {
@@ -458,6 +462,10 @@ TilePassOptions tilePassOptions(const RenderFrameState& f) {
                         : AccumulatedSums{true, true, true, true, true};
   // Eight pixels at a time (AVX2) for unclipped splats where the CPU has it: bitwise the same images.
   o.wide = kSimd && config.wide_simd && !o.separate_color_weight && avx2TilePassesAvailable();
+  o.exact_silhouettes = config.exact_silhouettes;
+  o.ewa_filter = config.ewa_filter;
+  const double cutoff_sigmas = config.cutoff_radius / kKernelSigmaPerRadius;
+  o.coverage_filter = cutoff_sigmas * cutoff_sigmas * config.lowpass_variance;
   return o;
 }
 
@@ -511,15 +519,26 @@ class TileRenderer {
   }
   void selectTile(int tile);
   void visibilityPass();
+  /// Pass 1's footprint of s: its unfiltered one with exact_silhouettes, else s itself. False: it covers
+  /// no pixel centre.
+  bool coverage(const SplatRaster& s, SplatRaster* footprint) const;
+  /// NearerFragmentTest's filter variance for s (-1 without exact_silhouettes).
+  double nearerFilter(const SplatRaster& s) const {
+    return o_.exact_silhouettes ? conicFilterVariance(s, o_.ewa_filter, o_.coverage_filter) : -1.0;
+  }
   void visibilitySplat(uint32_t k, uint64_t* rows);
-  void visibilitySplatScalar(const SplatRaster& s, const SplatShading& front_shading, uint64_t* rows);
+  void visibilitySplatScalar(const SplatRaster& s, const SplatRaster* covering,
+                             const SplatShading& front_shading, uint64_t* rows);
+  /// exact_silhouettes: pixels no fragment covers get bound -inf (pass 2 draws nothing there).
+  void markUncovered();
   void updateBlockMax();
   bool occluded(const SplatRaster& s) const;
   void accumulationPass();
   void accumulateSplatScalar(const SplatRaster& s, const SplatBlend& shading, const uint64_t* rows, int row0);
 #if defined(__SSE2__)
   void visibilityUpdate4(int i, __m128 z, __m128 mask, __m128 tolerance4, const SplatShading& front_shading);
-  void visibilitySplatClipped4(const SplatRaster& s, const SplatShading& front_shading, uint64_t* rows);
+  void visibilitySplatClipped4(const SplatRaster& s, const SplatRaster* covering,
+                               const SplatShading& front_shading, uint64_t* rows);
   int colorKeep4(const SplatRaster& s, const ClipProgram* color_program, int x, int y, int lanes) const;
   void accumulateSplat4(const SplatRaster& s, const SplatBlend& shading, const uint64_t* rows, int row0);
 #endif
@@ -654,7 +673,23 @@ void TileRenderer::visibilityPass() {
       if (!occluded(staged_[items_[clip_item.item]]))
         visibilitySplat(clip_item.item, keep_rows_.data() + clip_item.rows);
   }
+  if (o_.exact_silhouettes) markUncovered();
   updateBlockMax();
+}
+
+void TileRenderer::markUncovered() {
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  for (int i = 0; i < kTileBufferSize; ++i)
+    if (tb_.bound[i] == kInfinity) tb_.bound[i] = -kInfinity;
+}
+
+bool TileRenderer::coverage(const SplatRaster& s, SplatRaster* footprint) const {
+  const double filter = nearerFilter(s);
+  if (!(filter > 0)) {
+    *footprint = s;
+    return true;
+  }
+  return unfilteredFootprint(s, filter, footprint);
 }
 
 /// Pass 1 of splat k. Clipped splats: the clip test runs only on fragments not behind the current bound
@@ -662,34 +697,39 @@ void TileRenderer::visibilityPass() {
 void TileRenderer::visibilitySplat(uint32_t k, uint64_t* rows) {
   const SplatRaster& s = staged_[items_[k]];
   const SplatShading& front_shading = staged_shading_[items_[k]];  // read only with separate patches
+  const bool clip_any = rows != nullptr;
+  SplatRaster footprint;
+  const bool covers = coverage(s, &footprint);
+  if (!covers && !clip_any) return;  // (clipped: its keep bits are still needed by pass 2)
+  const SplatRaster* covering = covers ? &footprint : nullptr;
   if (!kSimd) {
-    visibilitySplatScalar(s, front_shading, rows);
+    visibilitySplatScalar(s, covering, front_shading, rows);
     return;
   }
 #if defined(__SSE2__)
-  const bool clip_any = rows != nullptr;
   if (!clip_any && o_.wide && !o_.separate_patches) {
-    visibilitySplatAvx2(s, rect_, tb_.bound, tb_.front);
+    visibilitySplatAvx2(footprint, rect_, tb_.bound, tb_.front);
     return;
   }
   if (!clip_any) {
     const __m128 tolerance4 = _mm_set1_ps(s.depth_tolerance);
-    rasterizeSplat4(s, rect_, [&](int i, int, int, __m128, __m128 z, __m128 mask) {
+    rasterizeSplat4(footprint, rect_, [&](int i, int, int, __m128, __m128 z, __m128 mask) {
       visibilityUpdate4(i, z, mask, tolerance4, front_shading);
     });
     return;
   }
-  visibilitySplatClipped4(s, front_shading, rows);
+  visibilitySplatClipped4(s, covering, front_shading, rows);
 #endif
 }
 
-void TileRenderer::visibilitySplatScalar(const SplatRaster& s, const SplatShading& front_shading,
-                                         uint64_t* rows) {
+void TileRenderer::visibilitySplatScalar(const SplatRaster& s, const SplatRaster* covering,
+                                         const SplatShading& front_shading, uint64_t* rows) {
   const float tolerance = s.depth_tolerance;
   const bool clip_any = rows != nullptr;
   const bool clip_geometry = (s.flags & SplatRaster::kClip) != 0;
   const int row0 = std::max(int(s.y0), rect_.y0);
-  rasterizeSplat(s, rect_, [&](int x, int y, float, float z) {
+  // Clipped splats: keep bits over the filtered footprint (pass 2 blends it), updates where it covers.
+  rasterizeSplat(clip_any ? s : *covering, rect_, [&](int x, int y, float, float z) {
     const int i = index(x, y);
     if (clip_any && z <= tb_.bound[i]) {
       const bool kept = keeps(s, x, y);
@@ -697,6 +737,7 @@ void TileRenderer::visibilitySplatScalar(const SplatRaster& s, const SplatShadin
       rows[y - row0] |= uint64_t(kept) << (x - rect_.x0);
       if (clip_geometry && !kept) return;
     }
+    if (clip_any && !(covering && coversPixel(*covering, x, y))) return;
     tb_.bound[i] = std::min(tb_.bound[i], z + tolerance);
     if (z < tb_.front[i]) {
       tb_.front[i] = z;
@@ -727,8 +768,8 @@ void TileRenderer::visibilityUpdate4(int i, __m128 z, __m128 mask, __m128 tolera
 
 /// Clipped: collect per row the fragments not behind the current bound (bit x - x0) and their depth, test
 /// them a row at a time, then update with the kept ones.
-void TileRenderer::visibilitySplatClipped4(const SplatRaster& s, const SplatShading& front_shading,
-                                           uint64_t* rows) {
+void TileRenderer::visibilitySplatClipped4(const SplatRaster& s, const SplatRaster* covering,
+                                           const SplatShading& front_shading, uint64_t* rows) {
   const __m128 tolerance4 = _mm_set1_ps(s.depth_tolerance);
   const bool clip_geometry = (s.flags & SplatRaster::kClip) != 0;
   const int row0 = std::max(int(s.y0), rect_.y0);
@@ -758,13 +799,14 @@ void TileRenderer::visibilitySplatClipped4(const SplatRaster& s, const SplatShad
     }
     clipped_fragments += size_t(__builtin_popcountll(candidate & ~keep));
     rows[r] = keep;
+    if (!covering) continue;
     const uint64_t drawn = clip_geometry ? keep : candidate;
     const int base = (y - rect_.y0) * kTileStride;
     for (uint64_t bits = drawn; bits;) {
       const int b = __builtin_ctzll(bits);
-      const int lanes = int((bits >> b) & 0xF);
-      visibilityUpdate4(base + b, _mm_loadu_ps(clip_depth_ + base + b), laneMask(lanes), tolerance4,
-                        front_shading);
+      const __m128 lanes =
+          _mm_and_ps(laneMask(int((bits >> b) & 0xF)), coversPixels4(*covering, rect_.x0 + b, y));
+      visibilityUpdate4(base + b, _mm_loadu_ps(clip_depth_ + base + b), lanes, tolerance4, front_shading);
       bits &= ~(uint64_t(0xF) << b);
     }
   }
@@ -840,7 +882,7 @@ void TileRenderer::accumulationPass() {
         attributes.patch_id};
     if (o_.wide && !clip_geometry && !clip_color && !o_.separate_patches) {
       fragments += accumulateSplatAvx2(s, rect_, tb_.bound, tb_.front, shading, weight_table_.data(),
-                                       kWeightTableSteps, wide_sums_);
+                                       kWeightTableSteps, wide_sums_, nearerFilter(s));
       continue;
     }
     if (!kSimd) {
@@ -858,12 +900,14 @@ void TileRenderer::accumulateSplatScalar(const SplatRaster& s, const SplatBlend&
   const bool clip_geometry = (s.flags & SplatRaster::kClip) != 0;
   const bool clip_color = (s.flags & SplatRaster::kClipColorOnly) != 0;
   const float tolerance = s.depth_tolerance;
+  NearerFragmentTest nearer(s, nearerFilter(s));
   rasterizeSplat(s, rect_, [&](int x, int y, float r2, float z) {
     if (clip_geometry && !((rows[y - row0] >> (x - rect_.x0)) & 1)) return;
     const int i = index(x, y);
     // Blend iff within the tolerance of the front surfel AND within this surfel's own tolerance of
     // the front depth: eps_z from both the pixel's and the incoming surfel (3.2.1).
     if (z > tb_.bound[i] || z - tolerance > tb_.front[i]) return;
+    if (nearer.active() && z + tolerance < tb_.front[i] && !nearer.covers(x, y)) return;
     if (o_.separate_patches && shading.patch_id != tb_.front_patch[i] &&
         shading.normal[0] * tb_.front_normal[0][i] + shading.normal[1] * tb_.front_normal[1][i] +
                 shading.normal[2] * tb_.front_normal[2][i] <
@@ -916,10 +960,20 @@ void TileRenderer::accumulateSplat4(const SplatRaster& s, const SplatBlend& shad
   const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
   const __m128 tolerance4 = _mm_set1_ps(s.depth_tolerance);
   const __m128 all_lanes = _mm_castsi128_ps(_mm_set1_epi32(-1));
+  NearerFragmentTest nearer(s, nearerFilter(s));
   rasterizeSplat4(s, rect_, [&](int i, int x, int y, __m128 r2, __m128 z, __m128 mask) {
     if (clip_geometry) mask = _mm_and_ps(mask, laneMask(int(rows[y - row0] >> (x - rect_.x0)) & 0xF));
+    const __m128 front = _mm_loadu_ps(tb_.front + i);
     __m128 pass = _mm_and_ps(_mm_and_ps(mask, _mm_cmple_ps(z, _mm_loadu_ps(tb_.bound + i))),
-                             _mm_cmple_ps(_mm_sub_ps(z, tolerance4), _mm_loadu_ps(tb_.front + i)));
+                             _mm_cmple_ps(_mm_sub_ps(z, tolerance4), front));
+    if (nearer.active()) {
+      const __m128 closer = _mm_and_ps(pass, _mm_cmplt_ps(_mm_add_ps(z, tolerance4), front));
+      if (_mm_movemask_ps(closer)) {
+        const SplatRaster* own = nearer.footprint();
+        const __m128 covered = own ? coversPixels4(*own, x, y) : _mm_setzero_ps();
+        pass = _mm_andnot_ps(_mm_andnot_ps(covered, closer), pass);
+      }
+    }
     if (!_mm_movemask_ps(pass)) return;
     if (o_.separate_patches) pass = blendsWithFront(pass, patch, shading.normal, tb_, i);
     const int bits = _mm_movemask_ps(pass);

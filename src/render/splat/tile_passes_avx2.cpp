@@ -28,8 +28,8 @@ namespace {
 /// Boxes narrower than this are visited whole per row (at most two groups of eight).
 constexpr int kWideSpanMinWidth = 16;
 
-/// Calls visit(index, r2, z, mask) for every group of eight pixels of the splat in the tile with at least
-/// one inside the cut-off; the same arithmetic as rasterizeSplat4.
+/// Calls visit(index, x, y, r2, z, mask) for every group of eight pixels of the splat in the tile with at
+/// least one inside the cut-off; the same arithmetic as rasterizeSplat4.
 template <class Visit>
 inline void rasterizeSplat8(const SplatRaster& s, const TileRect& tile, Visit&& visit) {
   const int xb = std::max(int(s.x0), tile.x0), xe = std::min(int(s.x1), tile.x1);
@@ -60,9 +60,21 @@ inline void rasterizeSplat8(const SplatRaster& s, const TileRect& tile, Visit&& 
       __m256 z = _mm256_div_ps(_mm256_add_ps(num_row, _mm256_mul_ps(n1, du)),
                                _mm256_add_ps(den_row, _mm256_mul_ps(d1, du)));
       z = _mm256_min_ps(_mm256_max_ps(z, z_lo), z_hi);  // max(NaN, lo) = lo
-      visit(base + x, r2, z, mask);
+      visit(base + x, x, y, r2, z, mask);
     }
   }
+}
+
+/// coversPixel for the eight pixels (x..x+7, y).
+inline __m256 coversPixels8(const SplatRaster& s, int x, int y) {
+  const float dv = float(y) - s.center_v;
+  const __m256 row = _mm256_set1_ps(s.conic_c * dv * dv), cross = _mm256_set1_ps(2.0f * s.conic_b * dv);
+  const __m256 du =
+      _mm256_sub_ps(_mm256_add_ps(_mm256_set1_ps(float(x)), _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7)),
+                    _mm256_set1_ps(s.center_u));
+  const __m256 r2 = _mm256_add_ps(
+      _mm256_mul_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(s.conic_a), du), cross), du), row);
+  return _mm256_cmp_ps(r2, _mm256_set1_ps(1.0f), _CMP_LE_OQ);
 }
 
 inline void addTo(float* buffer, __m256 value) {
@@ -73,7 +85,7 @@ inline void addTo(float* buffer, __m256 value) {
 
 void visibilitySplatAvx2(const SplatRaster& s, const TileRect& tile, float* bound, float* front) {
   const __m256 tolerance = _mm256_set1_ps(s.depth_tolerance);
-  rasterizeSplat8(s, tile, [&](int i, __m256, __m256 z, __m256 mask) {
+  rasterizeSplat8(s, tile, [&](int i, int, int, __m256, __m256 z, __m256 mask) {
     const __m256 b = _mm256_loadu_ps(bound + i), f = _mm256_loadu_ps(front + i);
     _mm256_storeu_ps(bound + i, _mm256_blendv_ps(b, _mm256_min_ps(b, _mm256_add_ps(z, tolerance)), mask));
     const __m256 nearer = _mm256_and_ps(mask, _mm256_cmp_ps(z, f, _CMP_LT_OQ));
@@ -83,7 +95,8 @@ void visibilitySplatAvx2(const SplatRaster& s, const TileRect& tile, float* boun
 
 size_t accumulateSplatAvx2(const SplatRaster& s, const TileRect& tile, const float* bound, const float* front,
                            const SplatBlend& blend, const float* weight_table, int table_steps,
-                           const TileSums& sums) {
+                           const TileSums& sums, double nearer_filter) {
+  NearerFragmentTest nearer(s, nearer_filter);
   const __m256 tolerance = _mm256_set1_ps(s.depth_tolerance);
   const __m256 steps = _mm256_set1_ps(float(table_steps)), half = _mm256_set1_ps(0.5f);
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
@@ -93,10 +106,18 @@ size_t accumulateSplatAvx2(const SplatRaster& s, const TileRect& tile, const flo
                color2 = _mm256_set1_ps(blend.color[2]);
   const __m256 patch = _mm256_castsi256_ps(_mm256_set1_epi32(blend.patch_id));
   size_t fragments = 0;
-  rasterizeSplat8(s, tile, [&](int i, __m256 r2, __m256 z, __m256 mask) {
-    const __m256 pass =
-        _mm256_and_ps(_mm256_and_ps(mask, _mm256_cmp_ps(z, _mm256_loadu_ps(bound + i), _CMP_LE_OQ)),
-                      _mm256_cmp_ps(_mm256_sub_ps(z, tolerance), _mm256_loadu_ps(front + i), _CMP_LE_OQ));
+  rasterizeSplat8(s, tile, [&](int i, int x, int y, __m256 r2, __m256 z, __m256 mask) {
+    const __m256 f = _mm256_loadu_ps(front + i);
+    __m256 pass = _mm256_and_ps(_mm256_and_ps(mask, _mm256_cmp_ps(z, _mm256_loadu_ps(bound + i), _CMP_LE_OQ)),
+                                _mm256_cmp_ps(_mm256_sub_ps(z, tolerance), f, _CMP_LE_OQ));
+    if (nearer.active()) {
+      const __m256 closer = _mm256_and_ps(pass, _mm256_cmp_ps(_mm256_add_ps(z, tolerance), f, _CMP_LT_OQ));
+      if (_mm256_movemask_ps(closer)) {
+        const SplatRaster* own = nearer.footprint();
+        const __m256 covered = own ? coversPixels8(*own, x, y) : _mm256_setzero_ps();
+        pass = _mm256_andnot_ps(_mm256_andnot_ps(covered, closer), pass);
+      }
+    }
     const int bits = _mm256_movemask_ps(pass);
     if (!bits) return;
     fragments += size_t(__builtin_popcount(unsigned(bits)));
@@ -138,7 +159,7 @@ void visibilitySplatAvx2(const SplatRaster&, const TileRect&, float*, float*) {
 }
 
 size_t accumulateSplatAvx2(const SplatRaster&, const TileRect&, const float*, const float*, const SplatBlend&,
-                           const float*, int, const TileSums&) {
+                           const float*, int, const TileSums&, double) {
   throw std::logic_error("accumulateSplatAvx2: this build has no AVX2 tile passes");
 }
 

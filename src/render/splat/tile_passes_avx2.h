@@ -36,11 +36,13 @@ struct TileSums {
   int32_t* patch_id;
 };
 
-/// Pass 2 of one splat: blends every fragment with z <= bound and z - eps_z <= front with the Gaussian
-/// weight weight_table[round(r2 * table_steps)]. Returns the number of blended fragments.
+/// Pass 2 of one splat: blends every fragment with z <= bound and z - eps_z <= front with the Gaussian weight
+/// weight_table[round(r2 * table_steps)]; with nearer_filter >= 0 (SplatConfig::exact_silhouettes) one nearer
+/// than the front by more than eps_z only where the splat's own footprint covers the pixel
+/// (NearerFragmentTest). Returns the number of blended fragments.
 size_t accumulateSplatAvx2(const SplatRaster& s, const TileRect& tile, const float* bound, const float* front,
                            const SplatBlend& blend, const float* weight_table, int table_steps,
-                           const TileSums& sums);
+                           const TileSums& sums, double nearer_filter);
 
 }  // namespace splat_tile
 }  // namespace rc
