@@ -91,15 +91,20 @@ BrushPreset parseBrushPreset(const std::string& yaml_text, const std::string& so
     src.fail(root["surfel_spacing"] ? root["surfel_spacing"] : root,
              "surfel_spacing must not exceed bristle_length");
   // The explicit step limit of this skeleton (stability at the extreme: a stiff preset is refused, not run).
-  const double limit = BrushSkeleton(p).stepLimit();
-  if (p.integrator == BrushIntegrator::kVerlet && p.time_step > limit) {
-    std::ostringstream why;
-    why << "time_step " << p.time_step << " s exceeds the skeleton's explicit step limit " << limit
-        << " s (spring_stiffness " << p.spring_stiffness << " N/m, mass " << p.mass
-        << " kg): lower time_step or stiffness, raise mass, or use integrator: implicit_euler";
-    src.fail(root["time_step"] ? root["time_step"] : root, why.str());
-  }
+  const std::string step_problem = brushStepLimitProblem(p);
+  if (!step_problem.empty()) src.fail(root["time_step"] ? root["time_step"] : root, step_problem);
   return p;
+}
+
+std::string brushStepLimitProblem(const BrushPreset& p) {
+  if (p.integrator != BrushIntegrator::kVerlet) return "";
+  const double limit = BrushSkeleton(p).stepLimit();
+  if (p.time_step <= limit) return "";
+  std::ostringstream why;
+  why << "time_step " << p.time_step << " s exceeds the skeleton's explicit step limit " << limit
+      << " s (spring_stiffness " << p.spring_stiffness << " N/m, mass " << p.mass
+      << " kg): lower time_step or stiffness, raise mass, or use integrator: implicit_euler";
+  return why.str();
 }
 
 BrushPreset readBrushPreset(const std::string& path) {

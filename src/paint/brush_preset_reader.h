@@ -14,4 +14,8 @@ BrushPreset readBrushPreset(const std::string& path);
 /// The same from YAML text; `source_name` names it in errors.
 BrushPreset parseBrushPreset(const std::string& yaml_text, const std::string& source_name);
 
+/// Why the preset's skeleton cannot run (a Verlet time_step above the explicit step limit: the limit and what
+/// to change), or "" if it can. The reader and paint_model's dynamic_reconfigure refuse such a preset.
+std::string brushStepLimitProblem(const BrushPreset& preset);
+
 }  // namespace rc

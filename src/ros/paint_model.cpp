@@ -15,6 +15,7 @@
 #include "relaxed_connectivity/paint/paint_type_reader.h"
 #include "relaxed_connectivity/paint/painted_surface_io.h"
 #include "relaxed_connectivity/ros/brush_messages.h"
+#include "relaxed_connectivity/ros/paint_settings.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
 namespace rc {
@@ -147,6 +148,11 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
       std::make_unique<actionlib::SimpleActionServer<relaxed_connectivity::LoadPaintedStateAction>>(
           private_nh_, "load_state", [this](const auto& goal) { loadState(goal); }, false);
   load_action_->start();
+  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<relaxed_connectivity::PaintConfig>>(
+      reconfigure_mutex_, private_nh_);
+  publishSettings();  // before the callback: its first call then sees the files' settings, not the defaults
+  reconfigure_server_->setCallback(
+      [this](relaxed_connectivity::PaintConfig& config, uint32_t level) { reconfigure(config, level); });
   timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / params_.rate), &PaintModel::tick, this);
   ROS_INFO_STREAM("paint_model: brush '"
                   << brush_->preset().name << "' (" << brush_->skeleton().handleCount() << " handle points, "
@@ -568,9 +574,14 @@ void PaintModel::loadState(const relaxed_connectivity::LoadPaintedStateGoalConst
 bool PaintModel::setPaint(File::Request& req, File::Response& res) {
   try {
     auto paint = std::make_unique<PaintType>(readPaintType(req.path));
-    std::lock_guard<std::mutex> lock(model_mutex_);
-    setPaintType(std::move(paint));
-    return answer(res, true, "set_paint: the brush is loaded with '" + paint_type_->name + "'");
+    std::string name;
+    {
+      std::lock_guard<std::mutex> lock(model_mutex_);
+      setPaintType(std::move(paint));
+      name = paint_type_->name;
+    }
+    publishSettings();
+    return answer(res, true, "set_paint: the brush is loaded with '" + name + "'");
   } catch (const std::exception& e) {
     ++rejected_;
     return answer(res, false, std::string("set_paint: ") + e.what());
@@ -580,16 +591,67 @@ bool PaintModel::setPaint(File::Request& req, File::Response& res) {
 bool PaintModel::setBrush(File::Request& req, File::Response& res) {
   try {
     auto brush = std::make_unique<Brush>(readBrushPreset(req.path), params_.brush_options);
-    std::lock_guard<std::mutex> lock(model_mutex_);
-    brush_ = std::move(brush);
-    if (paint_type_) setPaintType(std::make_unique<PaintType>(*paint_type_));  // loads the new brush
-    brush_placed_ = false;  // the new brush starts at rest at the next pose
-    idle_ticks_ = 0;
-    if (journal_) journal_->endStroke();
-    return answer(res, true, "set_brush: '" + brush_->preset().name + "'");
+    std::string name;
+    {
+      std::lock_guard<std::mutex> lock(model_mutex_);
+      installBrush(std::move(brush));
+      name = brush_->preset().name;
+    }
+    publishSettings();
+    return answer(res, true, "set_brush: '" + name + "'");
   } catch (const std::exception& e) {
     ++rejected_;
     return answer(res, false, std::string("set_brush: ") + e.what());
+  }
+}
+
+void PaintModel::installBrush(std::unique_ptr<Brush> brush) {
+  brush_ = std::move(brush);
+  if (paint_type_) setPaintType(std::make_unique<PaintType>(*paint_type_));  // loads the new brush
+  brush_placed_ = false;  // the new brush starts at rest at the next pose
+  idle_ticks_ = 0;
+  if (journal_) journal_->endStroke();
+}
+
+void PaintModel::publishSettings() {
+  // Without a paint type its settings show the defaults; changes to them wait for a paint (~set_paint).
+  relaxed_connectivity::PaintConfig config = relaxed_connectivity::PaintConfig::__getDefault__();
+  {
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    writePaintReconfigure(brush_->preset(), paint_type_.get(), &config);
+  }
+  reconfigure_server_->updateConfig(config);
+}
+
+void PaintModel::reconfigure(relaxed_connectivity::PaintConfig& config, uint32_t) {
+  std::string refused;
+  {
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    BrushPreset preset = brush_->preset();
+    PaintType paint = paint_type_ ? *paint_type_ : PaintType();
+    applyPaintReconfigure(config, &preset, &paint);
+    if (!sameBrushSettings(preset, brush_->preset())) {
+      refused = brushStepLimitProblem(preset);
+      if (refused.empty()) {
+        try {
+          installBrush(std::make_unique<Brush>(preset, params_.brush_options));
+          ROS_INFO_STREAM("paint_model: brush '" << preset.name
+                                                 << "' rebuilt with the reconfigured settings");
+        } catch (const std::exception& e) {
+          refused = e.what();
+        }
+      }
+    }
+    if (paint_type_ && !samePaintSettings(paint, *paint_type_)) {
+      *paint_type_ = paint;  // the brush keeps the paint it carries; the new rates apply from the next tick
+      restartBackgroundWork();
+      ROS_INFO_STREAM("paint_model: paint '" << paint.name << "' reconfigured");
+    }
+    writePaintReconfigure(brush_->preset(), paint_type_.get(), &config);  // answer with what holds
+  }
+  if (!refused.empty()) {
+    ++rejected_;
+    ROS_ERROR_STREAM("paint_model: refused brush settings: " << refused << "; the brush stays as it was");
   }
 }
 

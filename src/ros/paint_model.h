@@ -19,7 +19,10 @@
 //             their surfels, a viewer's channels without the paint columns)
 //             paint_stats (relaxed_connectivity/PaintStats, every stats_period seconds)
 // Services    ~undo, ~redo, ~clear (relaxed_connectivity/PaintCommand), ~save, ~load, ~set_paint, ~set_brush
-//             (relaxed_connectivity/PaintFile)
+//             (relaxed_connectivity/PaintFile); dynamic_reconfigure (~set_parameters,
+//             config/dynamic_reconfigure/Paint.cfg): the brush's physical parameters (a change rebuilds the
+//             brush at rest; a Verlet step above the explicit limit is refused) and the paint's rates, shown
+//             as loaded from the files
 // Actions     ~load_state (relaxed_connectivity/LoadPaintedState: ~load with progress feedback)
 // Parameters  (private) brush (preset file, required), device ("haptic"), world_frame ("world"), rate (main
 //             loop [Hz], 60; the brush holds still at the latest pose until a new one arrives),
@@ -37,10 +40,12 @@
 #pragma once
 
 #include <actionlib/server/simple_action_server.h>
+#include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <message_filters/subscriber.h>
 #include <relaxed_connectivity/LoadPaintedStateAction.h>
 #include <relaxed_connectivity/PaintCommand.h>
+#include <relaxed_connectivity/PaintConfig.h>
 #include <relaxed_connectivity/PaintFile.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -49,6 +54,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <atomic>
+#include <boost/thread/recursive_mutex.hpp>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -121,6 +127,12 @@ class PaintModel {
   bool load(File::Request& req, File::Response& res);
   bool setPaint(File::Request& req, File::Response& res);
   bool setBrush(File::Request& req, File::Response& res);
+  /// dynamic_reconfigure (Paint.cfg): applies what holds and answers with it in `config`.
+  void reconfigure(relaxed_connectivity::PaintConfig& config, uint32_t level);
+  /// Shows the current brush and paint settings on the reconfigure server (model_mutex_ not held).
+  void publishSettings();
+  /// Replaces the brush (model_mutex_ held): loaded with the paint type, at rest at the next pose.
+  void installBrush(std::unique_ptr<Brush> brush);
   void loadState(const relaxed_connectivity::LoadPaintedStateGoalConstPtr& goal);
   /// Loads a saved state (outside the model lock) and installs it; returns the message for the caller and in
   /// *active_surfels the count as installed (the main loop's downsampling may change it right after).
@@ -181,6 +193,9 @@ class PaintModel {
   std::vector<ros::ServiceServer> services_;
   ros::WallTimer timer_;
   std::unique_ptr<actionlib::SimpleActionServer<relaxed_connectivity::LoadPaintedStateAction>> load_action_;
+  // ~set_parameters (dynamic_reconfigure), started with the settings of the loaded files.
+  boost::recursive_mutex reconfigure_mutex_;  // the server's (updateConfig needs one it does not own)
+  std::unique_ptr<dynamic_reconfigure::Server<relaxed_connectivity::PaintConfig>> reconfigure_server_;
 };
 
 }  // namespace rc

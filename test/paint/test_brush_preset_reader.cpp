@@ -64,5 +64,18 @@ TEST(BrushPresetReader, AStiffPresetAboveTheStepLimitIsRefused) {
             "brush.yaml:1:13: integrator: unknown 'rk4' (known: verlet, implicit_euler)");
 }
 
+TEST(BrushPresetReader, StepLimitProblemOfAPresetBuiltInCode) {
+  // What paint_model's dynamic_reconfigure checks before rebuilding the brush.
+  BrushPreset p;
+  const double limit = BrushSkeleton(p).stepLimit();
+  p.time_step = 0.5 * limit;
+  EXPECT_EQ(brushStepLimitProblem(p), "");
+  p.time_step = 2 * limit;
+  EXPECT_EQ(brushStepLimitProblem(p).rfind("time_step ", 0), 0u) << brushStepLimitProblem(p);
+  EXPECT_NE(brushStepLimitProblem(p).find("explicit step limit"), std::string::npos);
+  p.integrator = BrushIntegrator::kImplicitEuler;
+  EXPECT_EQ(brushStepLimitProblem(p), "");
+}
+
 }  // namespace
 }  // namespace rc

@@ -1,11 +1,12 @@
 // paint_model's services and messages in a running session (launch/brush_demo.launch): deltas, undo/redo,
-// save/load, clear, set_paint, a second object while painted, stats.
+// save/load, clear, set_paint, a second object while painted, stats, dynamic_reconfigure of brush and paint.
 // (boost::function inside actionlib's client warns of a maybe-uninitialized copy with GCC 12)
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <actionlib/client/simple_action_client.h>
 #pragma GCC diagnostic pop
 #include <gtest/gtest.h>
+#include <relaxed_connectivity/BrushContact.h>
 #include <relaxed_connectivity/LoadPaintedStateAction.h>
 #include <relaxed_connectivity/PaintCommand.h>
 #include <relaxed_connectivity/PaintDelta.h>
@@ -23,6 +24,7 @@
 #include <mutex>
 #include <vector>
 
+#include "reconfigure_support.h"
 #include "relaxed_connectivity/paint/paint_palette.h"
 #include "relaxed_connectivity/ros/point_cloud2_converter.h"
 
@@ -245,6 +247,74 @@ TEST(PaintModelServices, DeltasUndoRedoSaveLoadClearAndASecondObject) {
   other.publish(PointCloud2Converter::toMessage(with_nan));
   EXPECT_TRUE(l.waitFor([&] { return l.stats->originals == 3 + palette_points; }, 5.0)) << l.stats->originals;
   EXPECT_EQ(l.stats->dropped_surfels, 1u);
+}
+
+// dynamic_reconfigure (Paint.cfg): the settings show the loaded files; a brush change rebuilds the brush (its
+// contact parameters change), one above the Verlet step limit is refused with the brush kept; a paint change
+// answers with the new rate; ~set_brush shows the new file's settings.
+TEST(PaintModelServices, BrushAndPaintSettingsReconfigure) {
+  ros::NodeHandle nh;
+  std::mutex mutex;
+  relaxed_connectivity::BrushContactConstPtr contact;
+  auto contact_sub = nh.subscribe<relaxed_connectivity::BrushContact>(
+      "brush_contact", 10, [&](const relaxed_connectivity::BrushContactConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        contact = m;
+      });
+  auto latestContact = [&](double penalty, double friction, double seconds) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+    while (ros::WallTime::now() < end) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (contact && contact->penalty_stiffness == penalty && contact->friction == friction) return true;
+      }
+      ros::WallDuration(0.02).sleep();
+    }
+    return false;
+  };
+  // The flat preset's K_p and eta (config/paint/brushes/flat.yaml, set by the test before) in the contacts.
+  EXPECT_TRUE(latestContact(400, 2.0, 10.0));
+  ros::ServiceClient reconfigure =
+      nh.serviceClient<dynamic_reconfigure::Reconfigure>("paint_model/set_parameters");
+  ASSERT_TRUE(reconfigure.waitForExistence(ros::Duration(10)));
+  double shown = 0;
+  EXPECT_TRUE(ros::param::get("/paint_model/time_step", shown));
+  EXPECT_EQ(shown, 8.0e-4);  // flat.yaml's (shown since ~set_brush), not Paint.cfg's default
+
+  dynamic_reconfigure::Reconfigure stiffer =
+      reconfigureRequest({{"penalty_stiffness", 777.0}, {"friction", 3.5}});
+  ASSERT_TRUE(reconfigure.call(stiffer));
+  EXPECT_EQ(doubleOf(stiffer.response.config, "penalty_stiffness"), 777.0);
+  EXPECT_EQ(doubleOf(stiffer.response.config, "friction"), 3.5);
+  EXPECT_TRUE(latestContact(777, 3.5, 10.0)) << "the rebuilt brush's contact parameters";
+
+  // K_s 4000 N/m puts the Verlet step 8e-4 s above the skeleton's limit: refused, answered with 40.
+  dynamic_reconfigure::Reconfigure unstable = reconfigureRequest({{"spring_stiffness", 4000.0}});
+  ASSERT_TRUE(reconfigure.call(unstable));
+  EXPECT_EQ(doubleOf(unstable.response.config, "spring_stiffness"), 40.0);
+  // ... accepted with the implicit integrator (no step limit).
+  dynamic_reconfigure::Reconfigure implicit =
+      reconfigureRequest({{"spring_stiffness", 4000.0}, {"time_step", 0.0333}}, {{"integrator", 1}});
+  ASSERT_TRUE(reconfigure.call(implicit));
+  EXPECT_EQ(doubleOf(implicit.response.config, "spring_stiffness"), 4000.0);
+  EXPECT_EQ(intOf(implicit.response.config, "integrator"), 1);
+  EXPECT_TRUE(latestContact(777, 3.5, 10.0));  // still stepping
+
+  dynamic_reconfigure::Reconfigure faster = reconfigureRequest({{"transfer_to_surface", 12.0}});
+  ASSERT_TRUE(reconfigure.call(faster));
+  EXPECT_EQ(doubleOf(faster.response.config, "transfer_to_surface"), 12.0);
+
+  relaxed_connectivity::PaintFile round;
+  round.request.path = std::string(RC_SOURCE_DIR) + "/config/paint/brushes/round.yaml";
+  ASSERT_TRUE(call("paint_model/set_brush", round)) << round.response.message;
+  EXPECT_TRUE(ros::param::get("/paint_model/time_step", shown));
+  EXPECT_EQ(shown, 1.0e-3);  // round.yaml's
+  int integrator = -1;
+  EXPECT_TRUE(ros::param::get("/paint_model/integrator", integrator));
+  EXPECT_EQ(integrator, 0);  // verlet
+  EXPECT_TRUE(ros::param::get("/paint_model/penalty_stiffness", shown));
+  EXPECT_EQ(shown, 400.0);
+  EXPECT_TRUE(latestContact(400, 2.0, 10.0));
 }
 
 }  // namespace
