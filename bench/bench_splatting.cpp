@@ -16,7 +16,7 @@
 // Then the cost of the EWA filter and of the depth tolerance against quality (holes inside the analytic
 // silhouette, seam angle between neighbouring pixels), and of exact silhouettes against the filtered
 // footprint.
-//   bench_splatting [--frames N] [--quick]
+//   bench_splatting [--frames N] [--quick] [--silhouettes]
 #include <fcntl.h>
 #include <omp.h>
 #include <sched.h>
@@ -472,16 +472,66 @@ std::string spreadText(const Spread& s, const char* format = "%.1f") {
 
 }  // namespace
 
+void exactSilhouettesTable(const rc::Camera& camera, double silhouette_px, int frames) {
+  std::printf(
+      "\nExact silhouettes vs the filtered footprint (SplatConfig::exact_silhouettes; 100k and 1M surfels, 2 "
+      "threads, all outputs, the settings alternated 3 times, median of the medians; silhouette offset: half "
+      "the "
+      "covered span of the centre row minus the analytic silhouette radius, %.2f px)\n\n",
+      silhouette_px);
+  std::printf(
+      "| surfels | exact_silhouettes | total ms | visibility ms | silhouette offset [px] | holes |\n"
+      "|---|---|---|---|---|---|\n");
+  for (int count : {100000, 1000000}) {
+    const rc::SurfelCloud sphere = sampleSphere(1.0, count);
+    std::vector<double> total[2], visibility[2];
+    rc::RenderImages images[2];
+    for (int round = 0; round < 3; ++round)
+      for (int exact = 1; exact >= 0; --exact) {
+        rc::SplatConfig config;
+        config.threads = 2;
+        config.exact_silhouettes = exact != 0;
+        const Timing t =
+            medianOf(rc::SurfelRenderer(config), sphere, camera, &images[exact], std::min(frames, 5));
+        total[exact].push_back(t.total.median);
+        visibility[exact].push_back(t.visibility);
+      }
+    for (int exact = 1; exact >= 0; --exact) {
+      size_t holes;
+      double seam;
+      quality(images[exact], camera, silhouette_px, &holes, &seam);
+      // The covered span of the centre row (the sphere's disc is taller than the image).
+      const uint32_t row = uint32_t(std::lround(camera.cy));
+      int first = -1, last = -1;
+      for (uint32_t u = 0; u < images[exact].width; ++u)
+        if (images[exact].weight[size_t(row) * images[exact].width + u] > 0) {
+          if (first < 0) first = int(u);
+          last = int(u);
+        }
+      const double radius = 0.5 * (last - first + 1);
+      auto median = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v[v.size() / 2];
+      };
+      std::printf("| %s | %s | %.1f | %.1f | %+.2f | %zu |\n", count == 100000 ? "100k" : "1M",
+                  exact ? "on" : "off", median(total[exact]), median(visibility[exact]),
+                  radius - silhouette_px, holes);
+    }
+  }
+}
+
 int main(int argc, char** argv) {
   int frames = 9;
-  bool quick = false;
+  bool quick = false, silhouettes_only = false;  // --silhouettes: the last table alone
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
       frames = std::max(1, std::atoi(argv[++i]));
     } else if (std::strcmp(argv[i], "--quick") == 0) {
       quick = true;
+    } else if (std::strcmp(argv[i], "--silhouettes") == 0) {
+      silhouettes_only = true;
     } else {
-      std::fprintf(stderr, "usage: %s [--frames N] [--quick]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--frames N] [--quick] [--silhouettes]\n", argv[0]);
       return 2;
     }
   }
@@ -492,6 +542,10 @@ int main(int argc, char** argv) {
   const double distance = 3.0;
   camera.lookAt(Vec3(distance, 0, 0), Vec3::Zero());
   const double silhouette_px = camera.fx / std::sqrt(distance * distance - 1);
+  if (silhouettes_only) {
+    exactSilhouettesTable(camera, silhouette_px, frames);
+    return 0;
+  }
   {
     rc::RenderImages probe;
     rc::RenderStats stats;
@@ -631,42 +685,7 @@ int main(int argc, char** argv) {
       std::printf("| %.2f | %s | %s | %zu | %.4f |\n", scale, ewa ? "on" : "off", spreadText(t.total).c_str(),
                   holes, seam);
     }
-  std::printf(
-      "\nExact silhouettes vs the filtered footprint (SplatConfig::exact_silhouettes; 100k and 1M surfels, 2 "
-      "threads, all outputs, the settings alternated 3 times, median of the medians; silhouette offset: the "
-      "radius of the covered disc minus the analytic silhouette, %.2f px)\n\n",
-      silhouette_px);
-  std::printf(
-      "| surfels | exact_silhouettes | total ms | visibility ms | silhouette offset [px] | holes |\n"
-      "|---|---|---|---|---|---|\n");
-  for (int count : {100000, 1000000}) {
-    const rc::SurfelCloud sphere = sampleSphere(1.0, count);
-    std::vector<double> total[2], visibility[2];
-    rc::RenderImages images[2];
-    for (int round = 0; round < 3; ++round)
-      for (int exact = 1; exact >= 0; --exact) {
-        rc::SplatConfig config;
-        config.threads = 2;
-        config.exact_silhouettes = exact != 0;
-        const Timing t =
-            medianOf(rc::SurfelRenderer(config), sphere, camera, &images[exact], std::min(frames, 5));
-        total[exact].push_back(t.total.median);
-        visibility[exact].push_back(t.visibility);
-      }
-    for (int exact = 1; exact >= 0; --exact) {
-      size_t holes;
-      double seam;
-      quality(images[exact], camera, silhouette_px, &holes, &seam);
-      const double radius = std::sqrt(double(coveredPixels(images[exact].depth)) / M_PI);
-      auto median = [](std::vector<double> v) {
-        std::sort(v.begin(), v.end());
-        return v[v.size() / 2];
-      };
-      std::printf("| %s | %s | %.1f | %.1f | %+.2f | %zu |\n", count == 100000 ? "100k" : "1M",
-                  exact ? "on" : "off", median(total[exact]), median(visibility[exact]),
-                  radius - silhouette_px, holes);
-    }
-  }
+  exactSilhouettesTable(camera, silhouette_px, frames);
   std::printf("\nload average at end: %s\n", loadAverage().c_str());
   return 0;
 }

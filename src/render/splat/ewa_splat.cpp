@@ -315,12 +315,15 @@ bool unfilteredFootprint(const SplatRaster& filtered, double filter_variance, Sp
   const double det = a * c - b * b;
   if (!(det > 0) || !std::isfinite(det)) return false;
   // The conic's inverse is the filtered covariance (cut-off units); remove the filter and invert back.
-  const double v00 = c / det - filter_variance, v01 = -b / det, v11 = a / det - filter_variance;
+  const double inverse_det = 1.0 / det;
+  const double v00 = c * inverse_det - filter_variance, v01 = -b * inverse_det,
+               v11 = a * inverse_det - filter_variance;
   const double det_unfiltered = v00 * v11 - v01 * v01;
   if (!(v00 > 0) || !(v11 > 0) || !(det_unfiltered > 1e-12 * (v00 + v11) * (v00 + v11))) return false;
-  footprint->conic_a = float(v11 / det_unfiltered);
-  footprint->conic_b = float(-v01 / det_unfiltered);
-  footprint->conic_c = float(v00 / det_unfiltered);
+  const double inverse_unfiltered = 1.0 / det_unfiltered;
+  footprint->conic_a = float(v11 * inverse_unfiltered);
+  footprint->conic_b = float(-v01 * inverse_unfiltered);
+  footprint->conic_c = float(v00 * inverse_unfiltered);
   return std::isfinite(footprint->conic_a) && std::isfinite(footprint->conic_b) &&
          std::isfinite(footprint->conic_c);
 }
