@@ -63,8 +63,8 @@ inline size_t savedPointCount(ros::NodeHandle& nh, const std::string& service,
   return count;
 }
 
-/// config/rviz/<name>.rviz has the fixed frame "world" and shows `expected_displays` PointCloud2/Marker
-/// topics, each of them advertised by somebody.
+/// config/rviz/<name>.rviz has the fixed frame "world" and shows `expected_displays` PointCloud2,
+/// SurfelCloud or Marker topics, each of them advertised by somebody.
 inline void expectRvizTopicsPublished(const std::string& rviz_path, int expected_displays) {
   const YAML::Node rviz = YAML::LoadFile(rviz_path);
   const YAML::Node manager = rviz["Visualization Manager"];
@@ -77,7 +77,8 @@ inline void expectRvizTopicsPublished(const std::string& rviz_path, int expected
   for (const auto& display : manager["Displays"]) {
     const std::string type = display["Class"].as<std::string>();
     std::string topic;
-    if (type == "rviz/PointCloud2") topic = display["Topic"].as<std::string>();
+    if (type == "rviz/PointCloud2" || type == "relaxed_connectivity/SurfelCloud")
+      topic = display["Topic"].as<std::string>();
     if (type == "rviz/Marker") topic = display["Marker Topic"].as<std::string>();
     if (topic.empty()) continue;
     ++shown;
