@@ -110,7 +110,8 @@ TEST(ScanLaunch, RvizConfigShowsPublishedTopics) {
   ASSERT_TRUE(ros::master::getTopics(topics));
   int clouds = 0;
   for (const auto& display : manager["Displays"]) {
-    if (display["Class"].as<std::string>() != "rviz/PointCloud2") continue;
+    const std::string type = display["Class"].as<std::string>();
+    if (type != "rviz/PointCloud2" && type != "relaxed_connectivity/SurfelCloud") continue;
     ++clouds;
     const std::string topic = display["Topic"].as<std::string>();
     const bool published = std::any_of(topics.begin(), topics.end(), [&](const ros::master::TopicInfo& t) {
