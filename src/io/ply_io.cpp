@@ -151,9 +151,8 @@ class BinarySource {
     return true;
   }
   bool skip(ScalarType type, size_t n) {
-    const size_t bytes = n * scalarSize(type);
-    if (static_cast<size_t>(end_ - p_) < bytes) return false;
-    p_ += bytes;
+    if (n > static_cast<size_t>(end_ - p_) / scalarSize(type)) return false;  // (n * size could overflow)
+    p_ += n * scalarSize(type);
     return true;
   }
   std::string problem() const { return "unexpected end of file"; }
@@ -365,11 +364,13 @@ class ElementReader {
   }
   void readIndexList(const PlyElement& element, size_t i, const PlyProperty& prop) {
     const int64_t n = readListLength(element, i, prop);
-    indices_.resize(static_cast<size_t>(n));
+    // Grown as read: a list length beyond the data fails where the data ends, not in an allocation of the
+    // length (a binary list of 2^32 entries asked for 32 GB, found by fuzzing).
+    indices_.clear();
     uint8_t value[8];
     for (int64_t k = 0; k < n; ++k) {
       if (!src_.read(prop.type, value)) fail(element, i, src_.problem());
-      indices_[k] = scalarToInt64(value, prop.type);
+      indices_.push_back(scalarToInt64(value, prop.type));
     }
   }
 

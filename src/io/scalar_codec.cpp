@@ -2,6 +2,8 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstring>
+#include <limits>
 
 #include "relaxed_connectivity/io/text_lines.h"
 
@@ -28,8 +30,10 @@ bool parseInteger(std::string_view token, uint8_t* out) {
     store(v, out);
     return true;
   }
-  double d;  // "3.0" or "1e3" written for an integer property
+  double d;  // "3.0" or "1e3" written for an integer property (within the type's range: found by fuzzing)
   if (!parseDouble(token, &d) || d != std::floor(d)) return false;
+  if (!(d >= double(std::numeric_limits<T>::min()) && d <= double(std::numeric_limits<T>::max())))
+    return false;
   store(static_cast<T>(d), out);
   return true;
 }
@@ -42,9 +46,13 @@ void appendNumber(T v, std::string* out) {
 }  // namespace
 
 int64_t scalarToInt64(const uint8_t* p, ScalarType type) {
-  // Every integer type up to 32 bits is exact in a double; non-finite floats map to -1.
+  // Every integer type up to 32 bits is exact in a double; non-finite floats map to -1, floats beyond the
+  // int64 range to its ends (the conversion itself would be undefined).
   const double d = scalarToDouble(p, type);
-  return std::isfinite(d) ? static_cast<int64_t>(d) : -1;
+  if (!std::isfinite(d)) return -1;
+  if (d >= 9.2e18) return std::numeric_limits<int64_t>::max();
+  if (d <= -9.2e18) return std::numeric_limits<int64_t>::min();
+  return static_cast<int64_t>(d);
 }
 
 bool parseScalar(std::string_view token, ScalarType type, uint8_t* out) {
