@@ -66,6 +66,7 @@ void NeighborLists::build(const std::vector<Vec3>& points, double radius, const 
     size_t local = 0;
     for (size_t s = thread_first_[t]; s < thread_first_[t + 1]; ++s) {
       const size_t dst = offsets_[sorted_[s].id], len = row_count_[s];
+      if (len == 0) continue;  // (memcpy from an empty buffer's null data is undefined: UBSan)
       std::memcpy(indices_.data() + dst, buffer.indices.data() + local, len * sizeof(uint32_t));
       if (options.store_sq_dists)
         std::memcpy(sq_dists_.data() + dst, buffer.sq_dists.data() + local, len * sizeof(double));
