@@ -1,6 +1,6 @@
-// launch/paint_session.launch playing a recorded session (bag:=, device:=topic; paint_session_launch_bag.test):
-// the session runs in the bag's simulated time, scans and paints the recorded object, and keeps running after
-// the bag ends.
+// launch/paint_session.launch playing a recorded session (bag:=, device:=topic;
+// paint_session_launch_bag.test): the session runs in the bag's simulated time, scans and paints the recorded
+// object, and keeps running after the bag ends.
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 
@@ -23,7 +23,8 @@ TEST(PaintSessionLaunchBag, ARecordedSessionIsScannedAndPaintedInSimulatedTime) 
   EXPECT_GT(session.paint_stats.header.stamp.toSec(), kBagStart);  // stamped in the recording's time
   ASSERT_TRUE(waitFor([&] { return session.paint_stats.children > 500; }, 60))
       << session.paint_stats.children << " children, " << session.pose_count << " device poses";
-  EXPECT_GT(session.pose_count, 1000u);  // the recorded stroke, from the bag
+  // The recorded stroke, from the bag (6,809 poses; the test's own subscription may lag under load).
+  EXPECT_TRUE(waitFor([&] { return session.pose_count > 1000; }, 30)) << session.pose_count << " poses";
   // rosbag play --keep-alive: the clock runs on past the bag's end and the session with it.
   EXPECT_TRUE(waitFor([&] { return session.paint_stats.header.stamp.toSec() > kBagEnd + 3; }, 30))
       << session.paint_stats.header.stamp.toSec() - kBagEnd << " s after the bag's end";
