@@ -16,10 +16,10 @@
 // Parameters  (private) fixed_frame ("world"), camera_frame ("paint_camera", REP 103 optical), max_rate
 //             ([Hz] 60), pose_tolerance (1e-6 m / rad), width, height, horizontal_fov (degrees), near_clip,
 //             far_clip, ewa_filter, lowpass_variance, cutoff_radius, depth_tolerance_scale, exact_footprint,
-//             exact_silhouettes, shading, backface_culling, threads, background [r g b], max_delta_surfels, max_tile_updates,
-//             environment ("studio" | "none" | an equirectangular PNG: reflective paint, 5.7), draw_brush,
-//             shadow, light_direction [x y z], shadow_length, shadow_strength, stats_period ([s] 1); see
-//             config/paint_session.yaml.
+//             exact_silhouettes, shading, backface_culling, threads, background [r g b], max_delta_surfels,
+//             max_tile_updates, environment ("studio" | "none" | an equirectangular PNG: reflective
+//             paint, 5.7), draw_brush, shadow, light_direction [x y z], shadow_length, shadow_strength,
+//             stats_period ([s] 1); see config/paint_session.yaml.
 //
 // A frame is published when something changed (a delta, the brush, the camera), at most max_rate times per
 // second; deltas are applied as they arrive and rendered at once when a frame is due (else within a quarter

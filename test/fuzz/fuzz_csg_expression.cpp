@@ -1,5 +1,5 @@
-// libFuzzer target for the CSG expression parser (render/csg/csg_tree.h): any string either parses into a tree
-// that normalises and prints, or is refused with std::invalid_argument; nothing else.
+// libFuzzer target for the CSG expression parser (render/csg/csg_tree.h): any string either parses into a
+// tree that normalises and prints, or is refused with std::invalid_argument; nothing else.
 #include <cstdint>
 #include <map>
 #include <stdexcept>

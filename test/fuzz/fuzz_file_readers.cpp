@@ -1,7 +1,7 @@
-// libFuzzer target for the file readers (src/io): the input becomes a file with the extension RC_FUZZ_EXTENSION
-// (one binary per format: fuzz_ply, fuzz_pcd, fuzz_off, fuzz_obj, fuzz_xyz) and is read as a cloud and as a
-// mesh. A reader may refuse the input (IoError or another std::exception with a message); it must not crash,
-// hang, or allocate without bound (scripts/fuzz runs with -timeout=1 -rss_limit_mb=2048).
+// libFuzzer target for the file readers (src/io): the input becomes a file with the extension
+// RC_FUZZ_EXTENSION (one binary per format: fuzz_ply, fuzz_pcd, fuzz_off, fuzz_obj, fuzz_xyz) and is read as
+// a cloud and as a mesh. A reader may refuse the input (IoError or another std::exception with a message); it
+// must not crash, hang, or allocate without bound (scripts/fuzz runs with -timeout=1 -rss_limit_mb=2048).
 #include <unistd.h>
 
 #include <cstdint>

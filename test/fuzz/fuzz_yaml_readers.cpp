@@ -17,12 +17,24 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data) + 1, size - 1);
   try {
     switch (data[0] % 6) {
-      case 0: (void)rc::parseSphScene(text, "fuzz.yaml"); break;
-      case 1: (void)rc::parseFemScene(text, "fuzz.yaml"); break;
-      case 2: (void)rc::parseShellScene(text, "fuzz.yaml"); break;
-      case 3: (void)rc::parseBrushPreset(text, "fuzz.yaml"); break;
-      case 4: (void)rc::parsePaintType(text, "fuzz.yaml"); break;
-      default: (void)rc::parsePalette(text, "fuzz.yaml"); break;
+      case 0:
+        (void)rc::parseSphScene(text, "fuzz.yaml");
+        break;
+      case 1:
+        (void)rc::parseFemScene(text, "fuzz.yaml");
+        break;
+      case 2:
+        (void)rc::parseShellScene(text, "fuzz.yaml");
+        break;
+      case 3:
+        (void)rc::parseBrushPreset(text, "fuzz.yaml");
+        break;
+      case 4:
+        (void)rc::parsePaintType(text, "fuzz.yaml");
+        break;
+      default:
+        (void)rc::parsePalette(text, "fuzz.yaml");
+        break;
     }
   } catch (const std::exception&) {
   }

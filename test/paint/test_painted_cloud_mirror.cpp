@@ -157,8 +157,8 @@ TEST(PaintedCloudMirror, FollowsAPaintedStrokeAndFeedsTheDifferentialRenderer) {
 // Acrylic leaves bristle imprints (0.1 mm, 5.6.3), deeper than the depth tolerance of the small children: a
 // full render separates the ridges by depth, the partial update keeps the unpainted board's visibility bounds
 // and blends them (the thesis' stated limitation, 5.7). Measured 2026-11-29: worst 48 levels, mean 1.4 levels
-// over the painted pixels with exact silhouettes (worst 96, mean 2.8 with the filtered footprint); a full update
-// (camera motion, the next full cloud) shows the ridges.
+// over the painted pixels with exact silhouettes (worst 96, mean 2.8 with the filtered footprint); a full
+// update (camera motion, the next full cloud) shows the ridges.
 TEST(PaintedCloudMirror, ImprintsDifferOnlyWithinTheStatedBound) {
   const StrokeComparison c = paintAndCompare("acrylic");
   EXPECT_GT(c.painted, 2000u);

@@ -311,6 +311,7 @@ SplatSetup setupCameraSurfel(const CameraSurfel& surfel, const CameraFrame& came
 
 bool unfilteredFootprint(const SplatRaster& filtered, double filter_variance, SplatRaster* footprint) {
   *footprint = filtered;
+  if (!(filter_variance > 0)) return true;  // no filter in the conic: the splat is its own footprint
   const double a = filtered.conic_a, b = filtered.conic_b, c = filtered.conic_c;
   const double det = a * c - b * b;
   if (!(det > 0) || !std::isfinite(det)) return false;

@@ -112,8 +112,8 @@ SplatSetup setupCircularEwaSplat(const Vec3& center, const Vec3& normal, double 
 
 /// The footprint of a set-up splat without the EWA low-pass filter (SplatConfig::exact_silhouettes): a copy
 /// of `filtered` whose conic, (V + v I)^-1 in cut-off units, becomes V^-1 (V the projected reconstruction
-/// kernel, v = `filter_variance` = cutoff_sigmas^2 lowpass_variance). False if no area is left (an edge-on
-/// disc thinner than float precision resolves): the splat covers no pixel centre.
+/// kernel, v = `filter_variance` = cutoff_sigmas^2 lowpass_variance; v <= 0: a plain copy). False if no area
+/// is left (an edge-on disc thinner than float precision resolves): the splat covers no pixel centre.
 bool unfilteredFootprint(const SplatRaster& filtered, double filter_variance, SplatRaster* footprint);
 
 /// The filter variance in the conic of `s` for unfilteredFootprint: `filter` (cutoff_sigmas^2

@@ -102,14 +102,7 @@ class NearerFragmentTest {
   bool active() const { return filter_ >= 0; }
   /// The splat's own footprint, or null if it covers no pixel centre.
   const SplatRaster* footprint() {
-    if (state_ == kUnknown) {
-      if (filter_ > 0) {
-        state_ = unfilteredFootprint(s_, filter_, &footprint_) ? kCovers : kEmpty;
-      } else {
-        footprint_ = s_;
-        state_ = kCovers;
-      }
-    }
+    if (state_ == kUnknown) state_ = unfilteredFootprint(s_, filter_, &footprint_) ? kCovers : kEmpty;
     return state_ == kCovers ? &footprint_ : nullptr;
   }
   bool covers(int x, int y) {

@@ -684,12 +684,7 @@ void TileRenderer::markUncovered() {
 }
 
 bool TileRenderer::coverage(const SplatRaster& s, SplatRaster* footprint) const {
-  const double filter = nearerFilter(s);
-  if (!(filter > 0)) {
-    *footprint = s;
-    return true;
-  }
-  return unfilteredFootprint(s, filter, footprint);
+  return unfilteredFootprint(s, nearerFilter(s), footprint);  // (without exact_silhouettes: s itself)
 }
 
 /// Pass 1 of splat k. Clipped splats: the clip test runs only on fragments not behind the current bound
