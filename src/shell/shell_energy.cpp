@@ -20,8 +20,9 @@ ShellEnergy::ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, con
     throw std::invalid_argument("ShellEnergy: the fibers were built for another node set");
   }
   if (!(material.stretch_stiffness >= 0.0) || !(material.bending_stiffness >= 0.0) ||
-      !(material.areal_density > 0.0) || !(material.damping >= 0.0)) {
-    throw std::invalid_argument("ShellMaterial: stiffnesses and damping must be >= 0, areal_density > 0");
+      !(material.areal_density > 0.0) || !(material.damping >= 0.0) || !(material.bending_fit > 0.0)) {
+    throw std::invalid_argument(
+        "ShellMaterial: stiffnesses and damping must be >= 0, areal_density and bending_fit > 0");
   }
   masses_.resize(n);
   for (size_t i = 0; i < n; ++i) {
@@ -46,6 +47,7 @@ ShellEnergy::ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, con
       gather_slots_[fill[target(i, s)]++] = slot_offsets_[i] + s;
   }
   slot_values_.resize(slot_offsets_[n]);
+  bending_forms_ = buildShellBendingForms(nodes, fibers, material.bending_fit);
 }
 
 double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slots, double* membrane,
@@ -88,17 +90,18 @@ double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slo
 
   // Per-fiber factors (7.3.4): the fiber term of fiber k is scaled by stretch_scale, the area term by their
   // weighted mean; bending uses g_k = sqrt(bend_scale) d_k in place of d_k (stays >= 0 by Cauchy-Schwarz).
-  double s = 0.0, s0 = 0.0, fiber_stretch = 0.0, mean_dk = 0.0, sq_dk = 0.0, mean_scale = 0.0;
+  double s = 0.0, s0 = 0.0, fiber_stretch = 0.0, mean_scale = 0.0;
   // Per fiber: d_k, 1 / l_k, 1 / (l_k^0)^2 (two divisions per fiber instead of six).
-  double stack_scratch[3 * kStackFibers];
+  double stack_scratch[4 * kStackFibers];
   thread_local std::vector<double> heap_scratch;
   double* dk = stack_scratch;
   if (m > kStackFibers) {
-    heap_scratch.resize(3 * m);
+    heap_scratch.resize(4 * m);
     dk = heap_scratch.data();
   }
   double* inv_len = dk + m;
   double* inv_l0sq = inv_len + m;
+  double* q_dk = inv_l0sq + m;             // Q_i d
   for (size_t q = 0; q + 1 < m; q += 2) {  // two fibers per call (SIMD lanes)
     const Fiber &fa = fib[q], &fb = fib[q + 1];
     const Vec3 e1[2] = {x[fa.end1] - xc, x[fb.end1] - xc}, e2[2] = {x[fa.end2] - xc, x[fb.end2] - xc};
@@ -123,12 +126,18 @@ double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slo
     const double e = lsq * inv_l0sq[q] - 1.0;  // A_k / A_k^0 - 1 (7.5)
     fiber_stretch += f.weight * f.stretch_scale * e * e;
     mean_scale += f.weight * f.stretch_scale;
-    mean_dk += f.weight * dk[q];
-    sq_dk += f.weight * dk[q] * dk[q];
   }
-  const double r = s / s0 - 1.0;                                                    // A_i / A_i^0 - 1 (7.6)
-  const double e_mem = 0.5 * area * ks * (mean_scale * r * r + fiber_stretch);      // (7.7)
-  const double e_bend = 0.5 * area * kb * (4.0 * sq_dk - 2.0 * mean_dk * mean_dk);  // (7.3), (7.11)
+  const double* form = bending_forms_.values.data() + bending_forms_.offsets[i];
+  double form_value = 0.0;
+  for (size_t a = 0; a < m; ++a) {
+    double row = 0.0;
+    for (size_t b = 0; b < m; ++b) row += form[a * m + b] * dk[b];
+    q_dk[a] = row;
+    form_value += dk[a] * row;
+  }
+  const double r = s / s0 - 1.0;                                                // A_i / A_i^0 - 1 (7.6)
+  const double e_mem = 0.5 * area * ks * (mean_scale * r * r + fiber_stretch);  // (7.7)
+  const double e_bend = 0.5 * area * kb * form_value;  // (7.3), (7.11); shell_bending_form.h
   if (membrane) *membrane = e_mem;
   if (bending) *bending = e_bend;
   if (!slots) return e_mem + e_bend;
@@ -140,7 +149,7 @@ double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slo
     const Fiber& f = fib[q];
     const FiberMeasure& t = terms[q];
     const double sqrt_bend = f.bend_scale == 1.0 ? 1.0 : std::sqrt(f.bend_scale);
-    const double de_dkappa = area_kb * f.weight * (4.0 * dk[q] - 2.0 * mean_dk) * sqrt_bend;
+    const double de_dkappa = area_kb * q_dk[q] * sqrt_bend;
     const double de_dtheta = de_dkappa * inv_len[q] * inv_beta;
     const double de_dl =
         area_ks2 * f.weight * t.length *
@@ -304,7 +313,7 @@ ShellStableStep ShellEnergy::stableStep(const std::vector<Vec3>& x) const {
             g[1 + pr.first] += ga, g[1 + pr.second] += gb, g[0] -= ga + gb;
           }
         }
-        add_term(4.0 * area * kb * f.weight * f.bend_scale, g, rb);
+        add_term(bending_forms_.bound[i] * area * kb * f.weight * f.bend_scale, g, rb);  // Q_i <= bound W
       }
       add_term(area * ks * mean_scale, g_area, rm);
     }

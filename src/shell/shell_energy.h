@@ -14,10 +14,11 @@
 //    tangents (fiberNormalAngle); a natural spline through three points of a circle turns its end tangents by
 //    3/4 of the true arc angle, hence the 3/4.
 //  * Bending uses (7.3) with the Frobenius norm, U_b = K_b/2 |S - S^0|_F^2 = K_b/2 (dk1^2 + dk2^2), written
-//  with
-//    the fiber curvature changes d_k as U_b = K_b/2 [4 sum_k w_k d_k^2 - 2 (sum_k w_k d_k)^2] (exact for
-//    isotropic fiber directions; sum_k w_k d_k is the mean-curvature change of (7.9)). Unlike (7.8) it also
-//    resists twist (saddle) modes, which have no mean-curvature change.
+//    with the fiber curvature changes d_k as U_b = K_b/2 d^T Q_i d (shell_bending_form.h: the curvature
+//    tensor fitted to the fibers' calibrated responses, exact for constant curvature also at open
+//    boundaries; for isotropic fiber directions Q_i = 4 W - 2 w w^T, i.e. 4 sum_k w_k d_k^2 -
+//    2 (sum_k w_k d_k)^2, sum_k w_k d_k the mean-curvature change of (7.9)). Unlike (7.8) it also resists
+//    twist (saddle) modes, which have no mean-curvature change.
 //  * Per-fiber stiffness factors (Fiber::stretch_scale, bend_scale; 7.3.4) scale each fiber's stretch term by
 //    s_k and the node's area term by sum_k w_k s_k; bending uses sqrt(b_k) d_k in place of d_k. Nodes left
 //    without fibers (cut off by cracks) store no energy.
@@ -25,6 +26,7 @@
 
 #include <vector>
 
+#include "relaxed_connectivity/shell/shell_bending_form.h"
 #include "relaxed_connectivity/shell/shell_fibers.h"
 #include "relaxed_connectivity/shell/shell_nodes.h"
 
@@ -35,6 +37,10 @@ struct ShellMaterial {
   double bending_stiffness = 25.0;  ///< K_b (energy)
   double areal_density = 1.0;       ///< rho (mass / area); node mass m_i = rho a_i^0
   double damping = 0.0;             ///< D (1/s): damping force -D m_i v_i (7.18)
+  /// Curvature components whose fiber response is below this are not fitted (shell_bending_form.h): lower
+  /// fits more at open edges (0.05: twist there within 10 %) at a smaller stable step; 2 or more keeps the
+  /// isotropic formula everywhere. bench_shell_bending_fit prints the trade.
+  double bending_fit = 0.15;
 };
 
 struct ShellEnergyValue {
@@ -55,7 +61,7 @@ struct ShellStableStep {
 /// internal scratch); it parallelises internally and is deterministic for any thread count.
 class ShellEnergy {
  public:
-  static constexpr double kSplineAngleScale = 0.75;
+  static constexpr double kSplineAngleScale = kFiberSplineAngleScale;
 
   ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, const ShellMaterial& material);
 
@@ -82,6 +88,8 @@ class ShellEnergy {
   const ShellNodes& nodes() const { return *nodes_; }
   const ShellFibers& fibers() const { return *fibers_; }
   const ShellMaterial& material() const { return material_; }
+  /// Per-node bending forms (shell_bending_form.h), built from the rest state with the energy.
+  const ShellBendingForms& bendingForms() const { return bending_forms_; }
 
  private:
   double evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slots, double* membrane, double* bending,
@@ -92,6 +100,7 @@ class ShellEnergy {
   const ShellFibers* fibers_;
   ShellMaterial material_;
   std::vector<double> masses_;
+  ShellBendingForms bending_forms_;
   std::vector<size_t> slot_offsets_;  ///< node i owns slots [slot_offsets_[i], +1+k): itself, then neighbours
   std::vector<size_t> gather_offsets_;
   std::vector<size_t> gather_slots_;  ///< slots referring to node p, in ascending owner order

@@ -10,6 +10,10 @@
 
 namespace rc {
 
+/// A natural spline through three points of a circle turns its end tangents by 3/4 of the true arc angle: the
+/// fiber curvature is kappa = theta / (3/4 l) (ShellEnergy).
+constexpr double kFiberSplineAngleScale = 0.75;
+
 /// One fiber x1 -> x -> x2 centred on node `center`; `local1`/`local2` index the centre's neighbour list.
 struct Fiber {
   uint32_t center = 0, end1 = 0, end2 = 0;

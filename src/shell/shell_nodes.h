@@ -45,7 +45,8 @@ struct ShellNodes {
   std::vector<Vec3> rest_positions;
   std::vector<Vec3> rest_normals;  ///< unit, from the surfel normals
   std::vector<double>
-      rest_areas;  ///< tangent-plane Voronoi area a_i^0 of the node (sums to the surface area)
+      rest_areas;  ///< a_i^0: from surfels, the summed tangent Voronoi areas of the node's cluster; from
+                   ///< points, the node's tangent Voronoi area (sums to the surface area)
   std::vector<uint32_t> source_surfel;   ///< surfel the node sits on (empty if built from plain points)
   std::vector<uint32_t> surfel_cluster;  ///< node each input surfel belongs to (empty if built from points)
   std::vector<size_t> neighbor_offsets;  ///< size() + 1 entries

@@ -12,6 +12,7 @@
 
 #include "relaxed_connectivity/io/cloud_io.h"
 #include "relaxed_connectivity/io/yaml_reader.h"
+#include "relaxed_connectivity/shell/shell_sheet_source.h"
 #include "relaxed_connectivity/surface/analytic_shapes.h"
 #include "relaxed_connectivity/surface/radius_estimation.h"
 
@@ -167,44 +168,24 @@ class SceneReader {
     const YAML::Node size_node = src_.require(node, "size", "source.sheet");
     if (!size_node.IsSequence() || size_node.size() != 2)
       src_.fail(size_node, "source.sheet.size: expected [w, h]");
-    const double w = src_.positive(size_node[0], "source.sheet.size"),
-                 h = src_.positive(size_node[1], "source.sheet.size");
-    const double spacing =
-        src_.positive(src_.require(node, "spacing", "source.sheet"), "source.sheet.spacing");
-    const double jitter = node["jitter"] ? src_.unitInterval(node["jitter"], "source.sheet.jitter") : 0.0;
-    enum class Colors { kNone, kChecker, kRings };
-    const Colors colors =
-        node["colors"]
-            ? src_.choice<Colors>(
-                  node["colors"], "source.sheet.colors",
-                  {{"none", Colors::kNone}, {"checker", Colors::kChecker}, {"rings", Colors::kRings}})
-            : Colors::kNone;
-    const double tile =
-        node["tile"] ? src_.positive(node["tile"], "source.sheet.tile") : 0.1 * std::min(w, h);
-    const long nx = long(std::round(w / spacing)), ny = long(std::round(h / spacing));
-    if (nx < 2 || ny < 2) src_.fail(node["spacing"], "source.sheet.spacing: larger than the sheet");
-    if (double(nx) * double(ny) > 5e7) src_.fail(node["spacing"], "source.sheet.spacing: too many surfels");
-    SurfelCloud& cloud = scene_.surfels;
-    std::mt19937 rng(7);
-    std::uniform_real_distribution<double> u(-0.5 * jitter, 0.5 * jitter);
-    const double sx = w / nx, sy = h / ny;
-    for (long a = 0; a < nx; ++a) {
-      for (long b = 0; b < ny; ++b) {
-        const Vec3 p(-0.5 * w + (a + 0.5 + u(rng)) * sx, -0.5 * h + (b + 0.5 + u(rng)) * sy, 0.0);
-        cloud.positions.push_back(p);
-        cloud.normals.push_back(Vec3::UnitZ());
-        if (colors == Colors::kChecker) {
-          const bool dark = (long(std::floor(p.x() / tile)) + long(std::floor(p.y() / tile))) % 2 != 0;
-          cloud.colors.push_back(dark ? Rgba{40, 60, 160, 255} : Rgba{240, 220, 90, 255});
-        } else if (colors == Colors::kRings) {
-          const double r = p.head<2>().norm() / tile;
-          const double t = 0.5 + 0.5 * std::cos(2.0 * M_PI * r);
-          cloud.colors.push_back(
-              Rgba{uint8_t(200 * t + 40), uint8_t(60 + 100 * (1 - t)), uint8_t(220 * (1 - t)), 255});
-        }
-      }
+    SheetSource sheet;
+    sheet.width = src_.positive(size_node[0], "source.sheet.size");
+    sheet.height = src_.positive(size_node[1], "source.sheet.size");
+    sheet.spacing = src_.positive(src_.require(node, "spacing", "source.sheet"), "source.sheet.spacing");
+    if (node["jitter"]) sheet.jitter = src_.unitInterval(node["jitter"], "source.sheet.jitter");
+    if (node["colors"])
+      sheet.colors = src_.choice<SheetColors>(
+          node["colors"], "source.sheet.colors",
+          {{"none", SheetColors::kNone}, {"checker", SheetColors::kChecker}, {"rings", SheetColors::kRings}});
+    if (node["tile"]) sheet.tile = src_.positive(node["tile"], "source.sheet.tile");
+    long nx = 0, ny = 0;
+    try {
+      sheetCells(sheet, &nx, &ny);
+    } catch (const std::invalid_argument&) {
+      src_.fail(node["spacing"], nx < 2 || ny < 2 ? "source.sheet.spacing: larger than the sheet"
+                                                  : "source.sheet.spacing: too many surfels");
     }
-    cloud.radii.assign(cloud.size(), 0.75 * std::max(sx, sy));
+    scene_.surfels = sheetSurfels(sheet);
   }
 
   void readSphere(const YAML::Node& node) {
@@ -257,8 +238,10 @@ class SceneReader {
   }
 
   void readMaterial(const YAML::Node& node) {
-    src_.allowKeys(node, {"stretch_stiffness", "bending_stiffness", "density", "damping", "balance_membrane"},
-                   "material");
+    src_.allowKeys(
+        node,
+        {"stretch_stiffness", "bending_stiffness", "density", "damping", "bending_fit", "balance_membrane"},
+        "material");
     ShellMaterial& m = scene_.material;
     m.stretch_stiffness =
         src_.nonNegative(src_.require(node, "stretch_stiffness", "material"), "material.stretch_stiffness");
@@ -268,6 +251,7 @@ class SceneReader {
       src_.fail(node, "material: stretch_stiffness and bending_stiffness are both 0");
     if (node["density"]) m.areal_density = src_.positive(node["density"], "material.density");
     if (node["damping"]) m.damping = src_.nonNegative(node["damping"], "material.damping");
+    if (node["bending_fit"]) m.bending_fit = src_.positive(node["bending_fit"], "material.bending_fit");
     if (node["balance_membrane"])
       scene_.balance_membrane = src_.boolean(node["balance_membrane"], "material.balance_membrane");
   }

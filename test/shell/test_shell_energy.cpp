@@ -33,7 +33,8 @@ double totalArea(const ShellNodes& nodes) {
 TEST(ShellEnergy, SphereNodeAreasSumToTheSurfaceArea) {
   const ShellNodes nodes = sphereNodes(0.2);
   std::printf("sphere h=0.2: %zu nodes, area %.4f (4 pi = %.4f)\n", nodes.size(), totalArea(nodes), 4 * M_PI);
-  EXPECT_NEAR(totalArea(nodes), 4.0 * M_PI, 0.03 * 4.0 * M_PI);
+  // Measured 0.03 % (each node sums its surfels' tangent Voronoi areas; 1.4 % with the nodes' own cells).
+  EXPECT_NEAR(totalArea(nodes), 4.0 * M_PI, 0.003 * 4.0 * M_PI);
 }
 
 TEST(ShellEnergy, RestStateHasNoEnergyAndNoForce) {

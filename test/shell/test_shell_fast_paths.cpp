@@ -4,7 +4,7 @@
 // against a full recomputation, and pinned nodes pulled inside the solver's drift.
 #include <gtest/gtest.h>
 
-#include <Eigen/Geometry>
+#include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -23,10 +23,12 @@ using shell_test::sphereNodes;
 using shell_test::wobble;
 
 // Straightforward evaluation of the energy and its gradient (7.7, 7.3 with 7.9-7.11; 7.14-7.17): every
-// fiber through fiberArcLength and fiberNormalAngle, the normal through fanNormal, gradients added
+// fiber through fiberArcLength and fiberNormalAngle, the normal through fanNormal, the bending form of each
+// node (shell_bending_form.h, tested in test_shell_energy) applied as a dense matrix, gradients added
 // directly into the node array in serial order.
 ShellEnergyValue referenceEnergy(const ShellNodes& nodes, const ShellFibers& fibers, const ShellMaterial& mat,
-                                 const std::vector<Vec3>& x, std::vector<Vec3>* grad) {
+                                 const ShellBendingForms& forms, const std::vector<Vec3>& x,
+                                 std::vector<Vec3>* grad) {
   constexpr double beta = ShellEnergy::kSplineAngleScale;
   ShellEnergyValue value;
   grad->assign(x.size(), Vec3::Zero());
@@ -39,7 +41,7 @@ ShellEnergyValue referenceEnergy(const ShellNodes& nodes, const ShellFibers& fib
     std::vector<double> len, ang, dk;
     std::vector<std::array<Vec3, 3>> gl(f1 - f0), ga(f1 - f0);
     std::vector<Vec3> gn(f1 - f0);
-    double s = 0, s0 = 0, fiber_stretch = 0, mean_dk = 0, sq_dk = 0, mean_scale = 0;
+    double s = 0, s0 = 0, fiber_stretch = 0, mean_scale = 0;
     for (size_t q = f0; q < f1; ++q) {
       const Fiber& f = fibers.fibers[q];
       len.push_back(fiberArcLength(x[f.end1], x[i], x[f.end2], &gl[q - f0]));
@@ -51,19 +53,19 @@ ShellEnergyValue referenceEnergy(const ShellNodes& nodes, const ShellFibers& fib
       s0 += f.weight * l0sq;
       fiber_stretch += f.weight * f.stretch_scale * e * e;
       mean_scale += f.weight * f.stretch_scale;
-      mean_dk += f.weight * dk.back();
-      sq_dk += f.weight * dk.back() * dk.back();
     }
+    const int m = int(f1 - f0);
+    const Eigen::Map<const Eigen::MatrixXd> form(forms.values.data() + forms.offsets[i], m, m);
+    const Eigen::VectorXd d = Eigen::Map<const Eigen::VectorXd>(dk.data(), m), form_d = form * d;
     const double r = s / s0 - 1.0;
     value.membrane += 0.5 * area * ks * (mean_scale * r * r + fiber_stretch);
-    value.bending += 0.5 * area * kb * (4.0 * sq_dk - 2.0 * mean_dk * mean_dk);
+    value.bending += 0.5 * area * kb * d.dot(form_d);
     Vec3 dn = Vec3::Zero();
     for (size_t q = f0; q < f1; ++q) {
       const Fiber& f = fibers.fibers[q];
       const size_t a = q - f0;
       const double l0sq = f.rest_length * f.rest_length;
-      const double de_dtheta =
-          area * kb * f.weight * (4.0 * dk[a] - 2.0 * mean_dk) * std::sqrt(f.bend_scale) / (beta * len[a]);
+      const double de_dtheta = area * kb * form_d(int(a)) * std::sqrt(f.bend_scale) / (beta * len[a]);
       const double de_dl =
           area * ks * f.weight * len[a] * 2.0 *
               (mean_scale * r / s0 + f.stretch_scale * (len[a] * len[a] / l0sq - 1.0) / l0sq) -
@@ -109,7 +111,7 @@ void checkAgainstReference(const ShellNodes& nodes, const std::vector<Vec3>& x, 
   std::vector<Vec3> g, g_ref;
   std::vector<double> length, angle, length_ref, angle_ref;
   const ShellEnergyValue e = energy.evaluate(x, &g, &length, &angle);
-  const ShellEnergyValue e_ref = referenceEnergy(nodes, fibers, mat, x, &g_ref);
+  const ShellEnergyValue e_ref = referenceEnergy(nodes, fibers, mat, energy.bendingForms(), x, &g_ref);
   measureFibers(nodes, fibers, x, &length_ref, &angle_ref);
   double gmax = 0.0, gerr = 0.0, lerr = 0.0, aerr = 0.0;
   for (size_t i = 0; i < x.size(); ++i) {

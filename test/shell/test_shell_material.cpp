@@ -111,7 +111,9 @@ size_t fiberGraphComponents(const ShellNodes& nodes, const ShellFibers& fibers, 
 }
 
 TEST(ShellMaterial, TearStartsAtTheWeakPointAndSeparatesTheSheet) {
-  const double size = 1.0, h = 0.07, pull = 0.05;
+  // Pulled slowly (the sides part at 2 x 0.02 per second; the membrane's wave crosses the sheet in about
+  // 0.03 s): at 0.05 per side, waves reflected from the grips broke fibers all over the sheet.
+  const double size = 1.0, h = 0.07, pull = 0.02;
   ShellSolverOptions so;
   ShellSolver solver(sheetNodes(size, h), material(1000.0, 10.0, 5.0), so);
   const ShellFibers original = solver.fibers();
@@ -138,15 +140,27 @@ TEST(ShellMaterial, TearStartsAtTheWeakPointAndSeparatesTheSheet) {
     const double x = solver.nodes().rest_positions[i].x();
     if (std::abs(x) > 0.5 * size - 0.8 * h) side[i] = x > 0 ? 1 : -1, solver.pin(i);
   }
+  // Grips reinforce the material, as the scenes do (shell_simulation): the clamp corners would otherwise
+  // tear first, a singularity of the displacement boundary condition.
+  for (size_t q = 0; q < solver.fibers().size(); ++q) {
+    const Fiber& f = solver.fibers().fibers[q];
+    if (side[f.center] != 0 || side[f.end1] != 0 || side[f.end2] != 0)
+      model.states()[q].stretch_threshold = model.states()[q].bend_threshold = INFINITY;
+  }
   std::vector<size_t> sizes;
   // Pieces: components of at least 3 nodes (the tear also chips off crumbs of 1-2 nodes along its path).
   auto pieces = [&] {
     fiberGraphComponents(solver.nodes(), solver.fibers(), &sizes);
     return size_t(std::count_if(sizes.begin(), sizes.end(), [](size_t c) { return c >= 3; }));
   };
-  size_t components = 1, steps = 0;
+  // Pulled until the two largest pieces each hold a quarter of the nodes (a chip of a few nodes along the
+  // tear's path does not end it).
+  const size_t n = solver.nodes().size();
+  auto separated = [&] { return pieces() >= 2 && sizes[1] > n / 4; };
+  size_t steps = 0;
+  bool apart = false;
   double min_dt = INFINITY, first_dt = 0.0;
-  while (components == 1 && steps < 6000) {
+  while (!apart && steps < 10000) {
     const ShellStepReport r = solver.step();
     if (steps == 0) first_dt = r.dt;
     min_dt = std::min(min_dt, r.dt);
@@ -154,23 +168,33 @@ TEST(ShellMaterial, TearStartsAtTheWeakPointAndSeparatesTheSheet) {
     std::vector<Vec3> x = solver.positions();
     for (size_t i = 0; i < x.size(); ++i) x[i].x() += side[i] * pull * r.dt;
     solver.setPositions(x);
-    if (model.update(solver, r.dt).new_cracks > 0) components = pieces();
+    if (model.update(solver, r.dt).new_cracks > 0) apart = separated();
   }
   for (int extra = 0; extra < 50; ++extra) model.update(solver, solver.step().dt);  // let it settle
-  components = pieces();
-  const size_t crumbs = sizes.size() - components;
+  const size_t components = pieces();
+  size_t chipped = 0;  // nodes outside the two largest pieces
+  for (size_t c = 2; c < sizes.size(); ++c) chipped += sizes[c];
   const std::vector<ShellCrack>& cracks = model.cracks();
   ASSERT_FALSE(cracks.empty());
+  ASSERT_GE(sizes.size(), 2u);
   std::printf(
       "tear: %zu weak fibers, first crack at node %u (%.3f, %.3f), %zu cracks in %zu steps, "
-      "pieces %zu (sizes %zu, %zu) + %zu crumbs of 1-2 nodes, dt %.3e -> min %.3e\n",
+      "pieces of 3 or more nodes %zu (sizes %zu, %zu), %zu of %zu nodes in neither half, dt %.3e -> min "
+      "%.3e\n",
       weak, cracks[0].node, cracks[0].center.x(), cracks[0].center.y(), cracks.size(), steps, components,
-      sizes[0], sizes.size() > 1 ? sizes[1] : 0, crumbs, first_dt, min_dt);
+      sizes[0], sizes[1], chipped, n, first_dt, min_dt);
+  // The tear runs across the sheet from the weak point, perpendicular to the pull.
+  size_t in_band = 0;
+  for (const ShellCrack& c : cracks) in_band += std::abs(c.center.x() - cracks[0].center.x()) < 0.25 * size;
+  std::printf("cracks within a quarter of the width of the first: %zu of %zu\n", in_band, cracks.size());
+  EXPECT_GE(in_band, cracks.size() * 9 / 10);
   EXPECT_EQ(cracks[0].node, weak_node);
   EXPECT_TRUE(cracks[0].stretch);
-  EXPECT_EQ(components, 2u);
-  EXPECT_GT(sizes[1], solver.nodes().size() / 3);  // two halves
-  EXPECT_LE(crumbs, cracks.size() / 3);
+  EXPECT_TRUE(apart);
+  EXPECT_GT(sizes[1], n / 3);  // two halves
+  // Branching tears chip off a few nodes: 0-29 of 213 in variants of the model measured (bending_fit 0.02 to
+  // 2); 2 with the defaults.
+  EXPECT_LE(chipped, n / 7);
   const SurfelCloud discs = crackDiscontinuitySurfels(cracks);  // for the renderer (4.3)
   ASSERT_EQ(discs.size(), 2 * cracks.size());
   for (size_t c = 0; c < cracks.size(); ++c)

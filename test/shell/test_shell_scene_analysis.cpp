@@ -26,7 +26,9 @@ ShellRunStats runScene(const std::string& name) {
   return runShellScene(loadShellScene(scenePath(name)), options);
 }
 
-constexpr double kSpan = 0.925;  // from the clamp's middle (x = -0.45) to the tip (0.475)
+constexpr double kSpan = 0.925;  // from the clamp's middle (x = -0.45) to the tip nodes (0.475)
+// From the clamp's middle to the strip's end (x = 0.5: the sheet's cell-centred surfels tile the strip).
+constexpr double kVibratingSpan = 0.95;
 
 TEST(ShellSceneAnalysis, StaticCantileverScene) {
   const ShellRunStats stats = runScene("cantilever_static");
@@ -39,8 +41,10 @@ TEST(ShellSceneAnalysis, StaticCantileverScene) {
               tip, beam, 100 * (tip / beam - 1), stats.held_reactions[0].z(), stats.static_iterations,
               stats.analysis_seconds);
   EXPECT_NEAR(stats.held_reactions[0].z(), force, 1e-6 * force);
-  EXPECT_GT(tip, 0.6 * beam);  // measured -31 % (the free edges, docs/shell_analysis.md)
-  EXPECT_LT(tip, beam);
+  // Measured +6.7 % (+2.0 % at node spacing 0.025, scripts/validate): the clamp box holds Poisson-disc nodes
+  // out to between x = -0.45 and -0.40, which moves the root by up to h / 2 (8 % of the deflection). Before
+  // the bending forms and the node areas were fixed at open edges: -31 % (docs/shell_analysis.md).
+  EXPECT_NEAR(tip, beam, 0.1 * beam);
   EXPECT_EQ(stats.frames, 1);
   EXPECT_NE(shellRunStatsJson(stats).find("\"held_reactions\": [["), std::string::npos);
 }
@@ -50,12 +54,13 @@ TEST(ShellSceneAnalysis, ModalCantileverScene) {
   const ShellRunStats stats = runScene("cantilever_modal");
   ASSERT_EQ(stats.analysis, "modal");
   ASSERT_EQ(stats.frequencies.size(), 4u);
-  const double f1 = 1.8751 * 1.8751 / (2 * M_PI * kSpan * kSpan), f2 = f1 * std::pow(4.6941 / 1.8751, 2);
+  const double f1 = 1.8751 * 1.8751 / (2 * M_PI * kVibratingSpan * kVibratingSpan),
+               f2 = f1 * std::pow(4.6941 / 1.8751, 2);
   std::printf("modal scene: f1 %.4f Hz (Euler-Bernoulli %.4f), f2 %.4f (%.4f); %.3f s\n",
               stats.frequencies[0], f1, stats.frequencies[1], f2, stats.analysis_seconds);
   EXPECT_EQ(stats.rigid_modes, 0);
-  EXPECT_NEAR(stats.frequencies[0], f1, 0.05 * f1);  // measured -1.2 %
-  EXPECT_NEAR(stats.frequencies[1], f2, 0.05 * f2);  // measured -2.9 %
+  EXPECT_NEAR(stats.frequencies[0], f1, 0.05 * f1);  // measured -3.2 % (-0.1 % at nodes 0.025)
+  EXPECT_NEAR(stats.frequencies[1], f2, 0.05 * f2);  // measured -3.9 % (-0.4 %)
   EXPECT_EQ(stats.frames, 4);
 }
 

@@ -148,6 +148,12 @@ TEST(ShellSceneFile, BadFilesNameFileLineAndProblem) {
   std::string balance = kMinimal;
   balance.replace(balance.find("bending_stiffness: 10}"), 22, "bending_stiffness: 10, balance_membrane: 3}");
   EXPECT_NE(errorOf(balance).find("material.balance_membrane"), std::string::npos) << errorOf(balance);
+  std::string fit = kMinimal;
+  fit.replace(fit.find("bending_stiffness: 10}"), 22, "bending_stiffness: 10, bending_fit: 0}");
+  EXPECT_NE(errorOf(fit).find("material.bending_fit must be positive"), std::string::npos) << errorOf(fit);
+  fit.replace(fit.find("bending_fit: 0}"), 15, "bending_fit: 0.05}");
+  EXPECT_EQ(errorOf(fit), "");
+  EXPECT_EQ(parseShellScene(fit, "fit.yaml").material.bending_fit, 0.05);
   EXPECT_THROW(loadShellScene("/nonexistent/scene.yaml"), ShellSceneError);
 }
 
