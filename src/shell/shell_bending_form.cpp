@@ -102,12 +102,33 @@ bool nodeForm(const ShellNodes& nodes, const Fiber* fib, size_t m, size_t i, dou
   return true;
 }
 
+// True if node i has the same neighbours and fibers (ends, weights) in both topologies.
+bool sameStencil(const ShellNodes& nodes, const ShellFibers& fibers, const ShellNodes& old_nodes,
+                 const ShellFibers& old_fibers, size_t i) {
+  const size_t k = nodes.neighborCount(i);
+  if (old_nodes.neighborCount(i) != k ||
+      !std::equal(nodes.neighborsOf(i), nodes.neighborsOf(i) + k, old_nodes.neighborsOf(i)))
+    return false;
+  const size_t f0 = fibers.node_offsets[i], m = fibers.node_offsets[i + 1] - f0;
+  const size_t o0 = old_fibers.node_offsets[i];
+  if (old_fibers.node_offsets[i + 1] - o0 != m) return false;
+  for (size_t q = 0; q < m; ++q) {
+    const Fiber &a = fibers.fibers[f0 + q], &b = old_fibers.fibers[o0 + q];
+    if (a.end1 != b.end1 || a.end2 != b.end2 || a.weight != b.weight) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 ShellBendingForms buildShellBendingForms(const ShellNodes& nodes, const ShellFibers& fibers,
-                                         double min_response) {
+                                         double min_response, const ShellBendingFormsReuse* previous) {
   const size_t n = nodes.size();
+  const bool can_reuse = previous && previous->forms && previous->nodes && previous->fibers &&
+                         previous->forms->min_response == min_response && previous->nodes->size() == n &&
+                         previous->forms->offsets.size() == n + 1;
   ShellBendingForms out;
+  out.min_response = min_response;
   out.offsets.assign(n + 1, 0);
   for (size_t i = 0; i < n; ++i) {
     const size_t m = fibers.node_offsets[i + 1] - fibers.node_offsets[i];
@@ -115,15 +136,25 @@ ShellBendingForms buildShellBendingForms(const ShellNodes& nodes, const ShellFib
   }
   out.values.assign(out.offsets[n], 0.0);
   out.bound.assign(n, 4.0);
-  std::vector<uint8_t> fitted(n, 0);
+  out.fitted.assign(n, 0);
+  std::vector<uint8_t> reused(n, 0);
 #pragma omp parallel for schedule(dynamic, 64) if (n >= 1024)
   for (size_t i = 0; i < n; ++i) {
     const size_t f0 = fibers.node_offsets[i], m = fibers.node_offsets[i + 1] - f0;
     if (m == 0) continue;
-    fitted[i] = nodeForm(nodes, fibers.fibers.data() + f0, m, i, min_response,
-                         out.values.data() + out.offsets[i], &out.bound[i]);
+    if (can_reuse && sameStencil(nodes, fibers, *previous->nodes, *previous->fibers, i)) {
+      const ShellBendingForms& old = *previous->forms;
+      std::copy(old.values.begin() + old.offsets[i], old.values.begin() + old.offsets[i + 1],
+                out.values.begin() + out.offsets[i]);
+      out.bound[i] = old.bound[i];
+      out.fitted[i] = old.fitted[i];
+      reused[i] = 1;
+      continue;
+    }
+    out.fitted[i] = nodeForm(nodes, fibers.fibers.data() + f0, m, i, min_response,
+                             out.values.data() + out.offsets[i], &out.bound[i]);
   }
-  for (uint8_t f : fitted) out.fitted_nodes += f;
+  for (size_t i = 0; i < n; ++i) out.fitted_nodes += out.fitted[i], out.reused_nodes += reused[i];
   return out;
 }
 

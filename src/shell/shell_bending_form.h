@@ -34,7 +34,18 @@ struct ShellBendingForms {
   /// Largest eigenvalue of W^-1/2 Q W^-1/2 per node (W = diag(fiber weights)): Q <= bound W, for the
   /// stable-step estimate. 4 for the isotropic formula.
   std::vector<double> bound;
-  size_t fitted_nodes = 0;  ///< nodes using the fitted form (the rest keep the isotropic one)
+  std::vector<uint8_t> fitted;  ///< per node: 1 if it uses the fitted form (0: the isotropic one)
+  size_t fitted_nodes = 0;      ///< their count
+  double min_response = 0.0;    ///< the setting they were built with
+  size_t reused_nodes = 0;      ///< forms copied from an earlier build (ShellBendingFormsReuse)
+};
+
+/// An earlier build and the topology it was built for: a node that kept its neighbours and its fibers (ends
+/// and weights; rest positions never change) keeps its form (re-neighbouring after cracks changes few nodes).
+struct ShellBendingFormsReuse {
+  const ShellBendingForms* forms = nullptr;
+  const ShellNodes* nodes = nullptr;
+  const ShellFibers* fibers = nullptr;
 };
 
 /// The forms of every node from the rest positions and the fibers' weights, rest lengths and rest angles.
@@ -42,6 +53,7 @@ struct ShellBendingForms {
 /// directions) at or below `min_response` are left out of the fit; a kept one with eigenvalue lambda makes
 /// the form up to 1/lambda x stiffer than the fibers' weights, which shrinks the stable step with its root.
 ShellBendingForms buildShellBendingForms(const ShellNodes& nodes, const ShellFibers& fibers,
-                                         double min_response = 0.15);
+                                         double min_response = 0.15,
+                                         const ShellBendingFormsReuse* previous = nullptr);
 
 }  // namespace rc

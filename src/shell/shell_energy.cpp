@@ -13,7 +13,8 @@ namespace {
 constexpr size_t kParallelNodes = 2048;
 }  // namespace
 
-ShellEnergy::ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, const ShellMaterial& material)
+ShellEnergy::ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, const ShellMaterial& material,
+                         const ShellBendingFormsReuse* previous)
     : nodes_(&nodes), fibers_(&fibers), material_(material) {
   const size_t n = nodes.size();
   if (fibers.node_offsets.size() != n + 1) {
@@ -47,7 +48,7 @@ ShellEnergy::ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, con
       gather_slots_[fill[target(i, s)]++] = slot_offsets_[i] + s;
   }
   slot_values_.resize(slot_offsets_[n]);
-  bending_forms_ = buildShellBendingForms(nodes, fibers, material.bending_fit);
+  bending_forms_ = buildShellBendingForms(nodes, fibers, material.bending_fit, previous);
 }
 
 double ShellEnergy::evaluateNode(size_t i, const std::vector<Vec3>& x, Vec3* slots, double* membrane,

@@ -63,7 +63,9 @@ class ShellEnergy {
  public:
   static constexpr double kSplineAngleScale = kFiberSplineAngleScale;
 
-  ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, const ShellMaterial& material);
+  /// `previous`: forms of an earlier topology to copy where nodes kept their stencils (shell_bending_form.h).
+  ShellEnergy(const ShellNodes& nodes, const ShellFibers& fibers, const ShellMaterial& material,
+              const ShellBendingFormsReuse* previous = nullptr);
 
   /// Total energies at positions x; if `gradient` is given it receives dE/dx (size nodes).
   ShellEnergyValue evaluate(const std::vector<Vec3>& x, std::vector<Vec3>* gradient = nullptr) const;

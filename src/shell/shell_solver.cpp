@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace rc {
 namespace {
@@ -96,9 +97,12 @@ void ShellSolver::setTopology(ShellNodes nodes, ShellFibers fibers) {
     throw std::invalid_argument("ShellSolver::setTopology: node count changed or fibers do not match nodes");
   }
   const ShellMaterial material = energy_.material();
-  nodes_ = std::move(nodes);
-  fibers_ = std::move(fibers);
-  energy_ = ShellEnergy(nodes_, fibers_, material);
+  // The old topology stays alive until the new energy has copied the bending forms of unchanged nodes.
+  const ShellNodes old_nodes = std::exchange(nodes_, std::move(nodes));
+  const ShellFibers old_fibers = std::exchange(fibers_, std::move(fibers));
+  const ShellBendingFormsReuse previous{&energy_.bendingForms(), &old_nodes, &old_fibers};
+  ShellEnergy next(nodes_, fibers_, material, &previous);
+  energy_ = std::move(next);
   refreshForces();
 }
 

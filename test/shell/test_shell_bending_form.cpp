@@ -2,7 +2,8 @@
 // under constant curvature fields (along, across and twisting) against K_b/2 |dS|_F^2 per unit rest area, on
 // a square grid's interior, edge and end nodes and on Poisson-disc nodes chosen from surfels; the isotropic
 // formula 4 W - 2 w w^T recovered where fiber directions are isotropic; node areas from their surfels summing
-// to the sampled surface; a cantilever of Poisson-disc nodes against beam theory at three resolutions.
+// to the sampled surface; a cantilever of Poisson-disc nodes against beam theory at three resolutions; forms
+// of an earlier topology reused where nodes kept their stencils.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "relaxed_connectivity/shell/shell_bending_form.h"
 #include "relaxed_connectivity/shell/shell_energy.h"
 #include "relaxed_connectivity/shell/shell_sheet_source.h"
 #include "relaxed_connectivity/shell/shell_static.h"
@@ -212,6 +214,36 @@ TEST(ShellBendingForm, PoissonCantileverAgainstBeamTheory) {
                 deflection, beam, 100 * (deflection / beam - 1));
     EXPECT_NEAR(deflection, beam, 0.04 * beam) << h;  // measured +2.8, +0.7, +1.8 %
   }
+}
+
+}  // namespace
+}  // namespace rc
+
+namespace rc {
+namespace {
+
+TEST(ShellBendingForm, AnEarlierBuildIsReusedWhereTheStencilIsUnchanged) {
+  const ShellNodes nodes = gridStrip(0.5, 0.2, 0.05);
+  const ShellFibers fibers = buildShellFibers(nodes);
+  const ShellBendingForms first = buildShellBendingForms(nodes, fibers);
+  ShellBendingFormsReuse previous{&first, &nodes, &fibers};
+  const ShellBendingForms again = buildShellBendingForms(nodes, fibers, 0.15, &previous);
+  EXPECT_EQ(again.reused_nodes, nodes.size());
+  EXPECT_EQ(again.values, first.values);
+  // A changed fiber weight (as re-neighbouring after a crack rebuilds a node's fibers) rebuilds that node
+  // only.
+  ShellFibers changed = fibers;
+  const size_t node = 7;
+  for (size_t q = changed.node_offsets[node]; q < changed.node_offsets[node + 1]; ++q)
+    changed.fibers[q].weight *= q == changed.node_offsets[node] ? 1.5 : 0.9;
+  const ShellBendingForms fresh = buildShellBendingForms(nodes, changed);
+  const ShellBendingForms updated = buildShellBendingForms(nodes, changed, 0.15, &previous);
+  EXPECT_EQ(updated.reused_nodes, nodes.size() - 1);
+  EXPECT_EQ(updated.values, fresh.values);
+  EXPECT_EQ(updated.bound, fresh.bound);
+  EXPECT_NE(updated.values, first.values);
+  // Another setting builds everything anew.
+  EXPECT_EQ(buildShellBendingForms(nodes, fibers, 0.05, &previous).reused_nodes, 0u);
 }
 
 }  // namespace
