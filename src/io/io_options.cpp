@@ -37,6 +37,8 @@ void applyReadOptions(const ReadOptions& options, TriangleMesh* mesh) {
   std::vector<Triangle> kept;
   kept.reserve(mesh->triangles.size());
   for (const Triangle& t : mesh->triangles) {
+    if (t[0] >= new_index.size() || t[1] >= new_index.size() || t[2] >= new_index.size())
+      throw std::invalid_argument("applyReadOptions: a triangle indexes a vertex the mesh does not have");
     const Triangle r{new_index[t[0]], new_index[t[1]], new_index[t[2]]};
     if (r[0] != kDropped && r[1] != kDropped && r[2] != kDropped) kept.push_back(r);
   }

@@ -152,6 +152,12 @@ PcdHeader parseHeader(const std::string& bytes, const std::string& file) {
     if (!counts.empty()) {
       const uint64_t count = number(counts[f], fields_where, "COUNT");
       if (count == 0) throw IoError(file, fields_where, "field '" + spec.name + "' has COUNT 0");
+      // (PCL's largest descriptors hold a few hundred values per point)
+      constexpr uint64_t kMaxCount = uint64_t(1) << 24;
+      if (count > kMaxCount)
+        throw IoError(file, fields_where,
+                      "field '" + spec.name + "' has COUNT " + std::to_string(count) + ", more than " +
+                          std::to_string(kMaxCount));
       spec.count = static_cast<uint32_t>(count);
     }
     header.fields.push_back(spec);

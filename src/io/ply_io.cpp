@@ -108,6 +108,9 @@ PlyHeader parseHeader(const std::string& bytes, const std::string& file) {
       int64_t count = -1;
       if (tokens.size() != 3 || !parseInt64(tokens[2], &count) || count < 0)
         throw IoError(file, where, "malformed element line '" + std::string(line) + "'");
+      for (const PlyElement& earlier : header.elements)
+        if (earlier.name == tokens[1])
+          throw IoError(file, where, "element '" + earlier.name + "' declared twice");
       header.elements.push_back(PlyElement{std::string(tokens[1]), static_cast<size_t>(count), {}});
     } else if (keyword == "property") {
       if (header.elements.empty()) throw IoError(file, where, "property before any element");

@@ -1,10 +1,13 @@
 #include "relaxed_connectivity/ros/paint_model.h"
 
+#include <algorithm>
+
 #include <relaxed_connectivity/PaintDelta.h>
 #include <relaxed_connectivity/PaintStats.h>
 #include <tf2_eigen/tf2_eigen.h>
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <stdexcept>
 #include <string_view>
@@ -40,6 +43,7 @@ void PaintModelParams::validate() const {
   if (!(stroke_gap >= 0) || !std::isfinite(stroke_gap)) fail("stroke_gap must be >= 0");
   if (journal_bytes < 0) fail("journal_bytes must be >= 0");
   if (!(autosave_period > 0) || !std::isfinite(autosave_period)) fail("autosave_period must be positive");
+  if (!(tf_wait > 0) || !std::isfinite(tf_wait)) fail("tf_wait must be positive");
   if (!(stats_period > 0) || !std::isfinite(stats_period)) fail("stats_period must be positive");
   try {
     transfer.validate();
@@ -70,6 +74,7 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
   pnh.param("restore", p.restore, p.restore);
   pnh.param("autosave", p.autosave, p.autosave);
   pnh.param("autosave_period", p.autosave_period, p.autosave_period);
+  pnh.param("tf_wait", p.tf_wait, p.tf_wait);
   pnh.param("replace_painted", p.replace_painted, p.replace_painted);
   pnh.param("stats_period", p.stats_period, p.stats_period);
   pnh.param("palette", p.palette, p.palette);
@@ -113,14 +118,24 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   }
   // The object waits for the transform of its stamp in a message filter (no lookup blocks the callback).
   surfels_sub_.subscribe(nh_, "surfels", 1);
+  // (registered before the filter connects, so a cloud is noted as waiting before the filter can pass it on)
+  surfels_sub_.registerCallback([this](const sensor_msgs::PointCloud2ConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(waiting_mutex_);
+    waiting_clouds_.emplace_back(msg, ros::WallTime::now());
+  });
   surfels_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
       surfels_sub_, tf_buffer_, params_.world_frame, 5, nh_);
-  surfels_filter_->registerCallback(
-      [this](const sensor_msgs::PointCloud2ConstPtr& msg) { surfelsCallback(msg, msg->header.stamp); });
+  surfels_filter_->registerCallback([this](const sensor_msgs::PointCloud2ConstPtr& msg) {
+    cloudLeftFilter(msg);
+    surfelsCallback(msg, msg->header.stamp);
+  });
+  tf_wait_timer_ = nh_.createWallTimer(ros::WallDuration(0.25),
+                                       [this](const ros::WallTimerEvent&) { refuseStaleWaits(); });
   // An object stamped before the transforms kept (e.g. a latched scan older than the object's frame) is
   // placed with the latest transform, as a static object is; without any, it is refused.
   surfels_filter_->registerFailureCallback([this](const sensor_msgs::PointCloud2ConstPtr& msg,
                                                   tf2_ros::filter_failure_reasons::FilterFailureReason) {
+    cloudLeftFilter(msg);
     if (!msg->header.frame_id.empty() &&
         tf_buffer_.canTransform(params_.world_frame, msg->header.frame_id, ros::Time(0))) {
       ROS_WARN_STREAM("paint_model: surfels (frame '"
@@ -214,20 +229,69 @@ void PaintModel::installSurface(std::unique_ptr<PaintSurface> surface, const std
                                             << surface_->childCount() << " children), " << what);
 }
 
+void PaintModel::cloudLeftFilter(const sensor_msgs::PointCloud2ConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(waiting_mutex_);
+  waiting_clouds_.erase(std::remove_if(waiting_clouds_.begin(), waiting_clouds_.end(),
+                                       [&](const auto& w) { return w.first == msg; }),
+                        waiting_clouds_.end());
+}
+
+void PaintModel::refuseStaleWaits() {
+  std::vector<sensor_msgs::PointCloud2ConstPtr> refused;
+  {
+    std::lock_guard<std::mutex> lock(waiting_mutex_);
+    const ros::WallTime now = ros::WallTime::now();
+    const bool stale = std::any_of(waiting_clouds_.begin(), waiting_clouds_.end(),
+                                   [&](const auto& w) { return (now - w.second).toSec() > params_.tf_wait; });
+    if (!stale) return;
+    // The filter can only be emptied as a whole: every cloud in it is refused.
+    surfels_filter_->clear();
+    for (const auto& w : waiting_clouds_) refused.push_back(w.first);
+    waiting_clouds_.clear();
+  }
+  for (const auto& msg : refused) {
+    ++rejected_;
+    char wait[32];
+    std::snprintf(wait, sizeof(wait), "%g", params_.tf_wait);
+    const std::string reason = "no transform of frame '" + msg->header.frame_id + "' to '" +
+                               params_.world_frame + "' within " + wait + " s";
+    diagnostics_.rejected("surfels", reason);
+    ROS_ERROR_STREAM("paint_model: rejected surfels: " << reason << "; the current object stays");
+  }
+}
+
 void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg, ros::Time tf_time) {
-  // The same object again (a latched topic re-sent, a reconnect): nothing to do.
-  const size_t hash = std::hash<std::string_view>()(
-      std::string_view(reinterpret_cast<const char*>(msg->data.data()), msg->data.size()));
+  // The same object again (a latched topic re-sent, a reconnect): nothing to do. The same bytes under another
+  // layout are another message (and are checked).
+  std::string layout = std::to_string(msg->width) + " " + std::to_string(msg->height) + " " +
+                       std::to_string(msg->point_step) + " " + std::to_string(msg->row_step) +
+                       (msg->is_bigendian ? " big" : " little");
+  for (const auto& f : msg->fields)
+    layout += " " + f.name + ":" + std::to_string(f.offset) + ":" + std::to_string(f.datatype) + ":" +
+              std::to_string(f.count);
+  const size_t hash = std::hash<std::string_view>()(std::string_view(
+                          reinterpret_cast<const char*>(msg->data.data()), msg->data.size())) ^
+                      (std::hash<std::string>()(layout) * 0x9e3779b97f4a7c15ULL);
   {
     std::lock_guard<std::mutex> lock(model_mutex_);
     if (surface_ && hash == object_hash_ && msg->header.frame_id == object_frame_) return;
     if (surface_ && object_hash_ != 0 && !msg->header.stamp.isZero() &&
-        msg->header.stamp < object_cloud_stamp_)
-      return;  // older than the current object (a message filter's late failure)
+        msg->header.stamp < object_cloud_stamp_) {  // older than the current object: out of order
+      ++rejected_;
+      const std::string reason = "stamp " + std::to_string(msg->header.stamp.toSec()) +
+                                 " older than the current object's " +
+                                 std::to_string(object_cloud_stamp_.toSec());
+      diagnostics_.rejected("surfels", reason);
+      ROS_WARN_STREAM("paint_model: rejected surfels: " << reason << "; the current object stays");
+      return;
+    }
   }
   try {
     SurfelCloud cloud = PointCloud2Converter::fromMessage(*msg);
     const size_t dropped = cloud.removeNonFinite();
+    if (cloud.empty())
+      throw std::invalid_argument(dropped ? "no finite surfel (" + std::to_string(dropped) + " non-finite)"
+                                          : std::string("the cloud has no points"));
     if (!cloud.hasNormals())
       throw std::invalid_argument("the cloud has no normals (normal_x/y/z): run it through surfel_estimator");
     if (msg->header.frame_id != params_.world_frame) {

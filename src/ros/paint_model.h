@@ -34,8 +34,9 @@
 //             wet ones diffused per time step when the paint diffuses, 4000; 0: off), stroke_gap ([s]
 //             without contact that ends a stroke, 0.25), journal_bytes (undo memory, 256 MiB), restore (a
 //             state saved by ~save to load at start, ""), autosave (file, ""), autosave_period ([s], 60),
-//             replace_painted (false), stats_period ([s], 1), palette (a palette file,
-//             config/paint/palettes/, appended beside each object from the topic; ""); see
+//             replace_painted (false), stats_period ([s], 1), tf_wait ([s] a cloud waits for the transform of
+//             its frame before it is refused, 30: a session's transforms may start late), palette (a palette
+//             file, config/paint/palettes/, appended beside each object from the topic; ""); see
 //             config/paint/brush_demo.yaml.
 #pragma once
 
@@ -91,6 +92,7 @@ struct PaintModelParams {
   double autosave_period = 60.0;
   bool replace_painted = false;
   double stats_period = 1.0;
+  double tf_wait = 30.0;
   std::string palette;  ///< palette file (config/paint/palettes/); empty: none
   std::string object;   ///< a surfel file (.ply, .pcd, .xyz with normals) painted instead of the topic's
 
@@ -189,6 +191,13 @@ class PaintModel {
   // The object: clouds on `surfels` through a tf2_ros::MessageFilter to world_frame.
   message_filters::Subscriber<sensor_msgs::PointCloud2> surfels_sub_;
   std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>> surfels_filter_;
+  // Clouds in the filter, waiting for their transform since the wall time (refused after tf_wait: without tf
+  // traffic the filter would hold a cloud of an unknown frame forever).
+  std::mutex waiting_mutex_;
+  std::vector<std::pair<sensor_msgs::PointCloud2ConstPtr, ros::WallTime>> waiting_clouds_;
+  ros::WallTimer tf_wait_timer_;
+  void cloudLeftFilter(const sensor_msgs::PointCloud2ConstPtr& msg);
+  void refuseStaleWaits();
   ros::Publisher contact_pub_, skeleton_pub_, skin_pub_, painted_pub_, delta_pub_, stats_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::WallTimer timer_;

@@ -60,6 +60,11 @@ TEST(IoErrors, BadPlyHeaders) {
   expectIoError([&] { readPlyCloud(path); }, {"bad_header.ply", "element 'vertex'", "missing x, y or z"});
   writeText(path, "ply\nformat utf8 1.0\nend_header\n");
   expectIoError([&] { readPlyCloud(path); }, {"bad_header.ply", "header line 2", "unknown format 'utf8'"});
+  // (found by fuzz_ply: a second vertex element's indices were checked against the first's count)
+  writeText(path,
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nelement vertex 4\nend_header\n");
+  expectIoError([&] { readPlyMesh(path); },
+                {"bad_header.ply", "header line 5", "element 'vertex' declared twice"});
 }
 
 TEST(IoErrors, PlyCountsBeyondTheFileAreRefusedBeforeAllocating) {
@@ -141,6 +146,11 @@ TEST(IoErrors, PcdProblems) {
   expectIoError([&] { readPcdCloud(path); }, {"bad.pcd", "WIDTH 2 x HEIGHT 2 does not match POINTS 3"});
   writeText(path, "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS 2\nDATA ascii\n1 2 3\n4 5\n");
   expectIoError([&] { readPcdCloud(path); }, {"bad.pcd", "point #1 (line 7)", "expected 3 values, found 2"});
+  // (found by fuzz_pcd: a COUNT of 8.9e15 made a compressed cloud's reader loop for minutes)
+  writeText(path,
+            "FIELDS x y z r\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 8888888888888881\nPOINTS 1\n"
+            "DATA ascii\n1 2 3 4\n");
+  expectIoError([&] { readPcdCloud(path); }, {"bad.pcd", "field 'r' has COUNT 8888888888888881, more than"});
   std::string compressed = header;
   compressed.replace(compressed.find("DATA binary"), 11, "DATA binary_compressed");
   const uint32_t sizes[2] = {4, 35};  // 35 != 3 points x 12 bytes

@@ -28,7 +28,6 @@ namespace rc {
 namespace {
 
 using namespace splat_tile;
-constexpr int kTilePixels = kTileSize * kTileSize;
 constexpr size_t kSurfelsPerChunk = 4096;  ///< set-up/binning work unit (at most 8 per thread)
 #if defined(__SSE2__)
 constexpr bool kSimd = true;  ///< unclipped splats are rasterized four pixels at a time
