@@ -49,6 +49,7 @@ void CsgRendererParams::validate() const {
   for (size_t i = 0; i < patch_topics.size(); ++i)
     if (patch_topics[i].empty()) fail("patch_topics[" + std::to_string(i) + "] is empty");
   if (tf_queue_size < 1) fail("tf_queue_size must be >= 1 (got " + std::to_string(tf_queue_size) + ")");
+  if (!finitePositive(tf_wait)) fail("tf_wait must be > 0 s (got " + std::to_string(tf_wait) + ")");
   if (!finitePositive(max_rate)) fail("max_rate must be > 0 Hz (got " + std::to_string(max_rate) + ")");
   if (!(pose_tolerance >= 0) || !std::isfinite(pose_tolerance))
     fail("pose_tolerance must be >= 0 (got " + std::to_string(pose_tolerance) + ")");
@@ -111,6 +112,7 @@ CsgRendererParams readCsgRendererParams(const ros::NodeHandle& pnh) {
   pnh.param("patch_topics", p.patch_topics, p.patch_topics);
   pnh.param("use_surfels_topic", p.use_surfels_topic, p.use_surfels_topic);
   pnh.param("tf_queue_size", p.tf_queue_size, p.tf_queue_size);
+  pnh.param("tf_wait", p.tf_wait, p.tf_wait);
   pnh.param("max_rate", p.max_rate, p.max_rate);
   pnh.param("pose_tolerance", p.pose_tolerance, p.pose_tolerance);
   pnh.param("partner_method", p.partner_method, p.partner_method);
@@ -153,29 +155,31 @@ CsgRenderer::CsgRenderer(ros::NodeHandle nh, ros::NodeHandle private_nh)
   info_pub_ = private_nh_.advertise<sensor_msgs::CameraInfo>("camera_info", 1, /*latch=*/true);
   stats_pub_ = private_nh_.advertise<relaxed_connectivity::CsgRenderStats>("stats", 10);
   set_tree_srv_ = private_nh_.advertiseService("set_csg_tree", &CsgRenderer::setCsgTree, this);
-  // Each input through a tf2_ros::MessageFilter: a cloud comes on once the transform of its stamp is known.
+  // Each input through a tf2_ros::MessageFilter: a cloud comes on once the transform of its stamp is known
+  // (waiting at most tf_wait).
   auto addInput = [this](const std::string& topic, int patch) {
-    cloud_subs_.push_back(
-        std::make_unique<message_filters::Subscriber<sensor_msgs::PointCloud2>>(nh_, topic, 5));
-    tf_filters_.push_back(std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
-        *cloud_subs_.back(), tf_buffer_, params_.fixed_frame, uint32_t(params_.tf_queue_size), nh_));
-    tf_filters_.back()->registerCallback([this, patch](const sensor_msgs::PointCloud2ConstPtr& msg) {
-      if (patch < 0)
-        surfelsCallback(msg);
-      else
-        patchCallback(patch, msg);
-    });
-    tf_filters_.back()->registerFailureCallback(
-        [this, topic](const sensor_msgs::PointCloud2ConstPtr& msg,
-                      tf2_ros::filter_failure_reasons::FilterFailureReason why) {
-          diagnostics_.rejected(topic, "no transform of frame '" + msg->header.frame_id + "'");
-          reject("cloud on " + topic + " (frame '" + msg->header.frame_id + "', stamp " +
-                     std::to_string(msg->header.stamp.toSec()) + ")",
-                 why == tf2_ros::filter_failure_reasons::EmptyFrameID
-                     ? std::string("header.frame_id is empty")
-                     : "no transform from '" + msg->header.frame_id + "' to '" + params_.fixed_frame +
-                           "' in time (tf2_ros::MessageFilter)");
-        });
+    auto refuse = [this, topic](const sensor_msgs::PointCloud2ConstPtr& msg, const std::string& reason) {
+      diagnostics_.rejected(topic, reason);
+      reject("cloud on " + topic + " (frame '" + msg->header.frame_id + "', stamp " +
+                 std::to_string(msg->header.stamp.toSec()) + ")",
+             reason);
+    };
+    inputs_.push_back(std::make_unique<BoundedTfFilter>(
+        nh_, topic, 5, tf_buffer_, params_.fixed_frame, uint32_t(params_.tf_queue_size), params_.tf_wait,
+        [this, patch](const sensor_msgs::PointCloud2ConstPtr& msg) {
+          if (patch < 0)
+            surfelsCallback(msg);
+          else
+            patchCallback(patch, msg);
+        },
+        [this, refuse](const sensor_msgs::PointCloud2ConstPtr& msg,
+                       tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+          refuse(msg, why == tf2_ros::filter_failure_reasons::EmptyFrameID
+                          ? std::string("header.frame_id is empty")
+                          : "no transform from '" + msg->header.frame_id + "' to '" + params_.fixed_frame +
+                                "' in time (tf2_ros::MessageFilter)");
+        },
+        refuse));
   };
   if (params_.use_surfels_topic) addInput("surfels", -1);
   if (params_.use_surfels_topic) diagnostics_.addInput("surfels", 0.0);  // latched scenes: never stale
@@ -237,6 +241,10 @@ void CsgRenderer::acceptCloud(size_t source, int patch, const sensor_msgs::Point
       cloud->frame_id = params_.fixed_frame;
     }
     std::lock_guard<std::mutex> lock(mutex_);
+    if (sources_[source].cloud && !msg->header.stamp.isZero() && msg->header.stamp < sources_[source].stamp)
+      throw std::invalid_argument("stamp " + std::to_string(msg->header.stamp.toSec()) +
+                                  " older than the cloud shown (" +
+                                  std::to_string(sources_[source].stamp.toSec()) + "): out of order");
     sources_[source].cloud = std::move(cloud);
     sources_[source].stamp = msg->header.stamp;
     inputs_changed_ = true;

@@ -12,6 +12,7 @@
 //             message and the previous tree is kept; dynamic_reconfigure (~set_parameters,
 //             config/dynamic_reconfigure/Splat.cfg): the splat settings, applied from the next frame.
 // Parameters  (private) fixed_frame, camera_frame, csg, patch_topics, use_surfels_topic, tf_queue_size,
+// tf_wait,
 //             max_rate, width, height, horizontal_fov (degrees), fx fy cx cy (override the fov when fx > 0),
 //             orthographic, ortho_view_width, near_clip, far_clip, pose_tolerance, partner_method,
 //             ewa_filter, lowpass_variance, cutoff_radius, depth_tolerance_scale, exact_footprint,
@@ -25,14 +26,12 @@
 #pragma once
 
 #include <dynamic_reconfigure/server.h>
-#include <message_filters/subscriber.h>
 #include <relaxed_connectivity/CsgRenderStats.h>
 #include <relaxed_connectivity/SetCsgTree.h>
 #include <relaxed_connectivity/SplatConfig.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
@@ -46,6 +45,7 @@
 #include "relaxed_connectivity/render/csg/patch_cloud_set.h"
 #include "relaxed_connectivity/render/splat/camera.h"
 #include "relaxed_connectivity/render/splat/surfel_renderer.h"
+#include "relaxed_connectivity/ros/bounded_tf_filter.h"
 #include "relaxed_connectivity/ros/node_diagnostics.h"
 
 namespace rc {
@@ -61,6 +61,9 @@ struct CsgRendererParams {
   /// Clouds of each input waiting for the transform of their stamp (tf2_ros::MessageFilter); one pushed out
   /// still without it is rejected naming its frame.
   int tf_queue_size = 5;
+  /// Seconds a cloud waits for its transform before it is rejected (without tf traffic the filter alone would
+  /// hold a cloud of an unknown frame forever).
+  double tf_wait = 30.0;
   double max_rate = 10.0;        ///< frames per second at most
   double pose_tolerance = 1e-6;  ///< camera motion (metres / radians) that triggers a new frame
   std::string partner_method =
@@ -144,8 +147,7 @@ class CsgRenderer {
   std::unique_ptr<dynamic_reconfigure::Server<relaxed_connectivity::SplatConfig>> reconfigure_server_;
   // The inputs (`surfels`, then the patch topics), each through a tf2_ros::MessageFilter to fixed_frame
   // (last: stopped first).
-  std::vector<std::unique_ptr<message_filters::Subscriber<sensor_msgs::PointCloud2>>> cloud_subs_;
-  std::vector<std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>> tf_filters_;
+  std::vector<std::unique_ptr<BoundedTfFilter>> inputs_;
 };
 
 }  // namespace rc

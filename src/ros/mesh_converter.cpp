@@ -151,7 +151,8 @@ SurfelCloud MeshConverter::goalSurfels(const relaxed_connectivity::ConvertSurfel
                                        std::string* frame_id, std::string* name) {
   const sensor_msgs::PointCloud2* msg = nullptr;
   sensor_msgs::PointCloud2ConstPtr latest;
-  if (goal.cloud.width * goal.cloud.height > 0) {
+  // (64-bit: a width * height that wraps to 0 in 32 bits is still a cloud, and is checked)
+  if (uint64_t(goal.cloud.width) * goal.cloud.height > 0 || !goal.cloud.data.empty()) {
     msg = &goal.cloud;
   } else if (goal.use_latest) {
     std::lock_guard<std::mutex> lock(mutex_);

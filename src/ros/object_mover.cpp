@@ -42,7 +42,7 @@ ObjectMoverParams readObjectMoverParams(const ros::NodeHandle& pnh) {
 }
 
 ObjectMover::ObjectMover(ros::NodeHandle nh, ros::NodeHandle private_nh)
-    : nh_(nh), params_(readObjectMoverParams(private_nh)) {
+    : nh_(nh), params_(readObjectMoverParams(private_nh)), diagnostics_(nh, private_nh, "object_mover") {
   const std::vector<double>& b = params_.initial_pose;
   const Eigen::Quaterniond q = b.size() == 7
                                    ? Eigen::Quaterniond(b[6], b[3], b[4], b[5]).normalized()
@@ -57,6 +57,7 @@ ObjectMover::ObjectMover(ros::NodeHandle nh, ros::NodeHandle private_nh)
   pose_.orientation.z = q.z();
   pose_.orientation.w = q.w();
   pose_sub_ = nh_.subscribe("object_pose", 10, &ObjectMover::poseCallback, this);
+  diagnostics_.addInput(pose_sub_.getTopic(), 0.0);  // poses come when someone moves the object
   if (params_.interactive_marker) {
     marker_server_ = std::make_unique<interactive_markers::InteractiveMarkerServer>(
         private_nh.getNamespace() + "/marker", "", /*spin_thread=*/false);
@@ -89,7 +90,12 @@ ObjectMover::ObjectMover(ros::NodeHandle nh, ros::NodeHandle private_nh)
 }
 
 void ObjectMover::poseCallback(const geometry_msgs::PoseStampedConstPtr& msg) {
-  if (!accept(msg->header.frame_id, msg->pose, "object pose")) return;
+  std::string problem;
+  if (!accept(msg->header.frame_id, msg->pose, "object pose", &problem)) {
+    diagnostics_.rejected(pose_sub_.getTopic(), problem);
+    return;
+  }
+  diagnostics_.accepted(pose_sub_.getTopic());
   if (marker_server_) {  // the handle follows the topic
     marker_server_->setPose(params_.child_frame, pose_);
     marker_server_->applyChanges();
@@ -101,7 +107,8 @@ void ObjectMover::markerFeedback(const visualization_msgs::InteractiveMarkerFeed
   accept(feedback->header.frame_id, feedback->pose, "marker pose");
 }
 
-bool ObjectMover::accept(const std::string& frame, const geometry_msgs::Pose& p, const char* source) {
+bool ObjectMover::accept(const std::string& frame, const geometry_msgs::Pose& p, const char* source,
+                         std::string* why) {
   const double values[] = {p.position.x,    p.position.y,    p.position.z,   p.orientation.x,
                            p.orientation.y, p.orientation.z, p.orientation.w};
   std::string problem;
@@ -113,6 +120,7 @@ bool ObjectMover::accept(const std::string& frame, const geometry_msgs::Pose& p,
                                 values[6] * values[6]);
   if (problem.empty() && std::abs(norm - 1) > 1e-3) problem = "quaternion of norm " + std::to_string(norm);
   if (!problem.empty()) {
+    if (why) *why = problem;
     ++rejected_;
     ROS_ERROR_STREAM_THROTTLE(1.0, "object_mover: rejected " << source << ": " << problem << " (" << rejected_
                                                              << " rejected so far)");

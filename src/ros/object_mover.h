@@ -24,6 +24,8 @@
 #include <string>
 #include <vector>
 
+#include "relaxed_connectivity/ros/node_diagnostics.h"
+
 namespace rc {
 
 struct ObjectMoverParams {
@@ -46,7 +48,8 @@ class ObjectMover {
 
  private:
   /// Takes a pose in parent_frame (an empty frame means parent_frame) from `source`, or logs why not.
-  bool accept(const std::string& frame, const geometry_msgs::Pose& pose, const char* source);
+  bool accept(const std::string& frame, const geometry_msgs::Pose& pose, const char* source,
+              std::string* why = nullptr);
   void markerFeedback(const visualization_msgs::InteractiveMarkerFeedbackConstPtr& feedback);
   void broadcast();
   ros::NodeHandle nh_;
@@ -57,6 +60,7 @@ class ObjectMover {
   geometry_msgs::Pose pose_;
   uint32_t rejected_ = 0;
   std::unique_ptr<interactive_markers::InteractiveMarkerServer> marker_server_;
+  NodeDiagnostics diagnostics_;  // the pose topic's accepted / rejected counts on /diagnostics
 };
 
 }  // namespace rc

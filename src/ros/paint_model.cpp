@@ -116,39 +116,25 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
         std::make_unique<PaintSurface>(std::move(cloud)),
         "from " + params_.object + (dropped ? " (" + std::to_string(dropped) + " non-finite dropped)" : ""));
   }
-  // The object waits for the transform of its stamp in a message filter (no lookup blocks the callback).
-  surfels_sub_.subscribe(nh_, "surfels", 1);
-  // (registered before the filter connects, so a cloud is noted as waiting before the filter can pass it on)
-  surfels_sub_.registerCallback([this](const sensor_msgs::PointCloud2ConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(waiting_mutex_);
-    waiting_clouds_.emplace_back(msg, ros::WallTime::now());
-  });
-  surfels_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
-      surfels_sub_, tf_buffer_, params_.world_frame, 5, nh_);
-  surfels_filter_->registerCallback([this](const sensor_msgs::PointCloud2ConstPtr& msg) {
-    cloudLeftFilter(msg);
-    surfelsCallback(msg, msg->header.stamp);
-  });
-  tf_wait_timer_ = nh_.createWallTimer(ros::WallDuration(0.25),
-                                       [this](const ros::WallTimerEvent&) { refuseStaleWaits(); });
-  // An object stamped before the transforms kept (e.g. a latched scan older than the object's frame) is
-  // placed with the latest transform, as a static object is; without any, it is refused.
-  surfels_filter_->registerFailureCallback([this](const sensor_msgs::PointCloud2ConstPtr& msg,
-                                                  tf2_ros::filter_failure_reasons::FilterFailureReason) {
-    cloudLeftFilter(msg);
-    if (!msg->header.frame_id.empty() &&
-        tf_buffer_.canTransform(params_.world_frame, msg->header.frame_id, ros::Time(0))) {
-      ROS_WARN_STREAM("paint_model: surfels (frame '"
-                      << msg->header.frame_id << "') older than the transforms to '" << params_.world_frame
-                      << "': placed with the latest one");
-      return surfelsCallback(msg, ros::Time(0));
-    }
-    ++rejected_;
-    diagnostics_.rejected("surfels", "no transform of frame '" + msg->header.frame_id + "'");
-    ROS_ERROR_STREAM("paint_model: rejected surfels (frame '"
-                     << msg->header.frame_id << "'): no transform to '" << params_.world_frame
-                     << "' (tf2_ros::MessageFilter); the current object stays");
-  });
+  // The object waits for the transform of its stamp in a message filter (no lookup blocks the callback), at
+  // most tf_wait seconds. An object stamped before the transforms kept (e.g. a latched scan older than the
+  // object's frame) is placed with the latest transform, as a static object is; without any, it is refused.
+  surfels_input_ = std::make_unique<BoundedTfFilter>(
+      nh_, "surfels", 1, tf_buffer_, params_.world_frame, 5, params_.tf_wait,
+      [this](const sensor_msgs::PointCloud2ConstPtr& msg) { surfelsCallback(msg, msg->header.stamp); },
+      [this](const sensor_msgs::PointCloud2ConstPtr& msg,
+             tf2_ros::filter_failure_reasons::FilterFailureReason) {
+        if (!msg->header.frame_id.empty() &&
+            tf_buffer_.canTransform(params_.world_frame, msg->header.frame_id, ros::Time(0))) {
+          ROS_WARN_STREAM("paint_model: surfels (frame '"
+                          << msg->header.frame_id << "') older than the transforms to '"
+                          << params_.world_frame << "': placed with the latest one");
+          return surfelsCallback(msg, ros::Time(0));
+        }
+        refuseSurfels("no transform of frame '" + msg->header.frame_id + "' to '" + params_.world_frame +
+                      "' (tf2_ros::MessageFilter)");
+      },
+      [this](const sensor_msgs::PointCloud2ConstPtr&, const std::string& reason) { refuseSurfels(reason); });
   pose_sub_ = nh_.subscribe(params_.device + "/pose", 10, &PaintModel::poseCallback, this,
                             ros::TransportHints().tcpNoDelay());
   diagnostics_.addInput(pose_sub_.getTopic(), 2.0);
@@ -229,35 +215,10 @@ void PaintModel::installSurface(std::unique_ptr<PaintSurface> surface, const std
                                             << surface_->childCount() << " children), " << what);
 }
 
-void PaintModel::cloudLeftFilter(const sensor_msgs::PointCloud2ConstPtr& msg) {
-  std::lock_guard<std::mutex> lock(waiting_mutex_);
-  waiting_clouds_.erase(std::remove_if(waiting_clouds_.begin(), waiting_clouds_.end(),
-                                       [&](const auto& w) { return w.first == msg; }),
-                        waiting_clouds_.end());
-}
-
-void PaintModel::refuseStaleWaits() {
-  std::vector<sensor_msgs::PointCloud2ConstPtr> refused;
-  {
-    std::lock_guard<std::mutex> lock(waiting_mutex_);
-    const ros::WallTime now = ros::WallTime::now();
-    const bool stale = std::any_of(waiting_clouds_.begin(), waiting_clouds_.end(),
-                                   [&](const auto& w) { return (now - w.second).toSec() > params_.tf_wait; });
-    if (!stale) return;
-    // The filter can only be emptied as a whole: every cloud in it is refused.
-    surfels_filter_->clear();
-    for (const auto& w : waiting_clouds_) refused.push_back(w.first);
-    waiting_clouds_.clear();
-  }
-  for (const auto& msg : refused) {
-    ++rejected_;
-    char wait[32];
-    std::snprintf(wait, sizeof(wait), "%g", params_.tf_wait);
-    const std::string reason = "no transform of frame '" + msg->header.frame_id + "' to '" +
-                               params_.world_frame + "' within " + wait + " s";
-    diagnostics_.rejected("surfels", reason);
-    ROS_ERROR_STREAM("paint_model: rejected surfels: " << reason << "; the current object stays");
-  }
+void PaintModel::refuseSurfels(const std::string& reason) {
+  ++rejected_;
+  diagnostics_.rejected("surfels", reason);
+  ROS_ERROR_STREAM("paint_model: rejected surfels: " << reason << "; the current object stays");
 }
 
 void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg, ros::Time tf_time) {
@@ -277,12 +238,8 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg, ro
     if (surface_ && hash == object_hash_ && msg->header.frame_id == object_frame_) return;
     if (surface_ && object_hash_ != 0 && !msg->header.stamp.isZero() &&
         msg->header.stamp < object_cloud_stamp_) {  // older than the current object: out of order
-      ++rejected_;
-      const std::string reason = "stamp " + std::to_string(msg->header.stamp.toSec()) +
-                                 " older than the current object's " +
-                                 std::to_string(object_cloud_stamp_.toSec());
-      diagnostics_.rejected("surfels", reason);
-      ROS_WARN_STREAM("paint_model: rejected surfels: " << reason << "; the current object stays");
+      refuseSurfels("stamp " + std::to_string(msg->header.stamp.toSec()) +
+                    " older than the current object's " + std::to_string(object_cloud_stamp_.toSec()));
       return;
     }
   }
@@ -313,7 +270,7 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg, ro
     if (painted() && !params_.replace_painted)
       throw std::runtime_error("the current object was painted meanwhile");
     const std::string what =
-        "from " + surfels_sub_.getTopic() +
+        "from " + surfels_input_->topic() +
         (dropped ? " (" + std::to_string(dropped) + " non-finite dropped)" : "") +
         (palette_ ? ", with the palette '" + palette_->name + "' (" +
                         std::to_string(surface->originalCount() - object_size) + " surfels)"

@@ -43,7 +43,6 @@
 #include <actionlib/server/simple_action_server.h>
 #include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/PoseStamped.h>
-#include <message_filters/subscriber.h>
 #include <relaxed_connectivity/LoadPaintedStateAction.h>
 #include <relaxed_connectivity/PaintCommand.h>
 #include <relaxed_connectivity/PaintConfig.h>
@@ -51,7 +50,6 @@
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
-#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <atomic>
@@ -68,6 +66,7 @@
 #include "relaxed_connectivity/paint/paint_transfer.h"
 #include "relaxed_connectivity/paint/painted_surface_io.h"
 #include "relaxed_connectivity/paint/surface_diffusion.h"
+#include "relaxed_connectivity/ros/bounded_tf_filter.h"
 #include "relaxed_connectivity/ros/node_diagnostics.h"
 
 namespace rc {
@@ -188,16 +187,10 @@ class PaintModel {
   unsigned long dropped_surfels_ = 0;
   double brush_s_ = 0, transfer_s_ = 0, background_s_ = 0, publish_s_ = 0;
   ros::Subscriber pose_sub_;
-  // The object: clouds on `surfels` through a tf2_ros::MessageFilter to world_frame.
-  message_filters::Subscriber<sensor_msgs::PointCloud2> surfels_sub_;
-  std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>> surfels_filter_;
-  // Clouds in the filter, waiting for their transform since the wall time (refused after tf_wait: without tf
-  // traffic the filter would hold a cloud of an unknown frame forever).
-  std::mutex waiting_mutex_;
-  std::vector<std::pair<sensor_msgs::PointCloud2ConstPtr, ros::WallTime>> waiting_clouds_;
-  ros::WallTimer tf_wait_timer_;
-  void cloudLeftFilter(const sensor_msgs::PointCloud2ConstPtr& msg);
-  void refuseStaleWaits();
+  // The object: clouds on `surfels` through a tf2_ros::MessageFilter to world_frame (waits bounded by
+  // tf_wait).
+  std::unique_ptr<BoundedTfFilter> surfels_input_;
+  void refuseSurfels(const std::string& reason);  // counted, logged, in /diagnostics
   ros::Publisher contact_pub_, skeleton_pub_, skin_pub_, painted_pub_, delta_pub_, stats_pub_;
   std::vector<ros::ServiceServer> services_;
   ros::WallTimer timer_;

@@ -171,7 +171,8 @@ void PaintRenderer::reject(const std::string& what, const std::string& reason) {
   last_error_ = text;
 }
 
-SurfelCloud PaintRenderer::cloudOf(const sensor_msgs::PointCloud2& msg, const char* what) const {
+SurfelCloud PaintRenderer::cloudOf(const sensor_msgs::PointCloud2& msg, const char* what,
+                                   bool need_father) const {
   if (msg.header.frame_id != params_.fixed_frame)
     throw std::invalid_argument(std::string(what) + " in frame '" + msg.header.frame_id + "', expected '" +
                                 params_.fixed_frame + "' (fixed_frame: the paint model's world_frame)");
@@ -179,6 +180,12 @@ SurfelCloud PaintRenderer::cloudOf(const sensor_msgs::PointCloud2& msg, const ch
   PointCloud2Converter::fromMessage(msg, cloud);
   if (!cloud.empty() && !(cloud.hasNormals() && cloud.hasRadii()))
     throw std::invalid_argument(std::string(what) + " has no normals or radii");
+  if (need_father && !cloud.empty()) {  // (checked here, so a cloud the mirror cannot take is not "accepted")
+    const Attribute* father = cloud.attributes.find(kSurfelFather);
+    if (!father || father->type != ScalarType::kUInt32 || father->count != 1)
+      throw std::invalid_argument(std::string(what) + " has no uint32 column '" + kSurfelFather +
+                                  "' (the paint model's surfel ids)");
+  }
   cloud.removeNonFinite();  // (what cannot be drawn never enters the copy)
   return cloud;
 }
@@ -192,7 +199,10 @@ void PaintRenderer::paintedCallback(const sensor_msgs::PointCloud2ConstPtr& msg)
       std::lock_guard<std::mutex> lock(mutex_);
       if (!waiting_ && have_object_ && !gap_ && last_delta_stamp_ > stamp) return;
     }
-    const SurfelCloud cloud = cloudOf(*msg, "full cloud");
+    const SurfelCloud cloud = cloudOf(*msg, "full cloud", true);
+    if (cloud.empty())  // (the paint model never sends an empty object: this one would blank the view)
+      throw std::invalid_argument(msg->width * msg->height ? "full cloud has no finite surfel"
+                                                           : "full cloud has no points");
     diagnostics_.accepted(painted_sub_.getTopic());  // well-formed
     std::lock_guard<std::mutex> lock(mutex_);
     if (waiting_) {  // deltas of a new object wait for its first full cloud; an older cloud is the old object
@@ -242,7 +252,7 @@ void PaintRenderer::applyDelta(const std::vector<uint32_t>& originals, const Sur
 
 void PaintRenderer::deltaCallback(const relaxed_connectivity::PaintDeltaConstPtr& msg) {
   try {
-    SurfelCloud surfels = cloudOf(msg->surfels, "delta");
+    SurfelCloud surfels = cloudOf(msg->surfels, "delta", true);
     diagnostics_.accepted(delta_sub_.getTopic());
     std::lock_guard<std::mutex> lock(mutex_);
     if (last_sequence_ != 0 && msg->sequence != last_sequence_ + 1) {
@@ -278,7 +288,7 @@ void PaintRenderer::deltaCallback(const relaxed_connectivity::PaintDeltaConstPtr
 
 void PaintRenderer::skinCallback(const sensor_msgs::PointCloud2ConstPtr& msg) {
   try {
-    SurfelCloud skin = cloudOf(*msg, "brush skin");
+    SurfelCloud skin = cloudOf(*msg, "brush skin", false);
     std::lock_guard<std::mutex> lock(mutex_);
     skin_ = std::move(skin);
     dirty_ = true;

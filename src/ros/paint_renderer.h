@@ -104,7 +104,7 @@ class PaintRenderer {
   void applyDelta(const std::vector<uint32_t>& originals, const SurfelCloud& surfels,
                   const ros::Time& pose_stamp);
   /// A cloud of a message in fixed_frame (throws naming the problem).
-  SurfelCloud cloudOf(const sensor_msgs::PointCloud2& msg, const char* what) const;
+  SurfelCloud cloudOf(const sensor_msgs::PointCloud2& msg, const char* what, bool need_father) const;
   void timerCallback(const ros::WallTimerEvent&);
   /// dynamic_reconfigure: new splat settings, a full update next ("settings"); refused settings are answered
   /// back with the ones that stay.

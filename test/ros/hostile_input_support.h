@@ -106,12 +106,18 @@ inline std::vector<HostileCloud> hostileClouds(const sensor_msgs::PointCloud2& v
   return out;
 }
 
-/// Reads the NodeDiagnostics statuses "<node>: input <topic>" from /diagnostics.
+/// Reads the NodeDiagnostics statuses ("<node>: input <topic>" with accepted / rejected counts, and the
+/// nodes' own tasks) from /diagnostics.
 class InputDiagnostics {
  public:
   struct Counts {
     long accepted = -1, rejected = -1;
     std::string last_rejection;
+    std::map<std::string, std::string> values;  // every key of the status
+    long number(const std::string& key) const {
+      auto it = values.find(key);
+      return it == values.end() ? -1 : std::stol(it->second);
+    }
   };
 
   InputDiagnostics() {
@@ -124,8 +130,9 @@ class InputDiagnostics {
               if (kv.key == "accepted") c.accepted = std::stol(kv.value);
               if (kv.key == "rejected") c.rejected = std::stol(kv.value);
               if (kv.key == "last rejection") c.last_rejection = kv.value;
+              c.values[kv.key] = kv.value;
             }
-            if (c.accepted >= 0) latest_[s.name] = c;
+            latest_[s.name] = c;
           }
         });
   }
