@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <stdexcept>
 #include <string_view>
@@ -44,6 +45,7 @@ void PaintModelParams::validate() const {
   if (journal_bytes < 0) fail("journal_bytes must be >= 0");
   if (!(autosave_period > 0) || !std::isfinite(autosave_period)) fail("autosave_period must be positive");
   if (!(tf_wait > 0) || !std::isfinite(tf_wait)) fail("tf_wait must be positive");
+  if (resume && autosave.empty()) fail("resume needs an autosave file");
   if (!(stats_period > 0) || !std::isfinite(stats_period)) fail("stats_period must be positive");
   try {
     transfer.validate();
@@ -74,6 +76,7 @@ PaintModelParams readPaintModelParams(const ros::NodeHandle& pnh) {
   pnh.param("restore", p.restore, p.restore);
   pnh.param("autosave", p.autosave, p.autosave);
   pnh.param("autosave_period", p.autosave_period, p.autosave_period);
+  pnh.param("resume", p.resume, p.resume);
   pnh.param("tf_wait", p.tf_wait, p.tf_wait);
   pnh.param("replace_painted", p.replace_painted, p.replace_painted);
   pnh.param("stats_period", p.stats_period, p.stats_period);
@@ -100,7 +103,10 @@ PaintModel::PaintModel(ros::NodeHandle nh, ros::NodeHandle private_nh)
   start_ = last_autosave_ = last_stats_ = ros::WallTime::now();  // (the dryer's clock starts here)
   if (!params_.paint.empty()) setPaintType(std::make_unique<PaintType>(readPaintType(params_.paint)));
   if (!params_.palette.empty()) palette_ = std::make_unique<PaletteSpec>(readPalette(params_.palette));
-  if (!params_.restore.empty()) {
+  if (params_.resume && std::filesystem::exists(params_.autosave)) {  // restarted: go on from the autosave
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    installSurface(loadPaintedSurface(params_.autosave), "resumed from the autosave " + params_.autosave);
+  } else if (!params_.restore.empty()) {
     std::lock_guard<std::mutex> lock(model_mutex_);
     installSurface(loadPaintedSurface(params_.restore), "restored from " + params_.restore);
   } else if (!params_.object.empty()) {  // an object file instead of the topic (a file error is fatal)

@@ -34,6 +34,8 @@
 //             wet ones diffused per time step when the paint diffuses, 4000; 0: off), stroke_gap ([s]
 //             without contact that ends a stroke, 0.25), journal_bytes (undo memory, 256 MiB), restore (a
 //             state saved by ~save to load at start, ""), autosave (file, ""), autosave_period ([s], 60),
+//             resume (false: with true, an autosave file that exists at start is loaded, so a node restarted
+//             after a crash or kill (respawn="true") goes on from its last autosave),
 //             replace_painted (false), stats_period ([s], 1), tf_wait ([s] a cloud waits for the transform of
 //             its frame before it is refused, 30: a session's transforms may start late), palette (a palette
 //             file, config/paint/palettes/, appended beside each object from the topic; ""); see
@@ -89,6 +91,7 @@ struct PaintModelParams {
   std::string restore;
   std::string autosave;
   double autosave_period = 60.0;
+  bool resume = false;
   bool replace_painted = false;
   double stats_period = 1.0;
   double tf_wait = 30.0;
