@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -25,8 +27,9 @@ YAML::Node YamlReader::parseMap(const std::string& yaml_text, const std::string&
 std::string YamlReader::readFile(const std::string& path, Raise raise) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    raise(path + ": cannot open the scene file");
-    throw std::runtime_error(path + ": cannot open the scene file");
+    // (scenes, brush presets, paint types, palettes: the reader's caller names what the file is for)
+    raise(path + ": cannot open the file (" + std::strerror(errno) + ")");
+    throw std::runtime_error(path + ": cannot open the file");
   }
   std::stringstream text;
   text << in.rdbuf();

@@ -25,7 +25,7 @@ class YamlReader {
   /// The root map of YAML text: a syntax error fails with "<source>:<line>:<column>: YAML syntax: <message>",
   /// a root that is not a map with "<source>:1:1: <not_a_map>".
   YAML::Node parseMap(const std::string& yaml_text, const std::string& not_a_map) const;
-  /// The bytes of a file (binary); fails with "<path>: cannot open the scene file".
+  /// The bytes of a file (binary); fails with "<path>: cannot open the file (<errno text>)".
   static std::string readFile(const std::string& path, Raise raise);
 
   /// "<source>:<line>:<column>" of a node (just "<source>" for one without a position), as fail() names it.
