@@ -85,10 +85,12 @@ class SceneReader {
     if (root["output"]) readOutput(root["output"]);
     const YAML::Node mesh = src_.require(root, "mesh", "scene");
     readMesh(mesh);
-    PolyhedralMesh built = buildMesh(mesh);
-    place(root["placement"], std::move(built), mesh);
+    const Placement placement = readPlacement(root["placement"]);
     if (root["body_acceleration"])
       scene_.body_acceleration = src_.vec3(root["body_acceleration"], "body_acceleration");
+    // (everything that needs no mesh is checked above; held regions, loads and probes select its nodes)
+    PolyhedralMesh built = buildMesh(mesh);
+    place(placement, std::move(built), mesh);
     if (root["held"]) readHeld(root["held"], dynamic);
     if (root["loads"]) readLoads(root["loads"]);
     if (root["probes"]) readProbes(root["probes"]);
@@ -530,9 +532,19 @@ class SceneReader {
   /// placement: {translation, rotation: {axis, degrees}, velocity, angular_velocity}; the rotation turns the
   /// mesh about its volume centroid, then it is translated; velocities are those of a rigid motion about the
   /// placed centroid.
-  void place(const YAML::Node& node, PolyhedralMesh mesh, const YAML::Node& mesh_node) {
+  struct Placement {
     Vec3 translation = Vec3::Zero(), velocity = Vec3::Zero(), angular = Vec3::Zero();
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  };
+
+  /// placement's keys and values, checked before the mesh is built (building can take long: a file with a
+  /// bad key fails at once).
+  Placement readPlacement(const YAML::Node& node) {
+    Placement p;
+    Vec3& translation = p.translation;
+    Vec3& velocity = p.velocity;
+    Vec3& angular = p.angular;
+    Eigen::Matrix3d& rotation = p.rotation;
     if (node) {
       src_.allowKeys(node, {"translation", "rotation", "velocity", "angular_velocity"}, "placement");
       if (node["translation"]) translation = src_.vec3(node["translation"], "placement.translation");
@@ -549,6 +561,12 @@ class SceneReader {
       if (node["angular_velocity"])
         angular = src_.vec3(node["angular_velocity"], "placement.angular_velocity");
     }
+    return p;
+  }
+
+  void place(const Placement& p, PolyhedralMesh mesh, const YAML::Node& mesh_node) {
+    const Vec3 &translation = p.translation, &velocity = p.velocity, &angular = p.angular;
+    const Eigen::Matrix3d& rotation = p.rotation;
     Vec3 centroid = Vec3::Zero();
     for (const ConvexPolyhedron& e : mesh.elements()) centroid += e.volume() * e.centroid();
     centroid /= mesh.volume();

@@ -376,7 +376,7 @@ TEST(TexturedMesh, DepthTexturesReachTheObjAsDisplacement) {
     Eigen::Vector2f uv = Eigen::Vector2f::Zero();
     for (int k : obj.face_vt[f]) uv += obj.vt[size_t(k)] / 3.0f;
     const size_t page = size_t(obj.face_page[f]);
-    const auto [w, h] = sizes[page];
+    const size_t w = sizes[page].first, h = sizes[page].second;
     const float value = bilinear(int(w), int(h), uv.x() * w, (1.0 - uv.y()) * h, [&](int i, int j) {
                           return Eigen::Vector3f(pages[page][size_t(j) * w + size_t(i)] / 65535.0f, 0, 0);
                         }).x();

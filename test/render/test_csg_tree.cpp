@@ -90,6 +90,12 @@ TEST(CsgTreeParse, ErrorsNameTheColumn) {
   EXPECT_NE(parseError("A & (B | C) & (D | B)").find("column 20"), std::string::npos);
   EXPECT_NE(parseError("A - | B").find("column 5"), std::string::npos);
   EXPECT_EQ(parseError("A & B"), "");
+  // Nesting is bounded (fuzz_csg_expression overflowed the stack with thousands of '(' or '!').
+  EXPECT_EQ(parseError(std::string(256, '(') + "A" + std::string(256, ')')), "");
+  EXPECT_NE(parseError(std::string(257, '(') + "A" + std::string(257, ')'))
+                .find("column 257: nested deeper than 256"),
+            std::string::npos);
+  EXPECT_NE(parseError(std::string(100000, '!') + "A").find("nested deeper than 256"), std::string::npos);
 }
 
 TEST(TriLogic, ExtendedAndOrTablesAreExhaustivelyCorrect) {

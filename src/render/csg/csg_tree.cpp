@@ -64,6 +64,11 @@ class Parser {
     skipSpace();
     if (pos_ >= text_.size()) fail(pos_, "unexpected end, expected a patch name, '!' or '('");
     const char c = text_[pos_];
+    // (found by fuzz_csg_expression: thousands of nested '(' or '!' overflowed the stack)
+    constexpr int kMaxNesting = 256;
+    if ((c == '!' || c == '(') && depth_ >= kMaxNesting)
+      fail(pos_, "nested deeper than " + std::to_string(kMaxNesting) + " levels");
+    const Nesting nesting(&depth_);
     if (c == '!') {
       ++pos_;
       return CsgTree::complement(parseFactor());
@@ -108,9 +113,19 @@ class Parser {
     return CsgTree::leaf(patch, it != names_.end() ? name : std::string());
   }
 
+  /// Counts one level of '!' or '(' while a factor is parsed.
+  struct Nesting {
+    explicit Nesting(int* depth) : depth_(depth) { ++*depth_; }
+    ~Nesting() { --*depth_; }
+    Nesting(const Nesting&) = delete;
+    Nesting& operator=(const Nesting&) = delete;
+    int* depth_;
+  };
+
   const std::string& text_;
   const std::map<std::string, int>& names_;
   size_t pos_ = 0;
+  int depth_ = 0;
   std::vector<int> used_;
 };
 
