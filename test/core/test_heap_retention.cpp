@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "../sanitizer_support.h"
+
 #include <cstdlib>
 #if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
 #include <malloc.h>
@@ -15,8 +17,8 @@ namespace rc {
 namespace {
 
 TEST(HeapRetention, BlocksAboveTheFixedThresholdStayMappedAfterLargerOnesWereFreed) {
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "glibc's heap statistics do not see AddressSanitizer's allocator";
+#if defined(RC_SANITIZER_ALLOCATOR)
+  GTEST_SKIP() << "glibc's heap statistics do not see the sanitizer's allocator";
 #endif
 #ifndef RC_HAVE_MALLINFO2
   GTEST_SKIP() << "needs glibc (mallopt, mallinfo2 from glibc 2.33)";
@@ -35,8 +37,8 @@ TEST(HeapRetention, BlocksAboveTheFixedThresholdStayMappedAfterLargerOnesWereFre
 }
 
 TEST(HeapRetention, HeapUsageCountsWhatIsHandedOutAndFreed) {
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "glibc's heap statistics do not see AddressSanitizer's allocator";
+#if defined(RC_SANITIZER_ALLOCATOR)
+  GTEST_SKIP() << "glibc's heap statistics do not see the sanitizer's allocator";
 #endif
 #ifndef RC_HAVE_MALLINFO2
   GTEST_SKIP() << "needs glibc 2.33+ (mallinfo2)";

@@ -4,6 +4,8 @@
 #include "relaxed_connectivity/paint/paint_journal.h"
 
 #include <gtest/gtest.h>
+
+#include "../sanitizer_support.h"
 #if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
 #include <malloc.h>
 #define RC_HAVE_MALLINFO2 1
@@ -129,8 +131,8 @@ TEST(PaintJournal, KeepsWithinItsMemoryBoundByForgettingTheOldestStrokes) {
 }
 
 TEST(PaintJournal, ReportsTheHeapItHolds) {
-#if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "glibc's heap statistics do not see AddressSanitizer's allocator";
+#if defined(RC_SANITIZER_ALLOCATOR)
+  GTEST_SKIP() << "glibc's heap statistics do not see the sanitizer's allocator";
 #endif
   // bytes() is what the session's ~journal_bytes bounds and paint_stats reports (the soak subtracts it from
   // the node's memory): it must count the heap the journal holds, allocator headers and array room included.
