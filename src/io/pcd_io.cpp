@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/io/pcd_io.h"
 
+#include <algorithm>
 #include <string_view>
 
 #include "relaxed_connectivity/io/file_bytes.h"
@@ -247,14 +248,15 @@ SurfelCloud readPcdCloud(const std::string& path, const ReadOptions& options) {
   const std::string bytes = readFileBytes(path);
   const PcdHeader header = parseHeader(bytes, path);
   // A POINTS count far beyond what the data can hold is refused before anything is allocated for it (up to
-  // twice that, plus 1024, the readers below name where the data ends): a point needs its stride in binary, a
+  // twice that, plus 1 KiB of points, the readers below name where the data ends): a point needs its stride in binary, a
   // character and a separator per value in ascii.
   if (header.data != PcdData::kBinaryCompressed) {
     size_t minimum = 0;
     for (const FieldSpec& f : header.fields)
       minimum += header.data == PcdData::kAscii ? 2 * f.count : f.count * scalarSize(f.type);
     const size_t body = bytes.size() - header.data_offset;
-    if (minimum > 0 && header.points > 2 * ((body + 1) / minimum) + 1024)
+    // (the slack is 1 KiB of data, not 1024 points: a point of 16,801 values each made that 137 MB)
+    if (minimum > 0 && header.points > 2 * ((body + 1) / minimum) + std::max<size_t>(1, 1024 / minimum))
       throw IoError(path, "header",
                     "POINTS " + std::to_string(header.points) + " of at least " + std::to_string(minimum) +
                         " bytes, but the file has " + std::to_string(body) + " bytes after its header");

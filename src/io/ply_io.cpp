@@ -1,5 +1,6 @@
 #include "relaxed_connectivity/io/ply_io.h"
 
+#include <algorithm>
 #include <string_view>
 #include <utility>
 
@@ -414,7 +415,7 @@ void readBody(Source* source, const PlyHeader& header, const std::string& file, 
 
 /// Refuses an element whose declared count is far beyond what the file can hold, before anything is allocated
 /// for it: each element needs at least its properties' bytes (binary: a scalar each, a list its count; ascii:
-/// a character and a separator each). Up to twice that (plus 1024) the reader goes on and names the element
+/// a character and a separator each). Up to twice that (plus 1 KiB) the reader goes on and names the element
 /// where the data ends, so what it allocates stays proportional to the file.
 void checkElementCounts(const PlyHeader& header, size_t body_bytes, const std::string& file) {
   for (const PlyElement& element : header.elements) {
@@ -423,7 +424,7 @@ void checkElementCounts(const PlyHeader& header, size_t body_bytes, const std::s
       minimum += header.format == PlyFormat::kAscii ? 2 : scalarSize(p.is_list ? p.count_type : p.type);
     if (minimum == 0) continue;
     const size_t capacity = (body_bytes + 1) / minimum;
-    if (element.count <= 2 * capacity + 1024) continue;
+    if (element.count <= 2 * capacity + std::max<size_t>(1, 1024 / minimum)) continue;  // (1 KiB of slack)
     throw IoError(file, "element '" + element.name + "'",
                   "declares " + std::to_string(element.count) + " elements of at least " +
                       std::to_string(minimum) + " bytes, but the file has " + std::to_string(body_bytes) +
