@@ -87,6 +87,13 @@ BrushPreset parseBrushPreset(const std::string& yaml_text, const std::string& so
       src.fail(root["paint_colour"], "paint_colour components must lie in [0, 1]");
   }
   non_negative("paint_volume", &p.paint_volume);
+  // (found by fuzz_yaml_readers: 32 chains of 16 masses made the step-limit eigen-problem 1,536 x 1,536, over
+  // a second to read a preset)
+  constexpr int kMaxActiveMasses = 128;
+  if (p.chains * p.segments > kMaxActiveMasses)
+    src.fail(root["chains"] ? root["chains"] : root,
+             "chains x segments = " + std::to_string(p.chains * p.segments) + " bristle masses, more than " +
+                 std::to_string(kMaxActiveMasses));
   if (p.surfel_spacing > p.bristle_length)
     src.fail(root["surfel_spacing"] ? root["surfel_spacing"] : root,
              "surfel_spacing must not exceed bristle_length");

@@ -44,6 +44,10 @@ TEST(BrushPresetReader, BadInputNamesTheLineAndTheProblem) {
   EXPECT_EQ(errorOf("shape: square\n"), "brush.yaml:1:8: shape: unknown 'square' (known: round, flat)");
   EXPECT_EQ(errorOf("mass: -1\n").rfind("brush.yaml:1:7: ", 0), 0u) << errorOf("mass: -1\n");
   EXPECT_EQ(errorOf("segments: 0\n").rfind("brush.yaml:1:11: ", 0), 0u);
+  // Skeleton size bounded (its step limit is a dense eigen-problem of 3 x the masses).
+  EXPECT_EQ(errorOf("shape: flat\nsegments: 16\nchains: 32\n"),
+            "brush.yaml:3:9: chains x segments = 512 bristle masses, more than 128");
+  EXPECT_EQ(errorOf("shape: flat\nsegments: 8\nchains: 16\n"), "");
   EXPECT_NE(errorOf("paint_colour: [2, 0, 0]\n").find("paint_colour"), std::string::npos);
   EXPECT_NE(errorOf("split_angle_deg: 180\n").find("(0, 180)"), std::string::npos);
   EXPECT_NE(errorOf("- 1\n").find("a map"), std::string::npos);
