@@ -244,6 +244,9 @@ void PaintModel::surfelsCallback(const sensor_msgs::PointCloud2ConstPtr& msg, ro
     if (surface_ && hash == object_hash_ && msg->header.frame_id == object_frame_) return;
     if (surface_ && object_hash_ != 0 && !msg->header.stamp.isZero() &&
         msg->header.stamp < object_cloud_stamp_) {  // older than the current object: out of order
+      // (a message filter's late failure, placed with the latest transform, of a cloud already superseded:
+      // benign, not counted)
+      if (tf_time.isZero()) return;
       refuseSurfels("stamp " + std::to_string(msg->header.stamp.toSec()) +
                     " older than the current object's " + std::to_string(object_cloud_stamp_.toSec()));
       return;
