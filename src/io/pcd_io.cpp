@@ -248,8 +248,8 @@ SurfelCloud readPcdCloud(const std::string& path, const ReadOptions& options) {
   const std::string bytes = readFileBytes(path);
   const PcdHeader header = parseHeader(bytes, path);
   // A POINTS count far beyond what the data can hold is refused before anything is allocated for it (up to
-  // twice that, plus 1 KiB of points, the readers below name where the data ends): a point needs its stride in binary, a
-  // character and a separator per value in ascii.
+  // twice that, plus 1 KiB of points, the readers below name where the data ends): a point needs its stride
+  // in binary, a character and a separator per value in ascii.
   if (header.data != PcdData::kBinaryCompressed) {
     size_t minimum = 0;
     for (const FieldSpec& f : header.fields)
